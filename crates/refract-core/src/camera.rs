@@ -1,0 +1,371 @@
+//! The pinhole camera every backend shares: world ↔ view ↔ clip ↔ pixel transforms and
+//! pixel-centre rays.
+//!
+//! Conventions (design.md): right-handed world and view space (the camera looks down `−z_vs`,
+//! `y` up), glam's `look_at_mat4` and DirectX-style `perspective` (NDC `z ∈ [0, 1]`, which is what
+//! wgpu expects), pixel coordinates `uv_px` with the origin at the top-left corner of the image,
+//! `y` pointing down, and pixel `(x, y)` sampled at its centre `(x + ½, y + ½)`.
+
+use core::fmt;
+
+use glam::camera::rh::{proj::directx::perspective, view::look_at_mat4};
+use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
+
+/// A ray `origin + t · dir`, `dir` unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Where the ray starts (world space).
+    pub origin: Vec3,
+    /// Unit direction (world space).
+    pub dir: Vec3,
+}
+
+impl Ray {
+    /// The point `origin + t · dir`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// What a [`Camera`] is built from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Eye position (world space).
+    pub eye: Vec3,
+    /// The point looked at (world space).
+    pub target: Vec3,
+    /// Approximate up direction (world space); must not be parallel to `target − eye`.
+    pub up: Vec3,
+    /// Vertical field of view in radians, in `(0, π)`.
+    pub fov_y: f32,
+    /// Near plane distance, `> 0`.
+    pub near: f32,
+    /// Far plane distance, `> near`.
+    pub far: f32,
+    /// Image width in pixels, `≥ 1`.
+    pub width: u32,
+    /// Image height in pixels, `≥ 1`.
+    pub height: u32,
+}
+
+impl Default for CameraDesc {
+    /// The camera of the built-in scenes: 3 units in front of the unit bounding sphere on `+z`,
+    /// looking at the origin with a 40° vertical field of view, 512².
+    fn default() -> Self {
+        Self {
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: 40f32.to_radians(),
+            near: 0.05,
+            far: 100.0,
+            width: 512,
+            height: 512,
+        }
+    }
+}
+
+/// Why a [`CameraDesc`] was rejected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraError {
+    /// Width or height is zero.
+    ZeroResolution {
+        /// The requested width.
+        width: u32,
+        /// The requested height.
+        height: u32,
+    },
+    /// The vertical field of view is not in `(0, π)` radians.
+    FieldOfView(f32),
+    /// Near and far planes must satisfy `0 < near < far`, both finite.
+    ClipPlanes {
+        /// The requested near distance.
+        near: f32,
+        /// The requested far distance.
+        far: f32,
+    },
+    /// Eye, target or up is not finite, the eye equals the target, or up is parallel to the view.
+    Orientation,
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::ZeroResolution { width, height } => {
+                write!(
+                    f,
+                    "camera resolution {width}x{height}: width and height must be at least 1"
+                )
+            }
+            Self::FieldOfView(fov) => write!(
+                f,
+                "camera fov_y {:.3}°: expected a vertical field of view strictly between 0° and 180°",
+                fov.to_degrees()
+            ),
+            Self::ClipPlanes { near, far } => {
+                write!(
+                    f,
+                    "camera clip planes near={near} far={far}: expected 0 < near < far, finite"
+                )
+            }
+            Self::Orientation => write!(
+                f,
+                "camera eye/target/up: expected finite vectors, eye ≠ target, up not parallel to the view direction"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for CameraError {}
+
+/// A validated pinhole camera with its matrices precomputed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    desc: CameraDesc,
+    world_to_view: Mat4,
+    view_to_world: Mat4,
+    view_to_clip: Mat4,
+    world_to_clip: Mat4,
+    clip_to_world: Mat4,
+    look_dir: Vec3,
+    tan_half_fov_y: f32,
+    aspect: f32,
+}
+
+impl Camera {
+    /// Validates `desc` and precomputes `world_to_view = look_at_mat4(eye, target, up)`,
+    /// `view_to_clip = perspective(fov_y, width/height, near, far)` and their inverses.
+    pub fn new(desc: CameraDesc) -> Result<Self, CameraError> {
+        if desc.width == 0 || desc.height == 0 {
+            return Err(CameraError::ZeroResolution {
+                width: desc.width,
+                height: desc.height,
+            });
+        }
+        if !(desc.fov_y > 0.0 && desc.fov_y < core::f32::consts::PI) {
+            return Err(CameraError::FieldOfView(desc.fov_y));
+        }
+        if !(desc.near > 0.0 && desc.far > desc.near && desc.far.is_finite()) {
+            return Err(CameraError::ClipPlanes {
+                near: desc.near,
+                far: desc.far,
+            });
+        }
+        let forward = (desc.target - desc.eye).try_normalize();
+        let up = desc.up.try_normalize();
+        let (Some(look_dir), Some(up)) = (forward, up) else {
+            return Err(CameraError::Orientation);
+        };
+        if !desc.eye.is_finite() || look_dir.cross(up).length() < 1e-6 {
+            return Err(CameraError::Orientation);
+        }
+        let aspect = desc.width as f32 / desc.height as f32;
+        let world_to_view = look_at_mat4(desc.eye, desc.target, up);
+        let view_to_clip = perspective(desc.fov_y, aspect, desc.near, desc.far);
+        let world_to_clip = view_to_clip * world_to_view;
+        Ok(Self {
+            desc,
+            world_to_view,
+            view_to_world: world_to_view.inverse(),
+            view_to_clip,
+            world_to_clip,
+            clip_to_world: world_to_clip.inverse(),
+            look_dir,
+            tan_half_fov_y: (0.5 * desc.fov_y).tan(),
+            aspect,
+        })
+    }
+
+    /// The description this camera was built from.
+    pub fn desc(&self) -> &CameraDesc {
+        &self.desc
+    }
+    /// Eye position (world space).
+    pub fn eye(&self) -> Vec3 {
+        self.desc.eye
+    }
+    /// Unit look-at direction `L = normalize(target − eye)` (Wyman 2005a §3.3 `L_at`).
+    pub fn look_dir(&self) -> Vec3 {
+        self.look_dir
+    }
+    /// Image width in pixels.
+    pub fn width(&self) -> u32 {
+        self.desc.width
+    }
+    /// Image height in pixels.
+    pub fn height(&self) -> u32 {
+        self.desc.height
+    }
+    /// The view matrix (world → view).
+    pub fn world_to_view(&self) -> Mat4 {
+        self.world_to_view
+    }
+    /// The inverse view matrix (view → world).
+    pub fn view_to_world(&self) -> Mat4 {
+        self.view_to_world
+    }
+    /// The projection matrix (view → clip, NDC depth in `[0, 1]`).
+    pub fn view_to_clip(&self) -> Mat4 {
+        self.view_to_clip
+    }
+    /// `view_to_clip · world_to_view`.
+    pub fn world_to_clip(&self) -> Mat4 {
+        self.world_to_clip
+    }
+    /// The exact inverse of [`Self::world_to_clip`].
+    pub fn clip_to_world(&self) -> Mat4 {
+        self.clip_to_world
+    }
+
+    /// The centre of pixel `(x, y)`: `uv_px = (x + ½, y + ½)`.
+    #[inline]
+    pub fn pixel_center(x: u32, y: u32) -> Vec2 {
+        Vec2::new(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// Pixel coordinates to NDC: `x_ndc = 2 u/W − 1`, `y_ndc = 1 − 2 v/H` (NDC `y` points up).
+    #[inline]
+    pub fn pixel_to_ndc(&self, uv_px: Vec2) -> Vec2 {
+        Vec2::new(
+            2.0 * uv_px.x / self.desc.width as f32 - 1.0,
+            1.0 - 2.0 * uv_px.y / self.desc.height as f32,
+        )
+    }
+
+    /// Projects a world point to `(u_px, v_px, depth)` with `depth ∈ [0, 1]` between the near and
+    /// far planes, or `None` when the point is on or behind the eye plane (`w_clip ≤ 0`).
+    #[inline]
+    pub fn world_to_pixel(&self, p_ws: Vec3) -> Option<Vec3> {
+        let clip = self.world_to_clip * p_ws.extend(1.0);
+        if clip.w.is_nan() || clip.w <= 0.0 {
+            return None;
+        }
+        let ndc = clip.xyz() / clip.w;
+        Some(Vec3::new(
+            0.5 * (ndc.x + 1.0) * self.desc.width as f32,
+            0.5 * (1.0 - ndc.y) * self.desc.height as f32,
+            ndc.z,
+        ))
+    }
+
+    /// The world point at pixel position `uv_px` and window depth `depth ∈ [0, 1]`: the exact
+    /// inverse of [`Self::world_to_pixel`] through `clip_to_world` (never a linearisation formula
+    /// for another depth range).
+    #[inline]
+    pub fn pixel_to_world(&self, uv_px: Vec2, depth: f32) -> Vec3 {
+        let ndc = self.pixel_to_ndc(uv_px);
+        self.clip_to_world
+            .project_point3(Vec3::new(ndc.x, ndc.y, depth))
+    }
+
+    /// View-space `z` (negative in front of the camera) of window depth `depth ∈ [0, 1]`:
+    /// `z_vs = −f n / (n + (1 − depth)(f − n))`, the inverse of the DirectX-style projection,
+    /// written so that `depth = 1` gives exactly `−f` (no cancellation near the far plane).
+    #[inline]
+    pub fn view_z_from_depth(&self, depth: f32) -> f32 {
+        let (n, f) = (self.desc.near, self.desc.far);
+        -f * n / (n + (1.0 - depth) * (f - n))
+    }
+
+    /// The primary ray through pixel position `uv_px` (use [`Self::pixel_center`] for pixel
+    /// centres): origin at the eye, direction `normalize(view_to_world · (x_ndc·a·tan(fov/2),
+    /// y_ndc·tan(fov/2), −1))`, `a = W/H`.
+    #[inline]
+    pub fn pixel_ray(&self, uv_px: Vec2) -> Ray {
+        let ndc = self.pixel_to_ndc(uv_px);
+        let dir_vs = Vec3::new(
+            ndc.x * self.aspect * self.tan_half_fov_y,
+            ndc.y * self.tan_half_fov_y,
+            -1.0,
+        );
+        Ray {
+            origin: self.desc.eye,
+            dir: self.view_to_world.transform_vector3(dir_vs).normalize(),
+        }
+    }
+
+    /// Euclidean distance from the eye, `‖p − eye‖`: the quantity stored in back-face buffers.
+    #[inline]
+    pub fn distance_from_eye(&self, p_ws: Vec3) -> f32 {
+        (p_ws - self.desc.eye).length()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera() -> Camera {
+        Camera::new(CameraDesc {
+            width: 640,
+            height: 480,
+            ..CameraDesc::default()
+        })
+        .expect("valid camera")
+    }
+
+    #[test]
+    fn pixel_ray_hits_the_point_that_projects_to_that_pixel() {
+        let cam = camera();
+        for (x, y) in [(0, 0), (320, 240), (639, 479), (17, 400)] {
+            let uv = Camera::pixel_center(x, y);
+            let p = cam.pixel_ray(uv).at(2.5);
+            let back = cam.world_to_pixel(p).expect("in front");
+            assert!((back.truncate() - uv).length() < 2e-3, "{uv} -> {back}");
+        }
+    }
+
+    #[test]
+    fn depth_round_trips_through_the_exact_inverse() {
+        let cam = camera();
+        let p = Vec3::new(0.3, -0.2, 0.4);
+        let px = cam.world_to_pixel(p).expect("in front");
+        let q = cam.pixel_to_world(px.truncate(), px.z);
+        assert!((p - q).length() < 1e-5, "{p} vs {q}");
+        let z_vs = cam.world_to_view().transform_point3(p).z;
+        // One f32 ulp of window depth moves z_vs by about z²/near · 2⁻²⁴ (≈ 1e-5 here).
+        let tolerance = 4.0 * z_vs * z_vs / 0.05 * f32::EPSILON;
+        assert!((cam.view_z_from_depth(px.z) - z_vs).abs() < tolerance);
+        assert!((cam.view_z_from_depth(0.0) + 0.05).abs() < 1e-6);
+        assert!((cam.view_z_from_depth(1.0) + 100.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn centre_pixel_looks_along_the_look_direction_and_y_points_down() {
+        let cam = camera();
+        let ray = cam.pixel_ray(Vec2::new(320.0, 240.0));
+        assert!((ray.dir - cam.look_dir()).length() < 1e-6);
+        let above = cam
+            .world_to_pixel(Vec3::new(0.0, 0.5, 0.0))
+            .expect("in front");
+        assert!(above.y < 240.0, "world +y appears toward the top row");
+        assert!(
+            cam.world_to_pixel(Vec3::new(0.0, 0.0, 5.0)).is_none(),
+            "behind the eye"
+        );
+    }
+
+    #[test]
+    fn bad_descriptions_are_rejected() {
+        let ok = CameraDesc::default();
+        assert!(Camera::new(CameraDesc { width: 0, ..ok }).is_err());
+        assert!(
+            Camera::new(CameraDesc {
+                fov_y: f32::NAN,
+                ..ok
+            })
+            .is_err()
+        );
+        assert!(Camera::new(CameraDesc { near: 0.0, ..ok }).is_err());
+        assert!(Camera::new(CameraDesc { far: 0.01, ..ok }).is_err());
+        assert!(Camera::new(CameraDesc { up: Vec3::Z, ..ok }).is_err());
+        assert!(
+            Camera::new(CameraDesc {
+                target: ok.eye,
+                ..ok
+            })
+            .is_err()
+        );
+    }
+}

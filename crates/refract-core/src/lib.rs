@@ -1,0 +1,35 @@
+//! # refract-core
+//!
+//! The pure per-pixel mathematics of the classic real-time refraction techniques, shared by
+//! every backend of `refract` (CPU, WGSL twin) and reusable in your own renderer.
+//!
+//! * [`optics`]: Snell refraction, reflection, critical angle (glam/WGSL conventions).
+//! * [`fresnel`]: exact unpolarised dielectric Fresnel, Schlick, conductor Schlick.
+//! * [`interpolated_distance`]: Wyman 2005a §3.1, the distance `d~` from `P1` to `P2`.
+//! * [`exit`]: Wyman 2005a §3.2–3.3, the exit normal and the second-interface TIR policy.
+//! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
+//! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
+//! * [`vector`]: robust normalisation and well-conditioned angles.
+//!
+//! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
+//! directions point *toward* the surface; normals point *outward* from the refractor;
+//! `eta = n_i / n_t`; `refract` returns the zero vector on total internal reflection (TIR),
+//! exactly like WGSL's and glam's `refract`.
+//!
+//! The crate has no I/O, no threads, no GPU and allocates nothing.
+
+pub mod camera;
+pub mod exit;
+pub mod fresnel;
+pub mod interpolated_distance;
+pub mod kernel;
+pub mod optics;
+pub mod vector;
+
+pub use camera::{Camera, CameraDesc, CameraError, Ray};
+pub use exit::{ExitNormalSource, TirPolicy};
+pub use interpolated_distance::DistanceMode;
+pub use kernel::{
+    BackFaceSample, BackFaceSampler, DegenerateInput, FrontSurface, ImageSpaceParams, InvalidIor,
+    OneInterfacePath, TwoInterfacePath,
+};

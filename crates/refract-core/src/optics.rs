@@ -1,0 +1,112 @@
+//! Geometric optics at one interface, in the glam/WGSL conventions: unit vectors, the incident
+//! direction `I` points *toward* the surface, the normal `N` faces the incident side
+//! (`N · I ≤ 0`), and `eta = n_i / n_t`.
+
+use glam::Vec3;
+
+/// Snell refraction (Wyman 2005a §2: `n_i sin θi = n_t sin θt`), exactly as WGSL's `refract`:
+///
+/// `k = 1 − η²(1 − (N·I)²)`; if `k < 0` (total internal reflection) the result is the zero
+/// vector, otherwise `T = η I − (η (N·I) + √k) N`.
+///
+/// `k` is evaluated as `(1 − η²) + η² (N·I)²`, which is the same number but keeps its digits
+/// near grazing incidence (with `1 − (N·I)²` first, `(N·I)² < 6e-8` is lost to rounding and an
+/// index-matched interface, `η = 1`, would bend grazing rays by ~1e-4 rad).
+///
+/// `incident` and `normal` must be unit length with `normal · incident ≤ 0`; the result is then
+/// unit length (up to rounding). A WGSL twin must use the same form, not the builtin `refract`.
+#[inline]
+pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
+    let n_dot_i = normal.dot(incident);
+    let eta2 = eta * eta;
+    let k = (1.0 - eta2) + eta2 * n_dot_i * n_dot_i;
+    if k < 0.0 {
+        Vec3::ZERO
+    } else {
+        eta * incident - (eta * n_dot_i + k.sqrt()) * normal
+    }
+}
+
+/// True when [`refract`] reports total internal reflection: `η² (1 − (N·I)²) > 1`, i.e.
+/// `η sin θi > 1`.
+#[inline]
+pub fn is_total_internal_reflection(incident: Vec3, normal: Vec3, eta: f32) -> bool {
+    let n_dot_i = normal.dot(incident);
+    let eta2 = eta * eta;
+    (1.0 - eta2) + eta2 * n_dot_i * n_dot_i < 0.0
+}
+
+/// Mirror reflection, as WGSL's `reflect`: `R = I − 2 (N·I) N`.
+#[inline]
+pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
+    incident - 2.0 * normal.dot(incident) * normal
+}
+
+/// The critical angle `θc = asin(1/η)` beyond which light going from the denser medium
+/// (`η = n_i/n_t > 1`) is totally internally reflected (Wyman 2005a §3.3).
+///
+/// For `η ≤ 1` no incidence angle below grazing is reflected totally, and the result is `π/2`.
+#[inline]
+pub fn critical_angle(eta: f32) -> f32 {
+    if eta <= 1.0 {
+        core::f32::consts::FRAC_PI_2
+    } else {
+        (1.0 / eta).asin()
+    }
+}
+
+/// Turns a shading normal toward the incident side when it faces away from the viewer.
+///
+/// Interpolated vertex normals can satisfy `N · I > 0` near silhouettes, where refraction is
+/// undefined. Every method and the reference tracer then use the same fix: remove the part of
+/// `N` along `I` that is too much and keep the normal just past grazing,
+/// `N' = normalize(N − (N·I + ε) I)` with `ε = 1e-4`, so that `N' · I = −ε/‖…‖ < 0`.
+/// Normals already facing the incident side are returned unchanged.
+#[inline]
+pub fn face_forward_shading_normal(normal: Vec3, incident: Vec3) -> Vec3 {
+    const EPSILON: f32 = 1e-4;
+    let n_dot_i = normal.dot(incident);
+    if n_dot_i < 0.0 {
+        return normal;
+    }
+    (normal - (n_dot_i + EPSILON) * incident)
+        .try_normalize()
+        .unwrap_or(-incident)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refract_matches_glam() {
+        let i = Vec3::new(0.3, -0.8, 0.1).normalize();
+        let n = Vec3::Y;
+        for eta in [0.5, 1.0 / 1.5, 1.0, 1.33, 1.5] {
+            let ours = refract(i, n, eta);
+            let glams = i.refract(n, eta);
+            assert!(
+                (ours - glams).length() < 1e-6,
+                "eta {eta}: {ours} vs {glams}"
+            );
+        }
+    }
+
+    #[test]
+    fn critical_angle_of_glass() {
+        let theta_c = critical_angle(1.5);
+        assert!((theta_c.to_degrees() - 41.810_314).abs() < 1e-4);
+        assert_eq!(critical_angle(1.0 / 1.5), core::f32::consts::FRAC_PI_2);
+    }
+
+    #[test]
+    fn face_forward_fixes_backfacing_normals_only() {
+        let i = Vec3::new(0.0, 0.0, -1.0);
+        let good = Vec3::new(0.0, 0.6, 0.8);
+        assert_eq!(face_forward_shading_normal(good, i), good);
+        let bad = Vec3::new(0.0, 0.6, -0.8);
+        let fixed = face_forward_shading_normal(bad, i);
+        assert!(fixed.dot(i) < 0.0 && fixed.dot(i) > -1e-3);
+        assert!((fixed.length() - 1.0).abs() < 1e-6);
+    }
+}
