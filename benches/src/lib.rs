@@ -1,1 +1,25 @@
-//! placeholder
+//! Inputs shared by refract's criterion benches (`cargo bench -p refract-benches`).
+//!
+//! Benches of real meshes read `../shared/data/meshes` (or `REFRACT_DATA_DIR`) and skip a
+//! mesh with a notice when the file is absent.
+
+use refract_geometry::{LoadOptions, Mesh, load_mesh};
+
+/// The real meshes the geometry benches run on: `(label, file in meshes/)`.
+pub const BENCH_MESHES: [(&str, &str); 3] = [
+    ("cow", "cow.obj"),
+    ("bunny", "stanford-bunny.obj"),
+    ("horse", "horse.obj"),
+];
+
+/// Loads a mesh of `../shared/data/meshes`, normalised, or prints why it is skipped.
+pub fn load_shared_mesh(file: &str) -> Option<Mesh> {
+    let path = refract_tests::shared_data_dir().join("meshes").join(file);
+    match load_mesh(&path, &LoadOptions::default()) {
+        Ok(loaded) => Some(loaded.mesh),
+        Err(err) => {
+            eprintln!("skipped {file}: {err}");
+            None
+        }
+    }
+}

@@ -1,1 +1,29 @@
-//! placeholder
+//! # refract-geometry
+//!
+//! The geometry precompute every refraction method needs:
+//!
+//! * [`mesh`]: indexed triangle meshes, validation, angle-weighted normals, welding,
+//!   normalisation into the unit bounding sphere, mesh facts (watertight, signed volume).
+//! * [`load`]: OBJ (tobj) and glTF 2.0 (gltf, with `KHR_materials_ior/transmission/volume`)
+//!   loading with the cleanup real files need (inside-out meshes, non-unit normals, degenerates).
+//! * [`bvh`]: the workspace's BVH (obvhs CwBvh) with closest-hit, occlusion and all-hits queries.
+//! * [`distance_along_normal`]: Wyman 2005a §3.1 per-vertex `d_N`.
+//! * [`shapes`], [`lens`], [`builtin`]: procedural shapes and spectacle lenses (spade).
+//!
+//! Every failure is a [`GeometryError`] naming the file or shape; nothing panics on user input.
+
+pub mod builtin;
+pub mod bvh;
+pub mod distance_along_normal;
+pub mod error;
+pub mod lens;
+pub mod load;
+pub mod mesh;
+pub mod shapes;
+
+pub use bvh::{Hit, MeshBvh};
+pub use distance_along_normal::{NormalDistances, normal_distances};
+pub use error::GeometryError;
+pub use lens::LensDesc;
+pub use load::{LoadOptions, LoadReport, LoadedMesh, load_mesh};
+pub use mesh::{BoundingSphere, Mesh, MeshFacts};

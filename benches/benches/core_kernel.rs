@@ -1,0 +1,117 @@
+//! refract-core's per-pixel kernels over precomputed buffers of an analytic sphere (1024²):
+//! the cost of the math alone, without rasterisation.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec2;
+use rayon::prelude::*;
+use refract_core::kernel::{one_interface, two_interface};
+use refract_core::{
+    BackFaceSample, BackFaceSampler, Camera, CameraDesc, DistanceMode, FrontSurface,
+    ImageSpaceParams, TirPolicy,
+};
+
+const RES: u32 = 1024;
+
+/// A back-face buffer sampled at the nearest texel.
+struct Buffer {
+    width: u32,
+    height: u32,
+    texels: Vec<Option<BackFaceSample>>,
+}
+
+impl BackFaceSampler for Buffer {
+    fn back_face(&self, uv_px: Vec2) -> Option<BackFaceSample> {
+        if !(uv_px.x >= 0.0 && uv_px.y >= 0.0) {
+            return None;
+        }
+        let (x, y) = (uv_px.x as u32, uv_px.y as u32);
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        self.texels[(y * self.width + x) as usize]
+    }
+}
+
+fn sphere_buffers(camera: &Camera) -> (Vec<Option<FrontSurface>>, Buffer) {
+    let (mut front, mut back) = (Vec::new(), Vec::new());
+    for y in 0..camera.height() {
+        for x in 0..camera.width() {
+            let ray = camera.pixel_ray(Camera::pixel_center(x, y));
+            let b = ray.origin.dot(ray.dir);
+            let disc = b * b - (ray.origin.length_squared() - 1.0);
+            if disc < 0.0 {
+                front.push(None);
+                back.push(None);
+                continue;
+            }
+            let (near, far) = (-b - disc.sqrt(), -b + disc.sqrt());
+            let p1 = ray.at(near);
+            front.push(Some(FrontSurface {
+                p1_ws: p1,
+                n1_ws: p1,
+                d_n: 2.0,
+            }));
+            back.push(Some(BackFaceSample {
+                n_ws: ray.at(far),
+                distance: far,
+            }));
+        }
+    }
+    (
+        front,
+        Buffer {
+            width: camera.width(),
+            height: camera.height(),
+            texels: back,
+        },
+    )
+}
+
+fn kernels(c: &mut Criterion) {
+    let camera = Camera::new(CameraDesc {
+        width: RES,
+        height: RES,
+        ..CameraDesc::default()
+    })
+    .expect("camera");
+    let (front, back) = sphere_buffers(&camera);
+    let params = ImageSpaceParams::new(1.5, DistanceMode::Interpolated, TirPolicy::ClampToCritical)
+        .expect("params");
+    let pixels: Vec<(Vec2, FrontSurface)> = front
+        .iter()
+        .enumerate()
+        .filter_map(|(i, f)| f.map(|f| (Camera::pixel_center(i as u32 % RES, i as u32 / RES), f)))
+        .collect();
+    // Correctness before timing: the centre pixel goes straight through.
+    let centre = Camera::pixel_center(RES / 2, RES / 2);
+    let centre_front = front[(RES / 2 * RES + RES / 2) as usize].expect("sphere covers the centre");
+    let path = two_interface(&camera, centre, &centre_front, &back, &params).expect("path");
+    assert!(path.t2.angle_between(path.entry.view) < 1e-2);
+
+    let mut group = c.benchmark_group("core_kernel/sphere_1024");
+    group.throughput(Throughput::Elements(pixels.len() as u64));
+    group.bench_function("two_interface", |b| {
+        b.iter(|| {
+            pixels
+                .par_iter()
+                .map(|(uv, f)| {
+                    two_interface(&camera, *uv, f, &back, &params).map_or(0.0, |p| p.t2.x)
+                })
+                .sum::<f32>()
+        })
+    });
+    group.bench_function("one_interface", |b| {
+        b.iter(|| {
+            pixels
+                .par_iter()
+                .map(|(_, f)| one_interface(&camera, black_box(f), &params).map_or(0.0, |p| p.t1.x))
+                .sum::<f32>()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernels);
+criterion_main!(benches);

@@ -1,0 +1,207 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`) through the gltf crate:
+//! every triangle primitive of the default scene (or of every node when there is no scene),
+//! with node transforms applied, and the glass parameters of the Khronos extensions.
+
+use std::path::Path;
+
+use glam::{Affine3A, Mat4, Vec2, Vec3};
+use gltf::mesh::Mode;
+
+use super::RawMesh;
+use crate::error::GeometryError;
+use crate::mesh::Mesh;
+
+/// Glass parameters of a glTF material (`KHR_materials_ior`, `KHR_materials_transmission`,
+/// `KHR_materials_volume`); absent extensions are `None`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlassMaterial {
+    /// Index of refraction (`KHR_materials_ior`, glTF default 1.5).
+    pub ior: Option<f32>,
+    /// Transmission factor in `[0, 1]` (`KHR_materials_transmission`).
+    pub transmission: Option<f32>,
+    /// Thickness factor in mesh units (`KHR_materials_volume`).
+    pub thickness: Option<f32>,
+}
+
+pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), GeometryError> {
+    let error = |message: String| GeometryError::Gltf {
+        path: path.to_owned(),
+        message,
+    };
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::open(path).map_err(|err| error(err.to_string()))?;
+    let buffers = gltf::import_buffers(&document, path.parent(), blob)
+        .map_err(|err| error(format!("cannot load its buffers: {err}")))?;
+
+    let mut collector = Collector::default();
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => {
+            for node in scene.nodes() {
+                collector.visit(&node, Mat4::IDENTITY, &buffers, &error)?;
+            }
+        }
+        None => {
+            for mesh in document.meshes() {
+                collector.add_mesh(&mesh, Mat4::IDENTITY, &buffers, &error)?;
+            }
+        }
+    }
+    if collector.triangles.is_empty() {
+        return Err(GeometryError::NoTriangles {
+            source_name: path.display().to_string(),
+            degenerate: 0,
+        });
+    }
+    let Collector {
+        positions,
+        normals,
+        uvs,
+        triangles,
+        all_have_normals,
+        all_have_uvs,
+        material,
+    } = collector;
+    let non_unit_normals = if all_have_normals {
+        super::count_non_unit(&normals)
+    } else {
+        0
+    };
+    let mesh = Mesh::new(
+        path.display().to_string(),
+        positions,
+        all_have_normals.then_some(normals),
+        if all_have_uvs { uvs } else { vec![] },
+        triangles,
+    )?;
+    Ok((
+        RawMesh {
+            mesh,
+            has_file_normals: all_have_normals,
+            non_unit_normals,
+        },
+        material,
+    ))
+}
+
+struct Collector {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    triangles: Vec<[u32; 3]>,
+    all_have_normals: bool,
+    all_have_uvs: bool,
+    material: Option<GlassMaterial>,
+}
+
+impl Default for Collector {
+    fn default() -> Self {
+        Self {
+            positions: vec![],
+            normals: vec![],
+            uvs: vec![],
+            triangles: vec![],
+            all_have_normals: true,
+            all_have_uvs: true,
+            material: None,
+        }
+    }
+}
+
+impl Collector {
+    fn visit(
+        &mut self,
+        node: &gltf::Node<'_>,
+        parent: Mat4,
+        buffers: &[gltf::buffer::Data],
+        error: &impl Fn(String) -> GeometryError,
+    ) -> Result<(), GeometryError> {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            self.add_mesh(&mesh, world, buffers, error)?;
+        }
+        for child in node.children() {
+            self.visit(&child, world, buffers, error)?;
+        }
+        Ok(())
+    }
+
+    fn add_mesh(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        world: Mat4,
+        buffers: &[gltf::buffer::Data],
+        error: &impl Fn(String) -> GeometryError,
+    ) -> Result<(), GeometryError> {
+        let transform = Affine3A::from_mat4(world);
+        let normal_matrix = transform.matrix3.inverse().transpose();
+        let mirrored = transform.matrix3.determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            if primitive.mode() != Mode::Triangles {
+                continue; // points, lines and strips are not surfaces we refract through
+            }
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
+            let Some(positions) = reader.read_positions() else {
+                return Err(error(format!(
+                    "mesh `{}` has a primitive without POSITION",
+                    mesh.name().unwrap_or("?")
+                )));
+            };
+            let base = self.positions.len() as u32;
+            self.positions
+                .extend(positions.map(|p| transform.transform_point3(Vec3::from(p))));
+            let count = self.positions.len() - base as usize;
+            match reader.read_normals() {
+                Some(normals) if self.all_have_normals => self.normals.extend(
+                    normals.map(|n| Vec3::from(normal_matrix * glam::Vec3A::from(Vec3::from(n)))),
+                ),
+                _ => self.all_have_normals = false,
+            }
+            match reader.read_tex_coords(0) {
+                Some(uvs) if self.all_have_uvs => {
+                    self.uvs.extend(uvs.into_f32().map(Vec2::from));
+                }
+                _ => self.all_have_uvs = false,
+            }
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(indices) => indices.into_u32().collect(),
+                None => (0..count as u32).collect(),
+            };
+            if let Some(&index) = indices.iter().find(|&&i| i as usize >= count) {
+                return Err(error(format!(
+                    "mesh `{}`: index {index} out of range for a primitive of {count} vertices",
+                    mesh.name().unwrap_or("?")
+                )));
+            }
+            if indices.len() % 3 != 0 {
+                return Err(error(format!(
+                    "{} indices is not a whole number of triangles",
+                    indices.len()
+                )));
+            }
+            self.triangles.extend(indices.chunks_exact(3).map(|t| {
+                let tri = [t[0] + base, t[1] + base, t[2] + base];
+                if mirrored {
+                    [tri[0], tri[2], tri[1]]
+                } else {
+                    tri
+                }
+            }));
+            let material = primitive.material();
+            if self.material.is_none()
+                && (material.ior().is_some()
+                    || material.transmission().is_some()
+                    || material.volume().is_some())
+            {
+                self.material = Some(GlassMaterial {
+                    ior: material.ior(),
+                    transmission: material.transmission().map(|t| t.transmission_factor()),
+                    thickness: material.volume().map(|v| v.thickness_factor()),
+                });
+            }
+        }
+        Ok(())
+    }
+}

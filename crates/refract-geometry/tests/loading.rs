@@ -1,0 +1,246 @@
+//! Loading OBJ and glTF files, good and broken ones (generated here, in a temporary directory).
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use refract_geometry::load::NormalSource;
+use refract_geometry::{GeometryError, LoadOptions, load_mesh};
+
+fn write(dir: &Path, name: &str, content: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, content).expect("write test file");
+    path
+}
+
+fn raw() -> LoadOptions {
+    LoadOptions {
+        normalize: false,
+        ..LoadOptions::default()
+    }
+}
+
+const CUBE_QUADS: &str = "\
+v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8
+";
+
+#[test]
+fn obj_quads_are_triangulated_and_normals_computed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let loaded = load_mesh(
+        &write(dir.path(), "cube.obj", CUBE_QUADS.as_bytes()),
+        &raw(),
+    )
+    .expect("cube");
+    let facts = loaded.mesh.facts();
+    assert_eq!((facts.triangles, facts.vertices), (12, 8));
+    assert!(facts.watertight);
+    assert!((facts.signed_volume - 8.0).abs() < 1e-5);
+    assert_eq!(loaded.report.normal_source, NormalSource::Computed);
+    // Angle-weighted corner normal of a cube: along the diagonal.
+    let corner = loaded.mesh.normals[6];
+    assert!((corner - Vec3::ONE.normalize()).length() < 1e-5, "{corner}");
+}
+
+#[test]
+fn inside_out_mesh_with_inward_non_unit_normals_is_fixed() {
+    // The cube wound inward with normals of length 6 pointing inward, like horse.obj.
+    let mut obj = String::from(
+        "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n",
+    );
+    for v in [
+        [-1, -1, -1],
+        [1, -1, -1],
+        [1, 1, -1],
+        [-1, 1, -1],
+        [-1, -1, 1],
+        [1, -1, 1],
+        [1, 1, 1],
+        [-1, 1, 1],
+    ] {
+        obj += &format!("vn {} {} {}\n", -6 * v[0], -6 * v[1], -6 * v[2]);
+    }
+    for f in [
+        "1 2 3 4", "8 7 6 5", "5 6 2 1", "6 7 3 2", "7 8 4 3", "8 5 1 4",
+    ] {
+        let face: Vec<String> = f.split(' ').map(|i| format!("{i}//{i}")).collect();
+        obj += &format!("f {}\n", face.join(" "));
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let loaded = load_mesh(
+        &write(dir.path(), "inside_out.obj", obj.as_bytes()),
+        &LoadOptions::default(),
+    )
+    .expect("loads");
+    let report = &loaded.report;
+    assert!(
+        report.flipped_inside_out && !report.flipped_file_normals,
+        "{report:?}"
+    );
+    assert_eq!(report.non_unit_normals, 8);
+    assert_eq!(report.normal_source, NormalSource::File);
+    let facts = loaded.mesh.facts();
+    assert!(facts.signed_volume > 0.0);
+    for (p, n) in loaded.mesh.positions.iter().zip(&loaded.mesh.normals) {
+        assert!(p.dot(*n) > 0.0 && (n.length() - 1.0).abs() < 1e-6);
+    }
+    // Normalised into the unit sphere.
+    assert!((facts.bounding_sphere.radius - 1.0).abs() < 1e-5);
+}
+
+#[test]
+fn broken_obj_files_give_errors_naming_the_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    type IsExpected = fn(&GeometryError) -> bool;
+    let cases: [(&str, &str, IsExpected); 6] = [
+        ("empty.obj", "", |e| {
+            matches!(e, GeometryError::EmptyFile { .. })
+        }),
+        (
+            "out_of_range.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+            |e| matches!(e, GeometryError::Obj { .. }),
+        ),
+        ("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", |e| {
+            matches!(e, GeometryError::NonFinite { vertex: 1, .. })
+        }),
+        (
+            "degenerate.obj",
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n",
+            |e| matches!(e, GeometryError::NoTriangles { degenerate: 2, .. }),
+        ),
+        ("points_only.obj", "v 0 0 0\nv 1 0 0\n", |e| {
+            matches!(e, GeometryError::NoTriangles { .. })
+        }),
+        ("truncated.obj", "v 0 0 0\nv 1 0 0\nv 0 1", |e| {
+            matches!(e, GeometryError::Obj { .. })
+        }),
+    ];
+    for (name, content, expected) in cases {
+        let path = write(dir.path(), name, content.as_bytes());
+        let err = load_mesh(&path, &raw()).expect_err(name);
+        assert!(expected(&err), "{name}: unexpected {err:?}");
+        assert!(
+            err.to_string().contains(name),
+            "{name}: message does not name the file: {err}"
+        );
+    }
+    let missing = load_mesh(&dir.path().join("missing.obj"), &raw()).expect_err("missing");
+    assert!(
+        matches!(missing, GeometryError::Io { .. }) && missing.to_string().contains("missing.obj")
+    );
+    let unsupported = load_mesh(&write(dir.path(), "mesh.stl", b"solid"), &raw()).expect_err("stl");
+    assert!(matches!(
+        unsupported,
+        GeometryError::UnsupportedFormat { .. }
+    ));
+}
+
+/// A GLB holding a tetrahedron under a translated and scaled node, with a glass material.
+fn tetrahedron_glb(index_override: Option<u16>) -> Vec<u8> {
+    let positions: [[f32; 3]; 4] = [
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+    ];
+    let mut indices: [u16; 12] = [0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
+    if let Some(bad) = index_override {
+        indices[5] = bad;
+    }
+    let mut bin: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},
+"extensionsUsed":["KHR_materials_ior","KHR_materials_transmission","KHR_materials_volume"],
+"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0,"translation":[2,0,0],"scale":[0.5,0.5,0.5]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
+"materials":[{{"extensions":{{"KHR_materials_ior":{{"ior":1.45}},
+  "KHR_materials_transmission":{{"transmissionFactor":1.0}},
+  "KHR_materials_volume":{{"thicknessFactor":0.2}}}}}}],
+"buffers":[{{"byteLength":{len}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-1,-1,-1],"max":[1,1,1]}},
+  {{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}}]}}"#,
+        len = bin.len()
+    );
+    let mut json = json.into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend((total as u32).to_le_bytes());
+    glb.extend((json.len() as u32).to_le_bytes());
+    glb.extend(0x4E4F_534Au32.to_le_bytes());
+    glb.extend(&json);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(0x004E_4942u32.to_le_bytes());
+    glb.extend(&bin);
+    glb
+}
+
+#[test]
+fn glb_with_node_transform_and_glass_material() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = write(dir.path(), "tetra.glb", &tetrahedron_glb(None));
+    let loaded = load_mesh(&path, &raw()).expect("glb loads");
+    let material = loaded.material.expect("glass material");
+    assert_eq!(material.ior, Some(1.45));
+    assert_eq!(material.transmission, Some(1.0));
+    assert_eq!(material.thickness, Some(0.2));
+    let facts = loaded.mesh.facts();
+    assert_eq!(facts.triangles, 4);
+    assert!(facts.watertight);
+    // Node transform: x' = 0.5 x + (2, 0, 0).
+    assert!((facts.bounding_sphere.center - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6);
+    assert!((facts.bounding_sphere.radius - 0.5 * 3f32.sqrt()).abs() < 1e-6);
+    // Volume of this regular tetrahedron (edge 2√2 · 0.5): 8/3 · 0.125, outward after any flip.
+    assert!(
+        (facts.signed_volume - 8.0 / 3.0 * 0.125).abs() < 1e-5,
+        "{facts:?}"
+    );
+}
+
+#[test]
+fn broken_gltf_files_give_errors_naming_the_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let good = tetrahedron_glb(None);
+    let cases: [(&str, Vec<u8>); 4] = [
+        ("truncated.glb", good[..good.len() / 2].to_vec()),
+        ("bad_index.glb", tetrahedron_glb(Some(40))),
+        (
+            "malformed.gltf",
+            b"{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ { ".to_vec(),
+        ),
+        (
+            "missing_buffer.gltf",
+            br#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":48,"uri":"nowhere.bin"}]}"#
+                .to_vec(),
+        ),
+    ];
+    for (name, bytes) in cases {
+        let err = load_mesh(&write(dir.path(), name, &bytes), &raw()).expect_err(name);
+        assert!(matches!(err, GeometryError::Gltf { .. }), "{name}: {err:?}");
+        assert!(err.to_string().contains(name), "{name}: {err}");
+    }
+    let no_mesh = write(
+        dir.path(),
+        "no_mesh.gltf",
+        br#"{"asset":{"version":"2.0"}}"#,
+    );
+    assert!(matches!(
+        load_mesh(&no_mesh, &raw()),
+        Err(GeometryError::NoTriangles { .. })
+    ));
+}
