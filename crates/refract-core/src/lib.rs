@@ -9,6 +9,7 @@
 //! * [`exit`]: Wyman 2005a §3.2–3.3, the exit normal and the second-interface TIR policy.
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
+//! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear.
 //! * [`vector`]: robust normalisation and well-conditioned angles.
 //!
 //! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
@@ -19,6 +20,7 @@
 //! The crate has no I/O, no threads, no GPU and allocates nothing.
 
 pub mod camera;
+pub mod environment;
 pub mod exit;
 pub mod fresnel;
 pub mod interpolated_distance;

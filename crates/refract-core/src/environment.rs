@@ -1,0 +1,90 @@
+//! Lat-long (equirectangular) environment mapping, as Mitsuba 3 looks maps up (design.md), so
+//! a scene can be checked against it.
+
+use core::f32::consts::{PI, TAU};
+
+use glam::{Vec2, Vec3};
+
+/// Texture coordinates of a unit world direction:
+/// `u = atan2(d.x, −d.z) / 2π` wrapped to `[0, 1)`, `v = acos(d.y) / π` (`v = 0` straight up),
+/// with `acos(d.y)` evaluated as `atan2(√(d.x² + d.z²), d.y)`, which keeps its digits at the
+/// poles.
+#[inline]
+pub fn direction_to_latlong(dir: Vec3) -> Vec2 {
+    let u = dir.x.atan2(-dir.z) / TAU;
+    let u = if u < 0.0 { u + 1.0 } else { u };
+    // `u + 1` can round to exactly 1 for tiny negative u.
+    let u = if u >= 1.0 { 0.0 } else { u };
+    let theta = (dir.x * dir.x + dir.z * dir.z).sqrt().atan2(dir.y);
+    Vec2::new(u, theta / PI)
+}
+
+/// The unit direction of lat-long coordinates, the inverse of [`direction_to_latlong`]:
+/// `θ = π v`, `φ = 2π u`, `d = (sin θ sin φ, cos θ, −sin θ cos φ)`.
+#[inline]
+pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
+    let (sin_theta, cos_theta) = (PI * uv.y).sin_cos();
+    let (sin_phi, cos_phi) = (TAU * uv.x).sin_cos();
+    Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
+}
+
+/// Bilinear lookup in a `width × height` lat-long image of linear RGB texels (row 0 at
+/// `v = 0`), texel centres at half-integers: `x = u·W − ½`, `y = v·H − ½`; wraps in `u`,
+/// clamps in `v`.
+#[inline]
+pub fn sample_latlong_bilinear(texels: &[Vec3], width: u32, height: u32, dir: Vec3) -> Vec3 {
+    let uv = direction_to_latlong(dir);
+    let x = uv.x * width as f32 - 0.5;
+    let y = (uv.y * height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let w = width as i64;
+    let wrap = |x: i64| x.rem_euclid(w) as usize;
+    let (xa, xb) = (wrap(x0 as i64), wrap(x0 as i64 + 1));
+    let ya = y0 as usize;
+    let yb = (ya + 1).min(height as usize - 1);
+    let at = |x: usize, y: usize| texels[y * width as usize + x];
+    let top = at(xa, ya).lerp(at(xb, ya), fx);
+    let bottom = at(xa, yb).lerp(at(xb, yb), fx);
+    top.lerp(bottom, fy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mitsuba_axes() {
+        // −z is u = 0, +x is u = 1/4, +z is u = 1/2; +y is v = 0.
+        assert!((direction_to_latlong(Vec3::NEG_Z) - Vec2::new(0.0, 0.5)).length() < 1e-6);
+        assert!((direction_to_latlong(Vec3::X) - Vec2::new(0.25, 0.5)).length() < 1e-6);
+        assert!((direction_to_latlong(Vec3::Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
+        assert!(direction_to_latlong(Vec3::Y).y.abs() < 1e-6);
+    }
+
+    #[test]
+    fn round_trip() {
+        for &d in &[
+            Vec3::new(0.3, 0.5, -0.2),
+            Vec3::new(-0.7, -0.1, 0.4),
+            Vec3::new(0.0, -1.0, 1e-3),
+        ] {
+            let d = d.normalize();
+            let back = latlong_to_direction(direction_to_latlong(d));
+            assert!((back - d).length() < 1e-5, "{d} -> {back}");
+        }
+    }
+
+    #[test]
+    fn bilinear_hits_texel_centres_and_wraps() {
+        // 4 × 2 map with distinct texels.
+        let texels: Vec<Vec3> = (0..8).map(|i| Vec3::splat(i as f32)).collect();
+        let centre = latlong_to_direction(Vec2::new(1.5 / 4.0, 0.5 / 2.0));
+        assert!(
+            (sample_latlong_bilinear(&texels, 4, 2, centre) - Vec3::splat(1.0)).length() < 1e-4
+        );
+        // Halfway across the seam between x = 3 and x = 0 on row 0.
+        let seam = latlong_to_direction(Vec2::new(0.0, 0.5 / 2.0));
+        assert!((sample_latlong_bilinear(&texels, 4, 2, seam) - Vec3::splat(1.5)).length() < 1e-4);
+    }
+}

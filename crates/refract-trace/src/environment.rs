@@ -1,0 +1,209 @@
+//! Distant lighting: lat-long HDR maps (`.exr`, `.hdr`), a constant colour, and the procedural
+//! default environment that needs no file.
+
+use std::path::Path;
+
+use glam::Vec3;
+use refract_core::environment::sample_latlong_bilinear;
+
+use crate::error::TraceError;
+
+/// A lat-long (equirectangular) map of linear RGB radiance, row 0 at the zenith.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LatLongMap {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width × height` texels, row-major from the top.
+    pub texels: Vec<Vec3>,
+}
+
+/// What loading a map had to fix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EnvironmentReport {
+    /// Negative channel values clamped to 0 (down-sampling ringing in real HDRIs).
+    pub negative_clamped: usize,
+    /// NaN or infinite channel values replaced by 0.
+    pub non_finite_replaced: usize,
+}
+
+/// Radiance arriving from infinitely far away, by direction.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// A lat-long map scaled by an intensity, looked up bilinearly (Mitsuba's convention).
+    LatLong {
+        /// The map.
+        map: LatLongMap,
+        /// Radiance scale.
+        intensity: f32,
+    },
+    /// The same radiance from every direction (the white furnace).
+    Constant(Vec3),
+    /// The built-in procedural sky and checkered ground, see [`procedural_radiance`].
+    Procedural,
+}
+
+impl Environment {
+    /// Radiance arriving along `-dir` (i.e. seen when looking along unit `dir`).
+    #[inline]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Self::LatLong { map, intensity } => {
+                *intensity * sample_latlong_bilinear(&map.texels, map.width, map.height, dir)
+            }
+            Self::Constant(c) => *c,
+            Self::Procedural => procedural_radiance(dir),
+        }
+    }
+}
+
+/// The built-in environment: structure everywhere, so refraction errors are visible.
+///
+/// - Sky (`d.y > 0`): a gradient from a pale horizon to a deep blue zenith, with twelve
+///   coloured meridian stripes (every 30° of azimuth, red at `−z`, up to 58° elevation) and a
+///   warm sun disc.
+/// - Ground (`d.y < 0`): a black-and-white checkerboard on the plane `y = −1` (squares of 0.5),
+///   fading into the horizon colour far away so that it does not alias.
+pub fn procedural_radiance(dir: Vec3) -> Vec3 {
+    const HORIZON: Vec3 = Vec3::new(0.85, 0.88, 0.92);
+    const ZENITH: Vec3 = Vec3::new(0.12, 0.3, 0.75);
+    if dir.y >= 0.0 {
+        let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
+        let azimuth = dir.x.atan2(-dir.z).to_degrees().rem_euclid(360.0);
+        let stripe = azimuth / 30.0;
+        // Meridians converge at the zenith: stop them below it.
+        if (stripe - stripe.round()).abs() < 0.06 && dir.y < 0.85 {
+            let hue = [
+                Vec3::new(0.9, 0.1, 0.1),
+                Vec3::new(0.95, 0.6, 0.1),
+                Vec3::new(0.2, 0.8, 0.2),
+                Vec3::new(0.6, 0.2, 0.8),
+            ];
+            sky = hue[(stripe.round() as usize) % 4];
+        }
+        let sun = Vec3::new(0.4, 0.6, -0.7).normalize();
+        if dir.dot(sun) > 0.995 {
+            sky = Vec3::new(8.0, 7.0, 5.0);
+        }
+        sky
+    } else {
+        let p = dir / -dir.y; // hit on the plane y = −1
+        let check = ((p.x * 2.0).floor() + (p.z * 2.0).floor()).rem_euclid(2.0);
+        let tile = if check < 1.0 {
+            Vec3::splat(0.9)
+        } else {
+            Vec3::splat(0.05)
+        };
+        let fade = (-dir.y * 4.0).min(1.0); // grazing rays see the horizon
+        HORIZON.lerp(tile, fade)
+    }
+}
+
+/// Loads a lat-long `.exr` (half or float, RGB or RGBA) or Radiance `.hdr` map. Negative and
+/// non-finite values are clamped to 0 and counted in the report.
+pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), TraceError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let (width, height, mut rgb) = match extension.as_deref() {
+        Some("exr") => read_exr(path)?,
+        Some("hdr") => read_hdr(path)?,
+        _ => {
+            return Err(TraceError::Format {
+                path: path.to_owned(),
+                message: "unsupported environment map; expected a lat-long .exr or .hdr file"
+                    .into(),
+            });
+        }
+    };
+    let mut report = EnvironmentReport::default();
+    for v in &mut rgb {
+        if !v.is_finite() {
+            *v = 0.0;
+            report.non_finite_replaced += 1;
+        } else if *v < 0.0 {
+            *v = 0.0;
+            report.negative_clamped += 1;
+        }
+    }
+    let texels = rgb.chunks_exact(3).map(Vec3::from_slice).collect();
+    Ok((
+        LatLongMap {
+            width,
+            height,
+            texels,
+        },
+        report,
+    ))
+}
+
+fn format_error(path: &Path, message: impl Into<String>) -> TraceError {
+    TraceError::Format {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// RGB of the first layer that has R, G and B channels (any layer name prefix).
+fn read_exr(path: &Path) -> Result<(u32, u32, Vec<f32>), TraceError> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|err| format_error(path, format!("not a readable OpenEXR file: {err}")))?;
+    for layer in &image.layer_data {
+        let find = |name: &str| {
+            layer.channel_data.list.iter().find(|c| {
+                let full = c.name.to_string();
+                full == name || full.ends_with(&format!(".{name}"))
+            })
+        };
+        let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) else {
+            continue;
+        };
+        let size = layer.size;
+        let (r, g, b): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+            r.sample_data.values_as_f32().collect(),
+            g.sample_data.values_as_f32().collect(),
+            b.sample_data.values_as_f32().collect(),
+        );
+        let rgb = (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect();
+        return Ok((size.width() as u32, size.height() as u32, rgb));
+    }
+    Err(format_error(
+        path,
+        "no layer with R, G and B channels; expected an RGB(A) lat-long map",
+    ))
+}
+
+fn read_hdr(path: &Path) -> Result<(u32, u32, Vec<f32>), TraceError> {
+    let image = image::open(path)
+        .map_err(|err| format_error(path, format!("not a readable Radiance .hdr file: {err}")))?;
+    let rgb = image.to_rgb32f();
+    Ok((rgb.width(), rgb.height(), rgb.into_raw()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn procedural_environment_has_structure_everywhere() {
+        let below = procedural_radiance(Vec3::new(0.1, -0.5, -0.3).normalize());
+        let other = procedural_radiance(Vec3::new(0.35, -0.5, -0.3).normalize());
+        assert_ne!(below, other, "checker squares differ");
+        let sky = procedural_radiance(Vec3::Y);
+        assert!(sky.z > sky.x, "blue zenith");
+        let stripe = procedural_radiance(Vec3::new(0.0, 0.2, -1.0).normalize());
+        assert!(
+            stripe.x > 0.8 && stripe.y < 0.2,
+            "red stripe toward −z: {stripe}"
+        );
+    }
+}
