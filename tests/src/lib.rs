@@ -7,6 +7,8 @@
 
 use std::path::PathBuf;
 
+pub mod scenes;
+
 /// The workspace root (the parent of this crate's directory).
 pub fn workspace_root() -> PathBuf {
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));

@@ -71,7 +71,7 @@ fn sphere_errors(mode: DistanceMode, ior: f32) -> (f32, f32, usize) {
             let p2 = p1 + (-2.0 * p1.dot(t1)) * t1;
             let t2 = refract(t1, -p2 / RADIUS, ior);
             p2_err += (path.p2 - p2).length() / (2.0 * RADIUS);
-            t2_err += path.t2.angle_between(t2).to_degrees();
+            t2_err += refract_core::vector::angle_between(path.t2, t2).to_degrees();
             count += 1;
         }
     }

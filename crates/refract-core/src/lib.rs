@@ -8,6 +8,7 @@
 //! * [`interpolated_distance`]: Wyman 2005a §3.1, the distance `d~` from `P1` to `P2`.
 //! * [`exit`]: Wyman 2005a §3.2–3.3, the exit normal and the second-interface TIR policy.
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
+//! * [`method`]: the method ids (`single`, `wyman`, `wyman-dv`, `wyman-dn`) and back surfaces.
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
 //! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear.
 //! * [`vector`]: robust normalisation and well-conditioned angles.
@@ -25,6 +26,7 @@ pub mod exit;
 pub mod fresnel;
 pub mod interpolated_distance;
 pub mod kernel;
+pub mod method;
 pub mod optics;
 pub mod vector;
 
@@ -35,3 +37,4 @@ pub use kernel::{
     BackFaceSample, BackFaceSampler, DegenerateInput, FrontSurface, ImageSpaceParams, InvalidIor,
     OneInterfacePath, TwoInterfacePath,
 };
+pub use method::{BackSurface, Method};

@@ -1,0 +1,17 @@
+//! # refract-cpu
+//!
+//! The CPU backend: it produces the same image-space buffers a GPU rasteriser produces
+//! ([`raster`]: pixel centres, top-left rule, perspective-correct interpolation, near-plane
+//! clipping, parallel deterministic tiles), then runs refract-core's kernels per pixel
+//! ([`render`]) for the methods `single`, `wyman`, `wyman-dv` and `wyman-dn` (Wyman 2005a).
+
+pub mod buffers;
+pub mod raster;
+pub mod render;
+
+pub use buffers::{BackFaces, PreparedRefractor, front_faces};
+pub use raster::{DepthTest, Faces, SurfaceBuffer, rasterize};
+pub use render::{
+    CpuError, FrameBuffers, MethodAov, MethodFrame, MethodParams, render_buffers, render_method,
+    shade,
+};
