@@ -1,0 +1,228 @@
+//! `refract compare` (and the default job): every method against the reference on each scene,
+//! with images, error maps, `metrics.json`, `report.md` and `index.html`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use refract_core::exit::TirPolicy;
+use refract_core::{Camera, CameraDesc, Method};
+use refract_cpu::{MethodParams, PreparedRefractor, render_method};
+use refract_trace::{TraceSettings, render};
+
+use crate::images::{write_color, write_error_map, write_mask};
+use crate::metrics::{MetricsRecord, evaluate, reference_record};
+use crate::report::{SceneImages, write_reports};
+use crate::scene_file::load_scene;
+
+/// What to compare.
+pub struct CompareOptions {
+    /// Scene names or files.
+    pub scenes: Vec<String>,
+    /// Methods.
+    pub methods: Vec<Method>,
+    /// Square resolution.
+    pub res: u32,
+    /// Reference samples per pixel.
+    pub spp: u32,
+    /// Timed frames per method (after 2 warm-up frames).
+    pub frames: u32,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Second-interface TIR policy.
+    pub tir_policy: TirPolicy,
+}
+
+/// Error-map scales (the top of each colour bar).
+pub const T2_SCALE_DEG: f32 = 20.0;
+/// |P~2 − P2| scale, fraction of the bounding-sphere diameter.
+pub const P2_SCALE: f32 = 0.2;
+
+fn bar(len: u64, message: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(message.to_owned());
+    bar
+}
+
+/// Median of `frames` timed runs after two warm-up runs, in milliseconds.
+fn median_ms(frames: u32, mut run: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+    for _ in 0..2 {
+        run()?;
+    }
+    let mut times = Vec::with_capacity(frames as usize);
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        run()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(times[times.len() / 2])
+}
+
+/// Runs the comparison and writes everything into `options.out`; returns the records.
+pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
+    std::fs::create_dir_all(&options.out).with_context(|| {
+        format!(
+            "{}: cannot create the output directory",
+            options.out.display()
+        )
+    })?;
+    let mut scenes = Vec::new();
+    for spec in &options.scenes {
+        let scene = load_scene(spec)?;
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
+        }
+        scenes.push(scene);
+    }
+    eprintln!("note: GPU backend not implemented yet; comparing the CPU backend only");
+
+    let references = bar(scenes.len() as u64, "reference");
+    let methods = bar((scenes.len() * options.methods.len()) as u64, "methods");
+    let mut records = Vec::new();
+    let mut scene_images = Vec::new();
+    for loaded in &scenes {
+        let camera = Camera::new(CameraDesc {
+            width: options.res,
+            height: options.res,
+            ..loaded.camera
+        })
+        .with_context(|| format!("scene {}: camera", loaded.name))?;
+        let dir = options.out.join(&loaded.name);
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
+
+        let settings = TraceSettings {
+            spp: options.spp,
+            ..TraceSettings::default()
+        };
+        let start = Instant::now();
+        let reference = render(&loaded.scene, &camera, &settings);
+        let reference_ms = start.elapsed().as_secs_f64() * 1e3;
+        references.inc(1);
+        write_color(
+            &dir.join("reference.png"),
+            options.res,
+            options.res,
+            &reference.radiance,
+        )?;
+        reference.write_exr(&dir.join("reference.exr"))?;
+        let tir: Vec<bool> = reference.aov.iter().map(|a| a.tir).collect();
+        write_mask(
+            &dir.join("tir-reference.png"),
+            options.res,
+            options.res,
+            &tir,
+            &reference.radiance,
+        )?;
+        let mut row = reference_record(&reference, reference_ms);
+        row.scene.clone_from(&loaded.name);
+        records.push(row);
+
+        let diameter = 2.0 * loaded.scene.refractor.mesh.bounding_sphere().radius;
+        let prepared = PreparedRefractor {
+            mesh: &loaded.scene.refractor.mesh,
+            d_n: &loaded.d_n,
+        };
+        let mut method_ids = Vec::new();
+        for &method in &options.methods {
+            let params = MethodParams {
+                method,
+                ior: loaded.scene.refractor.ior(),
+                tir_policy: options.tir_policy,
+            };
+            let environment = &loaded.scene.environment;
+            let frame = render_method(&prepared, environment, &camera, &params)?;
+            let ms = median_ms(options.frames, || {
+                render_method(&prepared, environment, &camera, &params)?;
+                Ok(())
+            })?;
+            let (mut record, maps) = evaluate(&reference, &frame, diameter);
+            record.scene.clone_from(&loaded.name);
+            record.method = method.id().to_owned();
+            record.backend = "cpu".to_owned();
+            record.ms_per_frame = Some(ms);
+            records.push(record);
+
+            let stem = format!("{}-cpu", method.id());
+            let (w, h) = (options.res, options.res);
+            write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
+            write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
+            write_error_map(
+                &dir.join(format!("t2err-{stem}.png")),
+                w,
+                h,
+                &maps.t2_deg,
+                T2_SCALE_DEG,
+            )?;
+            if method != Method::Single {
+                write_error_map(
+                    &dir.join(format!("p2err-{stem}.png")),
+                    w,
+                    h,
+                    &maps.p2_rel,
+                    P2_SCALE,
+                )?;
+            }
+            let tir: Vec<bool> = frame.aov.iter().map(|a| a.tir).collect();
+            write_mask(
+                &dir.join(format!("tir-{stem}.png")),
+                w,
+                h,
+                &tir,
+                &frame.color,
+            )?;
+            method_ids.push(stem);
+            methods.inc(1);
+        }
+        scene_images.push(SceneImages {
+            scene: loaded.name.clone(),
+            methods: method_ids,
+        });
+    }
+    references.finish_and_clear();
+    methods.finish_and_clear();
+    write_reports(&options.out, &records, &scene_images, options)?;
+    Ok(records)
+}
+
+/// The summary table printed at the end.
+pub fn print_summary(records: &[MetricsRecord], out: &Path) {
+    let f = |v: Option<f64>, digits: usize| {
+        v.map_or_else(|| "-".to_owned(), |v| format!("{v:.digits$}"))
+    };
+    println!(
+        "{:<10} {:<10} {:<7} {:>8} {:>8} {:>12} {:>12} {:>7} {:>10}",
+        "scene",
+        "method",
+        "backend",
+        "PSNR dB",
+        "FLIP",
+        "T2 err deg",
+        "P2 err/diam",
+        "TIR",
+        "ms/frame"
+    );
+    for r in records {
+        println!(
+            "{:<10} {:<10} {:<7} {:>8} {:>8} {:>12} {:>12} {:>7} {:>10}",
+            r.scene,
+            r.method,
+            r.backend,
+            f(r.psnr_db, 2),
+            f(r.flip_mean, 4),
+            f(r.t2_angle_deg_mean_non_tir, 3),
+            f(r.p2_error_rel_mean_non_tir, 4),
+            f(r.tir_fraction.map(|t| 100.0 * t), 1) + "%",
+            f(r.ms_per_frame, 1)
+        );
+    }
+    println!(
+        "\nwrote {}/index.html, report.md and metrics.json",
+        out.display()
+    );
+}

@@ -1,0 +1,162 @@
+//! `metrics.json`, `report.md` and `index.html` of a comparison.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Context;
+
+use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
+use crate::metrics::MetricsRecord;
+
+/// The images written for one scene.
+pub struct SceneImages {
+    /// Scene name (its subdirectory).
+    pub scene: String,
+    /// `method-backend` stems.
+    pub methods: Vec<String>,
+}
+
+fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
+    let temporary = path.with_extension("partial");
+    std::fs::write(&temporary, text)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    std::fs::rename(&temporary, path)
+        .with_context(|| format!("{}: cannot move into place", path.display()))
+}
+
+fn cell(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
+}
+
+fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 10]> {
+    records
+        .iter()
+        .map(|r| {
+            [
+                r.scene.clone(),
+                r.method.clone(),
+                r.backend.clone(),
+                cell(r.psnr_db, 2),
+                cell(r.flip_mean, 4),
+                cell(r.t2_angle_deg_mean, 3),
+                cell(r.t2_angle_deg_mean_non_tir, 3),
+                cell(r.p2_error_rel_mean_non_tir, 4),
+                cell(r.tir_fraction.map(|t| 100.0 * t), 1),
+                cell(r.ms_per_frame, 2),
+            ]
+        })
+        .collect()
+}
+
+const HEADERS: [&str; 10] = [
+    "scene",
+    "method",
+    "backend",
+    "PSNR (dB)",
+    "mean FLIP",
+    "T2 error (°)",
+    "T2 error, no TIR (°)",
+    "|P~2−P2|/diam, no TIR",
+    "TIR (%)",
+    "ms / frame",
+];
+
+/// Writes the three report files.
+pub fn write_reports(
+    out: &Path,
+    records: &[MetricsRecord],
+    scenes: &[SceneImages],
+    options: &CompareOptions,
+) -> anyhow::Result<()> {
+    let json = serde_json::to_string_pretty(records).context("serialising metrics")?;
+    write_atomically(&out.join("metrics.json"), &json)?;
+
+    let rows = table_rows(records);
+    let mut md = String::new();
+    let _ = writeln!(md, "# refract comparison\n");
+    let _ = writeln!(
+        md,
+        "{}², reference: exact tracer, `transmission` mode, {} spp, depth 8. Times: median of {} frames \
+         after 2 warm-up frames (buffers + kernel), this machine. GPU backend: not implemented yet.\n",
+        options.res, options.spp, options.frames
+    );
+    let _ = writeln!(md, "| {} |", HEADERS.join(" | "));
+    let _ = writeln!(md, "|{}|", ["---"; 10].join("|"));
+    for row in &rows {
+        let _ = writeln!(md, "| {} |", row.join(" | "));
+    }
+    for scene in scenes {
+        let _ = writeln!(md, "\n## {}\n", scene.scene);
+        let _ = writeln!(
+            md,
+            "| reference | method | FLIP | T2 error (0–{T2_SCALE_DEG}°) |\n|---|---|---|---|"
+        );
+        for m in &scene.methods {
+            let s = &scene.scene;
+            let _ = writeln!(
+                md,
+                "| ![]({s}/reference.png) | ![]({s}/{m}.png) `{m}` | ![]({s}/flip-{m}.png) | ![]({s}/t2err-{m}.png) |"
+            );
+        }
+    }
+    write_atomically(&out.join("report.md"), &md)?;
+
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>refract comparison</title><style>\
+body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
+table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:4px 10px;border-bottom:1px solid #ddd;text-align:right}}\
+td:nth-child(-n+3),th:nth-child(-n+3){{text-align:left}}th{{background:#eee}}\
+.row{{display:flex;gap:8px;align-items:flex-start;margin:8px 0}}.row figure{{margin:0}}\
+img{{width:256px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:264px}}\
+figcaption{{font-size:12px;color:#555}}h2{{margin-top:32px}}</style></head><body>\
+<h1>refract comparison</h1><p>{res}&sup2; pixels. Reference: exact ray tracer, transmission mode, {spp} spp, depth 8. \
+Times: median of {frames} frames after 2 warm-up frames, buffers + kernel. The GPU backend is not implemented yet.</p><table><tr>",
+        res = options.res,
+        spp = options.spp,
+        frames = options.frames
+    );
+    for h in HEADERS {
+        let _ = write!(html, "<th>{h}</th>");
+    }
+    html.push_str("</tr>");
+    for row in &rows {
+        html.push_str("<tr>");
+        for c in row {
+            let _ = write!(html, "<td>{c}</td>");
+        }
+        html.push_str("</tr>");
+    }
+    let _ = write!(
+        html,
+        "</table><p>Error maps use the magma colour map with a colour bar on the right: FLIP 0–1, \
+T2 angle error 0–{T2_SCALE_DEG}°, |P~2−P2| 0–{P2_SCALE} of the bounding-sphere diameter; grey where a \
+quantity does not exist. TIR masks show TIR pixels in magenta.</p>"
+    );
+    for scene in scenes {
+        let s = &scene.scene;
+        let _ = write!(html, "<h2>{s}</h2>");
+        for m in &scene.methods {
+            let _ = write!(
+                html,
+                "<div class=\"row\"><figure><img src=\"{s}/reference.png\"><figcaption>reference</figcaption></figure>\
+<figure><img src=\"{s}/{m}.png\"><figcaption>{m}</figcaption></figure>\
+<figure><img class=\"map\" src=\"{s}/flip-{m}.png\"><figcaption>FLIP (0–1)</figcaption></figure>\
+<figure><img class=\"map\" src=\"{s}/t2err-{m}.png\"><figcaption>T2 error (0–{T2_SCALE_DEG}°)</figcaption></figure>"
+            );
+            if !m.starts_with("single") {
+                let _ = write!(
+                    html,
+                    "<figure><img class=\"map\" src=\"{s}/p2err-{m}.png\"><figcaption>|P~2−P2| (0–{P2_SCALE} diam)</figcaption></figure>"
+                );
+            }
+            let _ = write!(
+                html,
+                "<figure><img src=\"{s}/tir-{m}.png\"><figcaption>TIR ({m})</figcaption></figure></div>"
+            );
+        }
+    }
+    html.push_str("</body></html>\n");
+    write_atomically(&out.join("index.html"), &html)
+}

@@ -1,0 +1,368 @@
+//! Scene files (TOML) and the built-in scenes, turned into what the backends and the reference
+//! render. Relative paths are relative to the scene file.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use glam::{Affine3A, EulerRot, Quat, Vec3};
+use refract_core::CameraDesc;
+use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
+use refract_trace::{Albedo, Environment, Object, Refractor, Scene, load_latlong};
+use serde::Deserialize;
+
+/// The built-in scenes: name, one line, TOML. They need no file.
+pub const BUILTIN_SCENES: [(&str, &str, &str); 3] = [
+    (
+        "sphere",
+        "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
+        "[refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\n",
+    ),
+    (
+        "torus",
+        "a torus (concave, depth complexity 4), IOR 1.33 (water)",
+        "[refractor]\nmesh = \"builtin:torus\"\nior = 1.33\nrotate_deg = [60.0, 0.0, 0.0]\n",
+    ),
+    (
+        "lens",
+        "a spade-built biconvex spectacle lens, IOR 1.5, seen along its axis",
+        "[camera]\neye = [0.0, 0.3, 3.0]\n\n[refractor]\nmesh = \"builtin:lens\"\nior = 1.5\n",
+    ),
+];
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    camera: CameraSection,
+    #[serde(default)]
+    environment: EnvironmentSection,
+    refractor: RefractorSection,
+    #[serde(default)]
+    objects: Vec<ObjectSection>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct CameraSection {
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: [f32; 3],
+    fov_y_deg: f32,
+}
+
+impl Default for CameraSection {
+    fn default() -> Self {
+        let d = CameraDesc::default();
+        Self {
+            eye: d.eye.into(),
+            target: d.target.into(),
+            up: d.up.into(),
+            fov_y_deg: d.fov_y.to_degrees(),
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentSection {
+    file: Option<String>,
+    #[serde(default = "one")]
+    intensity: f32,
+}
+
+impl Default for EnvironmentSection {
+    fn default() -> Self {
+        Self {
+            file: None,
+            intensity: 1.0,
+        }
+    }
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RefractorSection {
+    mesh: String,
+    #[serde(default = "default_ior")]
+    ior: f32,
+    #[serde(default = "yes")]
+    normalize: bool,
+    #[serde(default)]
+    translate: [f32; 3],
+    #[serde(default = "one")]
+    scale: f32,
+    #[serde(default)]
+    rotate_deg: [f32; 3],
+}
+
+fn default_ior() -> f32 {
+    1.5
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectSection {
+    mesh: String,
+    #[serde(default)]
+    normalize: bool,
+    #[serde(default)]
+    translate: [f32; 3],
+    #[serde(default = "one")]
+    scale: f32,
+    #[serde(default)]
+    rotate_deg: [f32; 3],
+    /// Linear RGB albedo (default 0.6 grey) when no texture is given.
+    color: Option<[f32; 3]>,
+    /// `checker` or `color-chart`.
+    texture: Option<String>,
+}
+
+/// A scene ready to render: the reference's scene, `d_N`, and the camera without resolution.
+pub struct LoadedScene {
+    /// Built-in name or file stem.
+    pub name: String,
+    /// Refractor, objects, environment, light.
+    pub scene: Scene,
+    /// Per-vertex `d_N` of the refractor.
+    pub d_n: Vec<f32>,
+    /// The camera (its width and height are set per run).
+    pub camera: CameraDesc,
+    /// Lines to show the user (mesh and environment quirks fixed on load).
+    pub warnings: Vec<String>,
+}
+
+/// A built-in scene name or a path to a `.toml` scene file.
+pub fn load_scene(spec: &str) -> anyhow::Result<LoadedScene> {
+    if let Some((name, _, toml)) = BUILTIN_SCENES.iter().find(|(name, _, _)| *name == spec) {
+        return build(name, toml, Path::new("."), "built-in scene");
+    }
+    let path = PathBuf::from(spec);
+    if path.extension().is_none_or(|e| e != "toml") {
+        let names: Vec<&str> = BUILTIN_SCENES.iter().map(|s| s.0).collect();
+        bail!(
+            "unknown scene `{spec}`: expected a built-in scene ({}) or a .toml scene file",
+            names.join(", ")
+        );
+    }
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{}: cannot read the scene file", path.display()))?;
+    let name = path
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+    let base = path.parent().map(Path::to_owned).unwrap_or_default();
+    build(&name, &text, &base, &path.display().to_string())
+}
+
+fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<LoadedScene> {
+    let file: SceneFile = toml::from_str(text)
+        .map_err(|err| anyhow::anyhow!("{origin}: {}", err.to_string().trim_end()))?;
+    let mut warnings = Vec::new();
+    let (mesh, glass_ior) = load_refractor_mesh(
+        &file.refractor.mesh,
+        file.refractor.normalize,
+        base,
+        &mut warnings,
+    )?;
+    let mut mesh = mesh;
+    let r = &file.refractor;
+    mesh.transform(&affine(r.translate, r.scale, r.rotate_deg));
+    let ior = file.refractor.ior;
+    if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
+        warnings.push(format!(
+            "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
+        ));
+    }
+    let bvh = MeshBvh::build(&mesh);
+    let d_n = normal_distances(&mesh, &bvh);
+    if d_n.misses > 0 {
+        warnings.push(format!(
+            "d_N: {} of {} vertices missed (open mesh); they use {:.4}",
+            d_n.misses,
+            d_n.values.len(),
+            d_n.fallback
+        ));
+    }
+    let refractor =
+        Refractor::new(mesh, ior).with_context(|| format!("{origin}: [refractor] ior"))?;
+
+    let environment = match &file.environment.file {
+        None => Environment::Procedural,
+        Some(env) => {
+            let path = base.join(env);
+            let (map, report) = load_latlong(&path)?;
+            if report.negative_clamped + report.non_finite_replaced > 0 {
+                warnings.push(format!(
+                    "{}: clamped {} negative and {} non-finite texel values to 0",
+                    path.display(),
+                    report.negative_clamped,
+                    report.non_finite_replaced
+                ));
+            }
+            Environment::LatLong {
+                map,
+                intensity: file.environment.intensity,
+            }
+        }
+    };
+
+    let mut objects = Vec::new();
+    for (k, object) in file.objects.iter().enumerate() {
+        let (mut mesh, _) =
+            load_refractor_mesh(&object.mesh, object.normalize, base, &mut warnings)?;
+        mesh.transform(&affine(object.translate, object.scale, object.rotate_deg));
+        let albedo = match object.texture.as_deref() {
+            None => Albedo::Constant(object.color.map_or(Vec3::splat(0.6), Vec3::from)),
+            Some("checker") => Albedo::Checker {
+                a: Vec3::splat(0.8),
+                b: Vec3::splat(0.1),
+                squares: 8.0,
+            },
+            Some("color-chart") => Albedo::ColorChart,
+            Some(other) => bail!(
+                "{origin}: objects[{k}].texture = \"{other}\": expected \"checker\" or \"color-chart\""
+            ),
+        };
+        objects.push(Object::new(mesh, albedo));
+    }
+
+    let c = &file.camera;
+    let camera = CameraDesc {
+        eye: Vec3::from(c.eye),
+        target: Vec3::from(c.target),
+        up: Vec3::from(c.up),
+        fov_y: c.fov_y_deg.to_radians(),
+        ..CameraDesc::default()
+    };
+    let mut scene = Scene::new(refractor, environment);
+    scene.objects = objects;
+    Ok(LoadedScene {
+        name: name.to_owned(),
+        scene,
+        d_n: d_n.values,
+        camera,
+        warnings,
+    })
+}
+
+fn load_refractor_mesh(
+    spec: &str,
+    normalize: bool,
+    base: &Path,
+    warnings: &mut Vec<String>,
+) -> anyhow::Result<(Mesh, Option<f32>)> {
+    if spec.starts_with(builtin::PREFIX) {
+        let mut mesh = builtin::mesh(spec)?;
+        if normalize {
+            mesh.normalize_to_unit_sphere();
+        }
+        return Ok((mesh, None));
+    }
+    let path = base.join(spec);
+    let loaded = load_mesh(
+        &path,
+        &LoadOptions {
+            normalize,
+            ..LoadOptions::default()
+        },
+    )?;
+    warnings.extend(
+        loaded
+            .report
+            .warnings
+            .iter()
+            .map(|w| format!("{}: {w}", path.display())),
+    );
+    Ok((loaded.mesh, loaded.material.and_then(|m| m.ior)))
+}
+
+/// `x' = T · R_xyz · S · x`: scale, then XYZ Euler rotation, then translation.
+fn affine(translate: [f32; 3], scale: f32, rotate_deg: [f32; 3]) -> Affine3A {
+    let [rx, ry, rz] = rotate_deg.map(f32::to_radians);
+    Affine3A::from_scale_rotation_translation(
+        Vec3::splat(scale),
+        Quat::from_euler(EulerRot::XYZ, rx, ry, rz),
+        Vec3::from(translate),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_scenes_load() {
+        for (name, _, _) in BUILTIN_SCENES {
+            let scene = load_scene(name).expect(name);
+            assert_eq!(scene.name, name);
+            assert!(scene.d_n.iter().all(|d| d.is_finite()));
+        }
+    }
+
+    #[test]
+    fn scene_file_errors_name_the_file_and_key() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let write = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).expect("write");
+            path.display().to_string()
+        };
+        let unknown = write(
+            "unknown.toml",
+            "[refractor]\nmesh = \"builtin:sphere\"\nshininess = 3\n",
+        );
+        let err = load_scene(&unknown).err().expect("unknown key").to_string();
+        assert!(
+            err.contains("unknown.toml") && err.contains("shininess"),
+            "{err}"
+        );
+        let wrong = write(
+            "wrong.toml",
+            "[refractor]\nmesh = \"builtin:sphere\"\nior = \"glass\"\n",
+        );
+        let err = load_scene(&wrong).err().expect("wrong type").to_string();
+        assert!(err.contains("wrong.toml") && err.contains("ior"), "{err}");
+        let missing = write("missing.toml", "[refractor]\nmesh = \"nowhere.obj\"\n");
+        let err = format!("{:#}", load_scene(&missing).err().expect("missing mesh"));
+        assert!(err.contains("nowhere.obj"), "{err}");
+        let bad_ior = write(
+            "bad_ior.toml",
+            "[refractor]\nmesh = \"builtin:sphere\"\nior = -1.0\n",
+        );
+        let err = format!("{:#}", load_scene(&bad_ior).err().expect("bad ior"));
+        assert!(err.contains("bad_ior.toml") && err.contains("ior"), "{err}");
+        let err = load_scene("teapot-in-space")
+            .err()
+            .expect("unknown")
+            .to_string();
+        assert!(err.contains("sphere, torus, lens"), "{err}");
+    }
+
+    #[test]
+    fn objects_and_transforms_are_read() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("scene.toml");
+        std::fs::write(
+            &path,
+            "[camera]\neye = [0.0, 1.0, 4.0]\nfov_y_deg = 30.0\n\n[refractor]\nmesh = \"builtin:icosphere\"\nior = 1.2\n\
+             translate = [0.0, 0.5, 0.0]\nscale = 0.5\n\n[[objects]]\nmesh = \"builtin:plane\"\ntexture = \"checker\"\n\
+             translate = [0.0, -1.0, 0.0]\nscale = 3.0\n",
+        )
+        .expect("write");
+        let scene = load_scene(&path.display().to_string()).expect("scene");
+        assert_eq!(scene.scene.objects.len(), 1);
+        let sphere = scene.scene.refractor.mesh.bounding_sphere();
+        assert!(
+            (sphere.center - Vec3::new(0.0, 0.5, 0.0)).length() < 1e-5
+                && (sphere.radius - 0.5).abs() < 1e-5
+        );
+        assert!((scene.camera.fov_y.to_degrees() - 30.0).abs() < 1e-4);
+    }
+}

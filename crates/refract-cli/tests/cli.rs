@@ -1,0 +1,173 @@
+//! The `refract` binary end to end, at small resolutions.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn refract(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_refract"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run refract")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn compare_writes_metrics_images_and_reports() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(
+        &[
+            "compare", "sphere", "lens", "--res", "48", "--frames", "1", "--out", "cmp",
+        ],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let out = dir.path().join("cmp");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).expect("metrics"))
+            .expect("json");
+    let records = metrics.as_array().expect("array");
+    assert_eq!(records.len(), 2 * 5, "reference + 4 methods per scene");
+    let fields = [
+        "scene",
+        "method",
+        "backend",
+        "width",
+        "height",
+        "rmse",
+        "psnr_db",
+        "flip_mean",
+        "t2_angle_deg_mean",
+        "t2_angle_deg_mean_non_tir",
+        "p2_error_rel_mean",
+        "p2_error_rel_mean_non_tir",
+        "tir_fraction",
+        "ms_per_frame",
+    ];
+    for record in records {
+        let object = record.as_object().expect("object");
+        assert_eq!(object.len(), fields.len());
+        for field in fields {
+            assert!(object.contains_key(field), "{field}");
+        }
+    }
+    let single = records
+        .iter()
+        .find(|r| r["method"] == "single" && r["scene"] == "sphere")
+        .expect("single");
+    assert!(single["p2_error_rel_mean"].is_null() && single["flip_mean"].as_f64().is_some());
+    for file in [
+        "index.html",
+        "report.md",
+        "sphere/reference.png",
+        "sphere/reference.exr",
+        "sphere/flip-wyman-cpu.png",
+        "lens/p2err-wyman-cpu.png",
+    ] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let leftovers: Vec<_> = walk(&out)
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).expect("read dir").flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(walk(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
+}
+
+#[test]
+fn render_writes_png_and_exr() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (method, file) in [
+        ("wyman", "w.png"),
+        ("reference", "r.exr"),
+        ("single", "s.exr"),
+    ] {
+        let output = refract(
+            &[
+                "render", "torus", "--method", method, "--res", "40x30", "--out", file,
+            ],
+            dir.path(),
+        );
+        assert!(output.status.success(), "{method}: {}", stderr(&output));
+        assert!(dir.path().join(file).is_file());
+    }
+}
+
+#[test]
+fn bad_input_gives_one_clear_error_line_and_a_failure() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
+    )
+    .expect("write");
+    let cases: [(&[&str], &str); 6] = [
+        (&["compare", "sphere", "--methods", "wyman,magic"], "magic"),
+        (
+            &["compare", "nowhere", "--res", "16"],
+            "sphere, torus, lens",
+        ),
+        (&["compare", "bad.toml", "--res", "16"], "colour"),
+        (
+            &["render", "sphere", "--res", "0x10", "--out", "x.png"],
+            "--res",
+        ),
+        (
+            &[
+                "render", "sphere", "--ior", "-2", "--res", "8", "--out", "x.png",
+            ],
+            "ior",
+        ),
+        (
+            &[
+                "compare",
+                "sphere",
+                "--res",
+                "8",
+                "--frames",
+                "1",
+                "--out",
+                "/proc/refract-cannot-write",
+            ],
+            "refract-cannot-write",
+        ),
+    ];
+    for (args, expected) in cases {
+        let output = refract(args, dir.path());
+        let err = stderr(&output);
+        assert!(!output.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
+    assert!(
+        !dir.path().join("x.png").exists(),
+        "no partial output on failure"
+    );
+}
+
+#[test]
+fn scenes_lists_the_builtins() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(&["scenes"], dir.path());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        output.status.success()
+            && text.contains("sphere")
+            && text.contains("torus")
+            && text.contains("lens")
+    );
+}
