@@ -108,8 +108,8 @@ pub fn write_reports(
 body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
 table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:4px 10px;border-bottom:1px solid #ddd;text-align:right}}\
 td:nth-child(-n+3),th:nth-child(-n+3){{text-align:left}}th{{background:#eee}}\
-.row{{display:flex;gap:8px;align-items:flex-start;margin:8px 0}}.row figure{{margin:0}}\
-img{{width:256px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:264px}}\
+.row{{display:flex;flex-wrap:wrap;gap:8px;align-items:flex-start;margin:8px 0}}.row figure{{margin:0}}\
+img{{width:220px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:227px}}\
 figcaption{{font-size:12px;color:#555}}h2{{margin-top:32px}}</style></head><body>\
 <h1>refract comparison</h1><p>{res}&sup2; pixels. Reference: exact ray tracer, transmission mode, {spp} spp, depth 8. \
 Times: median of {frames} frames after 2 warm-up frames, buffers + kernel. The GPU backend is not implemented yet.</p><table><tr>",

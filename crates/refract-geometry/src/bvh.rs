@@ -143,7 +143,7 @@ fn to_obvhs(ray: &Ray, t_min: f32, t_max: f32) -> ObvhsRay {
     ObvhsRay::new(ray.origin.into(), dir, t_min, t_max)
 }
 
-/// Barycentric slack of [`intersect`]: edges are widened by this fraction of the triangle.
+/// Barycentric slack of the ray-triangle test: edges are widened by this fraction of the triangle.
 pub const EDGE_TOLERANCE: f32 = 1e-5;
 
 /// Double-sided Möller–Trumbore with edges widened by [`EDGE_TOLERANCE`]

@@ -77,7 +77,8 @@ pub struct LoadedMesh {
     pub report: LoadReport,
 }
 
-/// Loads `.obj`, `.gltf` or `.glb` and prepares the mesh with [`prepare`].
+/// Loads `.obj`, `.gltf` or `.glb` and prepares the mesh (degenerates removed, normals made
+/// unit or computed, inside-out closed meshes turned, optional normalisation; see [`LoadReport`]).
 pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh, GeometryError> {
     let metadata = std::fs::metadata(path).map_err(|source| GeometryError::Io {
         path: path.to_owned(),
