@@ -16,8 +16,40 @@ use crate::metrics::{MetricsRecord, evaluate, reference_record};
 use crate::report::{SceneImages, write_reports};
 use crate::scene_file::load_scene;
 
+/// Which backends run the methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// refract-cpu.
+    Cpu,
+    /// refract-gpu (wgpu).
+    Gpu,
+}
+
+impl Backend {
+    /// The id in file names and metrics.
+    pub fn id(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+        }
+    }
+}
+
+/// What to do when no GPU adapter exists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuPolicy {
+    /// The user asked for the GPU: no adapter is an error.
+    Required,
+    /// The default job: compare on the CPU with a one-line notice.
+    IfAvailable,
+}
+
 /// What to compare.
 pub struct CompareOptions {
+    /// Backends.
+    pub backends: Vec<Backend>,
+    /// What a missing adapter means.
+    pub gpu_policy: GpuPolicy,
     /// Scene names or files.
     pub scenes: Vec<String>,
     /// Methods.
@@ -79,10 +111,34 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         }
         scenes.push(scene);
     }
-    eprintln!("note: GPU backend not implemented yet; comparing the CPU backend only");
+    let gpu = if options.backends.contains(&Backend::Gpu) {
+        match refract_gpu::GpuContext::new() {
+            Ok(context) => {
+                let renderer = refract_gpu::GpuRenderer::new(&context)?;
+                eprintln!("GPU: {} ({:?})", context.info.name, context.info.backend);
+                Some((context, renderer))
+            }
+            Err(err) if options.gpu_policy == GpuPolicy::IfAvailable => {
+                eprintln!("note: {err}; comparing on the CPU only");
+                None
+            }
+            Err(err) => return Err(err.into()),
+        }
+    } else {
+        None
+    };
+    let backends: Vec<Backend> = options
+        .backends
+        .iter()
+        .copied()
+        .filter(|b| *b == Backend::Cpu || gpu.is_some())
+        .collect();
 
     let references = bar(scenes.len() as u64, "reference");
-    let methods = bar((scenes.len() * options.methods.len()) as u64, "methods");
+    let methods = bar(
+        (scenes.len() * options.methods.len() * backends.len()) as u64,
+        "methods",
+    );
     let mut records = Vec::new();
     let mut scene_images = Vec::new();
     for loaded in &scenes {
@@ -129,6 +185,14 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
             d_n: &loaded.d_n,
         };
         let mut method_ids = Vec::new();
+        let gpu_scene = gpu.as_ref().map(|(context, _)| {
+            refract_gpu::GpuScene::new(
+                context,
+                &loaded.scene.refractor.mesh,
+                &loaded.d_n,
+                &loaded.scene.environment,
+            )
+        });
         for &method in &options.methods {
             let params = MethodParams {
                 method,
@@ -136,48 +200,71 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                 tir_policy: options.tir_policy,
             };
             let environment = &loaded.scene.environment;
-            let frame = render_method(&prepared, environment, &camera, &params)?;
-            let ms = median_ms(options.frames, || {
-                render_method(&prepared, environment, &camera, &params)?;
-                Ok(())
-            })?;
-            let (mut record, maps) = evaluate(&reference, &frame, diameter);
-            record.scene.clone_from(&loaded.name);
-            record.method = method.id().to_owned();
-            record.backend = "cpu".to_owned();
-            record.ms_per_frame = Some(ms);
-            records.push(record);
+            for &backend in &backends {
+                let (frame, ms) = match (backend, &gpu, &gpu_scene) {
+                    (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
+                        let run = refract_gpu::GpuFrame::new(
+                            context, renderer, gpu_scene, &camera, &params,
+                        )?;
+                        run.execute(context, renderer, gpu_scene, true)?;
+                        let frame = run.read(context)?;
+                        let mut times = Vec::new();
+                        for k in 0..options.frames + 2 {
+                            let timing = run.execute(context, renderer, gpu_scene, false)?;
+                            if k >= 2 {
+                                times.push(timing.ms);
+                            }
+                        }
+                        times.sort_by(f64::total_cmp);
+                        (frame, times[times.len() / 2])
+                    }
+                    _ => {
+                        let frame = render_method(&prepared, environment, &camera, &params)?;
+                        let ms = median_ms(options.frames, || {
+                            render_method(&prepared, environment, &camera, &params)?;
+                            Ok(())
+                        })?;
+                        (frame, ms)
+                    }
+                };
+                let (mut record, maps) = evaluate(&reference, &frame, diameter);
+                record.scene.clone_from(&loaded.name);
+                record.method = method.id().to_owned();
+                record.backend = backend.id().to_owned();
+                record.ms_per_frame = Some(ms);
+                records.push(record);
 
-            let stem = format!("{}-cpu", method.id());
-            let (w, h) = (options.res, options.res);
-            write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
-            write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
-            write_error_map(
-                &dir.join(format!("t2err-{stem}.png")),
-                w,
-                h,
-                &maps.t2_deg,
-                T2_SCALE_DEG,
-            )?;
-            if method != Method::Single {
+                let stem = format!("{}-{}", method.id(), backend.id());
+                let (w, h) = (options.res, options.res);
+                write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
+                write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
                 write_error_map(
-                    &dir.join(format!("p2err-{stem}.png")),
+                    &dir.join(format!("t2err-{stem}.png")),
                     w,
                     h,
-                    &maps.p2_rel,
-                    P2_SCALE,
+                    &maps.t2_deg,
+                    T2_SCALE_DEG,
                 )?;
+                if method != Method::Single {
+                    write_error_map(
+                        &dir.join(format!("p2err-{stem}.png")),
+                        w,
+                        h,
+                        &maps.p2_rel,
+                        P2_SCALE,
+                    )?;
+                }
+                let tir: Vec<bool> = frame.aov.iter().map(|a| a.tir).collect();
+                write_mask(
+                    &dir.join(format!("tir-{stem}.png")),
+                    w,
+                    h,
+                    &tir,
+                    &frame.color,
+                )?;
+                method_ids.push(stem);
+                methods.inc(1);
             }
-            let tir: Vec<bool> = frame.aov.iter().map(|a| a.tir).collect();
-            write_mask(
-                &dir.join(format!("tir-{stem}.png")),
-                w,
-                h,
-                &tir,
-                &frame.color,
-            )?;
-            method_ids.push(stem);
-            methods.inc(1);
         }
         scene_images.push(SceneImages {
             scene: loaded.name.clone(),

@@ -19,9 +19,9 @@ mod scene_file;
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
 /// With no command, compares every implemented method (single, wyman, wyman-dv, wyman-dn) on the
-/// CPU backend against the exact reference ray tracer on the built-in scenes (sphere, torus,
-/// lens) at 512², writes images, error maps, metrics.json, report.md and index.html to out/,
-/// and prints a summary table. The GPU backend is not implemented yet.
+/// CPU backend and the GPU backend (when an adapter exists) against the exact reference ray
+/// tracer on the built-in scenes (sphere, torus, lens) at 512², writes images, error maps,
+/// metrics.json, report.md and index.html to out/, and prints a summary table.
 #[derive(Debug, Parser)]
 #[command(name = "refract", version, about, long_about)]
 struct Cli {
@@ -74,8 +74,8 @@ struct CompareArgs {
         default_value = "single,wyman,wyman-dv,wyman-dn"
     )]
     methods: Vec<Method>,
-    /// Comma-separated backends; only `cpu` exists so far.
-    #[arg(long, value_delimiter = ',', default_value = "cpu")]
+    /// Comma-separated backends: cpu, gpu. With gpu and no adapter, the command fails.
+    #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
     backends: Vec<String>,
     /// Square resolution in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=8192))]
@@ -95,12 +95,23 @@ struct CompareArgs {
 }
 
 fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions> {
-    if let Some(other) = args.backends.iter().find(|b| b.as_str() != "cpu") {
-        anyhow::bail!(
-            "backend `{other}` is not available: expected `cpu` (the GPU backend is not implemented yet)"
-        );
+    let mut backends = Vec::new();
+    for backend in &args.backends {
+        backends.push(match backend.as_str() {
+            "cpu" => compare::Backend::Cpu,
+            "gpu" => compare::Backend::Gpu,
+            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
+        });
     }
+    // The default list tolerates a missing adapter (with a notice); an explicit list does not.
+    let explicit = args.backends != ["cpu", "gpu"];
     Ok(compare::CompareOptions {
+        backends,
+        gpu_policy: if explicit {
+            compare::GpuPolicy::Required
+        } else {
+            compare::GpuPolicy::IfAvailable
+        },
         scenes: args.scenes,
         methods: args.methods,
         res: args.res,
@@ -113,6 +124,8 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions>
 
 fn default_job() -> anyhow::Result<()> {
     let options = compare::CompareOptions {
+        backends: vec![compare::Backend::Cpu, compare::Backend::Gpu],
+        gpu_policy: compare::GpuPolicy::IfAvailable,
         scenes: scene_file::BUILTIN_SCENES
             .iter()
             .map(|s| s.0.to_owned())

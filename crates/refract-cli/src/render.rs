@@ -20,7 +20,7 @@ pub struct RenderArgs {
     /// `reference`, `single`, `wyman`, `wyman-dv` or `wyman-dn`.
     #[arg(long, default_value = "wyman")]
     pub method: String,
-    /// Backend: `cpu` (the GPU backend is not implemented yet).
+    /// Backend: `cpu` or `gpu` (wgpu; fails with a clear error when no adapter exists).
     #[arg(long, default_value = "cpu")]
     pub backend: String,
     /// Resolution, `WxH` or `N` for N×N.
@@ -64,11 +64,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !matches!(extension.as_deref(), Some("png" | "exr")) {
         bail!("--out {}: expected a .png or .exr file", args.out.display());
     }
-    if args.backend != "cpu" {
-        bail!(
-            "--backend {}: expected `cpu` (the GPU backend is not implemented yet)",
-            args.backend
-        );
+    if !matches!(args.backend.as_str(), "cpu" | "gpu") {
+        bail!("--backend {}: expected cpu or gpu", args.backend);
     }
     let (width, height) = parse_res(&args.res)?;
     let mut loaded = load_scene(&args.scene)?;
@@ -104,11 +101,20 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             ior: loaded.scene.refractor.ior(),
             tir_policy: args.tir.into(),
         };
-        let prepared = PreparedRefractor {
-            mesh: &loaded.scene.refractor.mesh,
-            d_n: &loaded.d_n,
+        let result = if args.backend == "gpu" {
+            let context = refract_gpu::GpuContext::new()?;
+            let renderer = refract_gpu::GpuRenderer::new(&context)?;
+            let mesh = &loaded.scene.refractor.mesh;
+            let scene =
+                refract_gpu::GpuScene::new(&context, mesh, &loaded.d_n, &loaded.scene.environment);
+            refract_gpu::render_method(&context, &renderer, &scene, &camera, &params)?.0
+        } else {
+            let prepared = PreparedRefractor {
+                mesh: &loaded.scene.refractor.mesh,
+                d_n: &loaded.d_n,
+            };
+            render_method(&prepared, &loaded.scene.environment, &camera, &params)?
         };
-        let result = render_method(&prepared, &loaded.scene.environment, &camera, &params)?;
         let aov = result
             .aov
             .iter()

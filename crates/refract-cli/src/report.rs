@@ -77,7 +77,7 @@ pub fn write_reports(
     let _ = writeln!(
         md,
         "{}², reference: exact tracer, `transmission` mode, {} spp, depth 8. Times: median of {} frames \
-         after 2 warm-up frames (buffers + kernel), this machine. GPU backend: not implemented yet.\n",
+         after 2 warm-up frames (buffers + kernel; GPU: timestamp queries around all passes), this machine.\n",
         options.res, options.spp, options.frames
     );
     let _ = writeln!(md, "| {} |", HEADERS.join(" | "));
@@ -112,7 +112,7 @@ td:nth-child(-n+3),th:nth-child(-n+3){{text-align:left}}th{{background:#eee}}\
 img{{width:220px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:227px}}\
 figcaption{{font-size:12px;color:#555}}h2{{margin-top:32px}}</style></head><body>\
 <h1>refract comparison</h1><p>{res}&sup2; pixels. Reference: exact ray tracer, transmission mode, {spp} spp, depth 8. \
-Times: median of {frames} frames after 2 warm-up frames, buffers + kernel. The GPU backend is not implemented yet.</p><table><tr>",
+Times: median of {frames} frames after 2 warm-up frames, buffers + kernel (GPU: timestamp queries around all passes, queue waited).</p><table><tr>",
         res = options.res,
         spp = options.spp,
         frames = options.frames

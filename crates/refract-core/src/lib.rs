@@ -11,6 +11,7 @@
 //! * [`method`]: the method ids (`single`, `wyman`, `wyman-dv`, `wyman-dn`) and back surfaces.
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
 //! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear.
+//! * [`gpu`]: the `#[repr(C)]` uniform block and enum codes shared with the WGSL twin.
 //! * [`vector`]: robust normalisation and well-conditioned angles.
 //!
 //! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
@@ -24,6 +25,7 @@ pub mod camera;
 pub mod environment;
 pub mod exit;
 pub mod fresnel;
+pub mod gpu;
 pub mod interpolated_distance;
 pub mod kernel;
 pub mod method;

@@ -43,7 +43,9 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
 }
 
 /// The critical angle `θc = asin(1/η)` beyond which light going from the denser medium
-/// (`η = n_i/n_t > 1`) is totally internally reflected (Wyman 2005a §3.3).
+/// (`η = n_i/n_t > 1`) is totally internally reflected (Wyman 2005a §3.3), evaluated as
+/// `atan2(1, √((η − 1)(η + 1)))`, which is the same angle but well conditioned for `η → 1`
+/// (where `asin` of a number near 1 loses its digits).
 ///
 /// For `η ≤ 1` no incidence angle below grazing is reflected totally, and the result is `π/2`.
 #[inline]
@@ -51,9 +53,12 @@ pub fn critical_angle(eta: f32) -> f32 {
     if eta <= 1.0 {
         core::f32::consts::FRAC_PI_2
     } else {
-        (1.0 / eta).asin()
+        1.0f32.atan2(((eta - 1.0) * (eta + 1.0)).sqrt())
     }
 }
+
+/// How far past grazing [`face_forward_shading_normal`] turns a back-facing normal.
+pub const FACE_FORWARD_EPSILON: f32 = 1e-4;
 
 /// Turns a shading normal toward the incident side when it faces away from the viewer.
 ///
@@ -64,12 +69,11 @@ pub fn critical_angle(eta: f32) -> f32 {
 /// Normals already facing the incident side are returned unchanged.
 #[inline]
 pub fn face_forward_shading_normal(normal: Vec3, incident: Vec3) -> Vec3 {
-    const EPSILON: f32 = 1e-4;
     let n_dot_i = normal.dot(incident);
     if n_dot_i < 0.0 {
         return normal;
     }
-    (normal - (n_dot_i + EPSILON) * incident)
+    (normal - (n_dot_i + FACE_FORWARD_EPSILON) * incident)
         .try_normalize()
         .unwrap_or(-incident)
 }

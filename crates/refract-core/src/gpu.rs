@@ -1,0 +1,160 @@
+//! The data the WGSL twin shares with Rust: the `#[repr(C)]` uniform block of a frame and the
+//! integer codes of enums, defined once here. `refract-gpu` generates the WGSL constant header
+//! from [`wgsl_constants`], and its tests compare [`FrameUniforms`]' offsets with the WGSL
+//! struct's (as naga lays it out).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::exit::{ExitNormalSource, TirPolicy};
+use crate::interpolated_distance::{DistanceMode, NORMAL_INCIDENCE_ANGLE};
+use crate::optics::FACE_FORWARD_EPSILON;
+
+/// Per-frame uniforms of the GPU passes (`shaders/frame.wgsl`, `struct FrameUniforms`).
+/// Matrices are column-major, as glam and WGSL store them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct FrameUniforms {
+    /// `Camera::world_to_clip`.
+    pub world_to_clip: [[f32; 4]; 4],
+    /// `Camera::view_to_world`.
+    pub view_to_world: [[f32; 4]; 4],
+    /// Eye position, `w` unused.
+    pub eye: [f32; 4],
+    /// Unit look direction, `w` unused.
+    pub look_dir: [f32; 4],
+    /// Radiance of a constant environment, `w` unused.
+    pub environment_constant: [f32; 4],
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// `tan(fov_y / 2)`.
+    pub tan_half_fov_y: f32,
+    /// `width / height`.
+    pub aspect: f32,
+    /// Index of refraction.
+    pub ior: f32,
+    /// [`tir_policy_code`].
+    pub tir_policy: u32,
+    /// [`distance_mode_code`].
+    pub distance_mode: u32,
+    /// [`METHOD_SINGLE`] or [`METHOD_TWO_INTERFACE`].
+    pub method_kind: u32,
+    /// [`ENVIRONMENT_PROCEDURAL`], [`ENVIRONMENT_LATLONG`] or [`ENVIRONMENT_CONSTANT`].
+    pub environment_kind: u32,
+    /// Lat-long map width.
+    pub environment_width: u32,
+    /// Lat-long map height.
+    pub environment_height: u32,
+    /// Lat-long map intensity.
+    pub environment_intensity: f32,
+}
+
+/// `method_kind` of `single`.
+pub const METHOD_SINGLE: u32 = 0;
+/// `method_kind` of the two-interface methods.
+pub const METHOD_TWO_INTERFACE: u32 = 1;
+/// `environment_kind` of the procedural environment.
+pub const ENVIRONMENT_PROCEDURAL: u32 = 0;
+/// `environment_kind` of a lat-long map.
+pub const ENVIRONMENT_LATLONG: u32 = 1;
+/// `environment_kind` of a constant environment.
+pub const ENVIRONMENT_CONSTANT: u32 = 2;
+
+/// The WGSL code of a [`TirPolicy`].
+pub const fn tir_policy_code(policy: TirPolicy) -> u32 {
+    match policy {
+        TirPolicy::ClampToCritical => 0,
+        TirPolicy::ReflectOnce => 1,
+        TirPolicy::Black => 2,
+    }
+}
+
+/// The WGSL code of a [`DistanceMode`].
+pub const fn distance_mode_code(mode: DistanceMode) -> u32 {
+    match mode {
+        DistanceMode::Interpolated => 0,
+        DistanceMode::ViewOnly => 1,
+        DistanceMode::NormalOnly => 2,
+    }
+}
+
+/// The WGSL code of an [`ExitNormalSource`] (0 means none).
+pub const fn exit_normal_source_code(source: ExitNormalSource) -> u32 {
+    match source {
+        ExitNormalSource::BackFace => 1,
+        ExitNormalSource::SilhouetteFallback => 2,
+    }
+}
+
+/// The WGSL `const` declarations every shader module starts with: the numbers the Rust code
+/// uses, so that neither side hard-codes them.
+pub fn wgsl_constants() -> String {
+    let f = |v: f32| format!("{v:e}");
+    [
+        format!(
+            "const FACE_FORWARD_EPSILON: f32 = {};",
+            f(FACE_FORWARD_EPSILON)
+        ),
+        format!(
+            "const NORMAL_INCIDENCE_ANGLE: f32 = {};",
+            f(NORMAL_INCIDENCE_ANGLE)
+        ),
+        format!(
+            "const TIR_CLAMP_TO_CRITICAL: u32 = {}u;",
+            tir_policy_code(TirPolicy::ClampToCritical)
+        ),
+        format!(
+            "const TIR_REFLECT_ONCE: u32 = {}u;",
+            tir_policy_code(TirPolicy::ReflectOnce)
+        ),
+        format!(
+            "const TIR_BLACK: u32 = {}u;",
+            tir_policy_code(TirPolicy::Black)
+        ),
+        format!(
+            "const DISTANCE_INTERPOLATED: u32 = {}u;",
+            distance_mode_code(DistanceMode::Interpolated)
+        ),
+        format!(
+            "const DISTANCE_VIEW_ONLY: u32 = {}u;",
+            distance_mode_code(DistanceMode::ViewOnly)
+        ),
+        format!(
+            "const DISTANCE_NORMAL_ONLY: u32 = {}u;",
+            distance_mode_code(DistanceMode::NormalOnly)
+        ),
+        format!("const METHOD_SINGLE: u32 = {METHOD_SINGLE}u;"),
+        format!("const METHOD_TWO_INTERFACE: u32 = {METHOD_TWO_INTERFACE}u;"),
+        format!("const ENVIRONMENT_PROCEDURAL: u32 = {ENVIRONMENT_PROCEDURAL}u;"),
+        format!("const ENVIRONMENT_LATLONG: u32 = {ENVIRONMENT_LATLONG}u;"),
+        format!("const ENVIRONMENT_CONSTANT: u32 = {ENVIRONMENT_CONSTANT}u;"),
+        format!(
+            "const EXIT_NORMAL_BACK_FACE: u32 = {}u;",
+            exit_normal_source_code(ExitNormalSource::BackFace)
+        ),
+        format!(
+            "const EXIT_NORMAL_FALLBACK: u32 = {}u;",
+            exit_normal_source_code(ExitNormalSource::SilhouetteFallback)
+        ),
+    ]
+    .join("\n")
+        + "\n"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_block_is_tightly_packed_and_16_byte_aligned() {
+        assert_eq!(core::mem::size_of::<FrameUniforms>(), 224);
+        assert_eq!(core::mem::size_of::<FrameUniforms>() % 16, 0);
+        assert_eq!(core::mem::offset_of!(FrameUniforms, eye), 128);
+        assert_eq!(core::mem::offset_of!(FrameUniforms, width), 176);
+        assert_eq!(
+            core::mem::offset_of!(FrameUniforms, environment_intensity),
+            220
+        );
+    }
+}

@@ -1,0 +1,175 @@
+//! Finding an adapter and a device, headless, with clear errors.
+
+use std::fmt;
+
+/// Why the GPU backend could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter exists (no GPU and no software Vulkan such as lavapipe).
+    #[error(
+        "no GPU adapter found (install a Vulkan driver, e.g. Debian's mesa-vulkan-drivers for lavapipe{0})"
+    )]
+    NoAdapter(String),
+    /// The device could not be created.
+    #[error("cannot create a device on {adapter}: {message}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// What wgpu said.
+        message: String,
+    },
+    /// A resolution the adapter cannot hold.
+    #[error("resolution {width}x{height} exceeds what {adapter} supports ({limit})")]
+    ResolutionTooLarge {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// Adapter name.
+        adapter: String,
+        /// Which limit.
+        limit: String,
+    },
+    /// A wgpu validation or device error while rendering.
+    #[error("GPU error: {0}")]
+    Wgpu(String),
+    /// Reading results back failed (device lost, mapping failed).
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+    /// Invalid parameters.
+    #[error(transparent)]
+    Ior(#[from] refract_core::kernel::InvalidIor),
+}
+
+/// A device and its queue, plus what the adapter can do.
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter's description.
+    pub info: wgpu::AdapterInfo,
+    /// Whether GPU timestamps are available (TIMESTAMP_QUERY).
+    pub timestamps: bool,
+}
+
+impl fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.info.name)
+            .field("backend", &self.info.backend)
+            .finish()
+    }
+}
+
+impl GpuContext {
+    /// Opens the first adapter, honouring `WGPU_BACKEND` (which backends to try) and
+    /// `WGPU_ADAPTER_NAME` (a substring of the adapter name), and creates a device with the
+    /// adapter's own limits and TIMESTAMP_QUERY when available.
+    pub fn new() -> Result<Self, GpuError> {
+        pollster::block_on(Self::new_async())
+    }
+
+    async fn new_async() -> Result<Self, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = match std::env::var("WGPU_ADAPTER_NAME") {
+            Ok(wanted) => {
+                let wanted = wanted.to_lowercase();
+                let adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+                adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
+                    .ok_or_else(|| {
+                        GpuError::NoAdapter(format!("; none matches WGPU_ADAPTER_NAME={wanted}"))
+                    })?
+            }
+            Err(_) => instance
+                .request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    ..Default::default()
+                })
+                .await
+                .map_err(|err| GpuError::NoAdapter(format!("; {err}")))?,
+        };
+        let info = adapter.get_info();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let required_features = if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("refract"),
+                required_features,
+                required_limits: adapter.limits(),
+                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                memory_hints: wgpu::MemoryHints::Performance,
+                trace: wgpu::Trace::Off,
+            })
+            .await
+            .map_err(|err| GpuError::Device {
+                adapter: info.name.clone(),
+                message: err.to_string(),
+            })?;
+        Ok(Self {
+            device,
+            queue,
+            info,
+            timestamps,
+        })
+    }
+
+    /// Opens a context for a test: `None` (after printing `skipped: no GPU adapter`) when there
+    /// is none, unless `REFRACT_REQUIRE_GPU=1`, where a missing adapter panics.
+    pub fn for_tests() -> Option<Self> {
+        match Self::new() {
+            Ok(context) => Some(context),
+            Err(err) => {
+                let required = std::env::var("REFRACT_REQUIRE_GPU").is_ok_and(|v| v == "1");
+                assert!(!required, "REFRACT_REQUIRE_GPU=1 but: {err}");
+                println!("skipped: no GPU adapter ({err})");
+                None
+            }
+        }
+    }
+
+    /// Waits for all submitted work.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|err| GpuError::Readback(err.to_string()))
+    }
+
+    /// Copies a `MAP_READ` buffer's content out.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let slice = buffer.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            let _ = sender.send(result);
+        });
+        self.wait()?;
+        receiver
+            .recv()
+            .map_err(|err| GpuError::Readback(err.to_string()))?
+            .map_err(|err| GpuError::Readback(err.to_string()))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|err| GpuError::Readback(err.to_string()))?
+            .to_vec();
+        buffer.unmap();
+        Ok(data)
+    }
+
+    /// Runs `work` inside a validation error scope and reports the first error.
+    pub fn checked<T>(&self, work: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = work();
+        match pollster::block_on(scope.pop()) {
+            Some(err) => Err(GpuError::Wgpu(err.to_string())),
+            None => Ok(value),
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! The WGSL modules of the GPU backend, composed from the files in `shaders/` (WGSL has no
+//! includes) after the constant header generated from Rust ([`refract_core::gpu::wgsl_constants`]).
+
+use refract_core::gpu::wgsl_constants;
+
+/// Every `.wgsl` file of `shaders/`, by name.
+pub const FILES: [(&str, &str); 7] = [
+    ("core.wgsl", include_str!("../../../shaders/core.wgsl")),
+    (
+        "procedural_sky.wgsl",
+        include_str!("../../../shaders/procedural_sky.wgsl"),
+    ),
+    ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
+    (
+        "environment.wgsl",
+        include_str!("../../../shaders/environment.wgsl"),
+    ),
+    ("raster.wgsl", include_str!("../../../shaders/raster.wgsl")),
+    ("shade.wgsl", include_str!("../../../shaders/shade.wgsl")),
+    (
+        "conformance.wgsl",
+        include_str!("../../../shaders/conformance.wgsl"),
+    ),
+];
+
+fn file(name: &str) -> &'static str {
+    FILES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or("", |(_, s)| s)
+}
+
+fn compose(parts: &[&str]) -> String {
+    let mut source = wgsl_constants();
+    for part in parts {
+        source.push_str(&format!("\n// ---- {part} ----\n"));
+        source.push_str(file(part));
+    }
+    source
+}
+
+/// The modules the backend compiles: `(name, files it is made of)`.
+pub const MODULES: [(&str, &[&str]); 3] = [
+    ("raster", &["core.wgsl", "frame.wgsl", "raster.wgsl"]),
+    (
+        "shade",
+        &[
+            "core.wgsl",
+            "procedural_sky.wgsl",
+            "frame.wgsl",
+            "environment.wgsl",
+            "shade.wgsl",
+        ],
+    ),
+    (
+        "conformance",
+        &["core.wgsl", "procedural_sky.wgsl", "conformance.wgsl"],
+    ),
+];
+
+/// The full source of a module of [`MODULES`].
+pub fn module_source(name: &str) -> String {
+    let parts = MODULES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(&[][..], |(_, p)| p);
+    compose(parts)
+}

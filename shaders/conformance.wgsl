@@ -1,0 +1,96 @@
+// The conformance harness: one compute entry point per core function, each evaluating it on
+// `count` input rows (in_a, in_b) and writing one vec4 per row. crates/refract-gpu/tests
+// compares the results with the Rust functions on proptest-generated inputs.
+
+@group(0) @binding(0) var<storage, read> in_a: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> in_b: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> out_v: array<vec4<f32>>;
+
+// a = (I, eta), b = (N, _) -> (refract_dir, TIR)
+@compute @workgroup_size(64)
+fn test_refract(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let t = refract_dir(in_a[i].xyz, in_b[i].xyz, in_a[i].w);
+    out_v[i] = vec4<f32>(t, select(0.0, 1.0, all(t == vec3<f32>(0.0))));
+}
+
+// a = (I, _), b = (N, _) -> (reflect_dir, _)
+@compute @workgroup_size(64)
+fn test_reflect(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(reflect_dir(in_a[i].xyz, in_b[i].xyz), 0.0);
+}
+
+// a = (N, _), b = (I, _) -> (face_forward_shading_normal, angle_between(a, b))
+@compute @workgroup_size(64)
+fn test_face_forward(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(face_forward_shading_normal(in_a[i].xyz, in_b[i].xyz), angle_between(in_a[i].xyz, in_b[i].xyz));
+}
+
+// a = (cos_i, eta, n, k) -> (fresnel_dielectric, schlick_dielectric, schlick_conductor, critical_angle)
+@compute @workgroup_size(64)
+fn test_fresnel(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let a = in_a[i];
+    out_v[i] = vec4<f32>(
+        fresnel_dielectric(a.x, a.y),
+        schlick_dielectric(a.x, a.y),
+        schlick_conductor(a.x, a.z, a.w),
+        critical_angle(a.y),
+    );
+}
+
+// a = (theta_i, theta_t, eta, d_v), b = (d_n, mode, _, _) -> (angle_ratio, approximate_distance, _, _)
+@compute @workgroup_size(64)
+fn test_distance(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let a = in_a[i];
+    let b = in_b[i];
+    out_v[i] = vec4<f32>(angle_ratio(a.x, a.y, a.z), approximate_distance(u32(b.y), a.x, a.y, a.z, a.w, b.x), 0.0, 0.0);
+}
+
+// a = (T1, ior), b = (N2, policy) -> refract_exit
+@compute @workgroup_size(64)
+fn test_exit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = refract_exit(in_a[i].xyz, in_b[i].xyz, in_a[i].w, u32(in_b[i].w));
+}
+
+// a = (T1, _), b = (L, _) -> exit_normal_outside_silhouette
+@compute @workgroup_size(64)
+fn test_exit_normal(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(exit_normal_outside_silhouette(in_a[i].xyz, in_b[i].xyz), 0.0);
+}
+
+// a = (v, _) -> robust_normalize(v)
+@compute @workgroup_size(64)
+fn test_normalize(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = robust_normalize(in_a[i].xyz);
+}
+
+// a = (dir, _) -> (direction_to_latlong, _, _) ; b unused
+@compute @workgroup_size(64)
+fn test_latlong(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(direction_to_latlong(in_a[i].xyz), 0.0, 0.0);
+}
+
+// a = (dir, _) -> (procedural_radiance, _)
+@compute @workgroup_size(64)
+fn test_procedural_sky(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(procedural_radiance(in_a[i].xyz), 0.0);
+}

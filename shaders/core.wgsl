@@ -1,0 +1,191 @@
+// refract-core's twin in WGSL. Every function mirrors the Rust function of the same name in
+// crates/refract-core (same formulas, same branches); tests/gpu_conformance.rs holds them to it.
+// Constants (FACE_FORWARD_EPSILON, NORMAL_INCIDENCE_ANGLE, policy and mode codes) come from the
+// header that crates/refract-gpu generates from Rust.
+
+const PI: f32 = 3.14159265358979;
+const TAU: f32 = 6.28318530717959;
+const HALF_PI: f32 = 1.5707963267949;
+const F32_MAX: f32 = 3.40282347e38;
+
+// vector.rs: robust_normalize. xyz = the unit vector, w = 1 when valid, 0 when v is zero or
+// not finite.
+fn robust_normalize(v: vec3<f32>) -> vec4<f32> {
+    let scale = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if !(scale > 0.0 && scale <= F32_MAX) {
+        return vec4<f32>(0.0);
+    }
+    let u = v / scale;
+    let len = length(u);
+    if !(len > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(u / len, 1.0);
+}
+
+// glam's try_normalize: xyz = v / |v|, w = 1 when |v| > 0 and finite.
+fn try_normalize(v: vec3<f32>) -> vec4<f32> {
+    let len = length(v);
+    if !(len > 0.0 && len <= F32_MAX) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(v / len, 1.0);
+}
+
+// vector.rs: angle_between = atan2(|a x b|, a . b).
+fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return atan2(length(cross(a, b)), dot(a, b));
+}
+
+// optics.rs: refract, k = (1 - eta^2) + eta^2 (N.I)^2; zero vector on TIR.
+fn refract_dir(incident: vec3<f32>, normal: vec3<f32>, eta: f32) -> vec3<f32> {
+    let n_dot_i = dot(normal, incident);
+    let eta2 = eta * eta;
+    let k = (1.0 - eta2) + eta2 * n_dot_i * n_dot_i;
+    if k < 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return eta * incident - (eta * n_dot_i + sqrt(k)) * normal;
+}
+
+// optics.rs: reflect.
+fn reflect_dir(incident: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    return incident - 2.0 * dot(normal, incident) * normal;
+}
+
+// optics.rs: critical_angle = atan2(1, sqrt((eta - 1)(eta + 1))).
+fn critical_angle(eta: f32) -> f32 {
+    if eta <= 1.0 {
+        return HALF_PI;
+    }
+    return atan2(1.0, sqrt((eta - 1.0) * (eta + 1.0)));
+}
+
+// optics.rs: face_forward_shading_normal.
+fn face_forward_shading_normal(normal: vec3<f32>, incident: vec3<f32>) -> vec3<f32> {
+    let n_dot_i = dot(normal, incident);
+    if n_dot_i < 0.0 {
+        return normal;
+    }
+    let turned = try_normalize(normal - (n_dot_i + FACE_FORWARD_EPSILON) * incident);
+    if turned.w > 0.5 {
+        return turned.xyz;
+    }
+    return -incident;
+}
+
+// fresnel.rs: fresnel_dielectric.
+fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
+    let cos_i = clamp(cos_i_in, 0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return clamp(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
+}
+
+// fresnel.rs: f0_dielectric.
+fn f0_dielectric(eta: f32) -> f32 {
+    let r = (1.0 - eta) / (1.0 + eta);
+    return r * r;
+}
+
+// fresnel.rs: f0_conductor.
+fn f0_conductor(n: f32, k: f32) -> f32 {
+    return ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);
+}
+
+// fresnel.rs: schlick.
+fn schlick(cos_theta: f32, f0: f32) -> f32 {
+    let m = 1.0 - clamp(cos_theta, 0.0, 1.0);
+    let m2 = m * m;
+    return f0 + (1.0 - f0) * m2 * m2 * m;
+}
+
+// fresnel.rs: schlick_dielectric.
+fn schlick_dielectric(cos_i_in: f32, eta: f32) -> f32 {
+    let cos_i = clamp(cos_i_in, 0.0, 1.0);
+    let f0 = f0_dielectric(eta);
+    if eta <= 1.0 {
+        return schlick(cos_i, f0);
+    }
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    return schlick(sqrt(1.0 - sin2_t), f0);
+}
+
+// fresnel.rs: schlick_conductor.
+fn schlick_conductor(cos_i: f32, n: f32, k: f32) -> f32 {
+    return schlick(cos_i, f0_conductor(n, k));
+}
+
+// interpolated_distance.rs: angle_ratio.
+fn angle_ratio(theta_i: f32, theta_t: f32, eta: f32) -> f32 {
+    var ratio = eta;
+    if theta_i > NORMAL_INCIDENCE_ANGLE {
+        ratio = theta_t / theta_i;
+    }
+    return clamp(ratio, 0.0, 1.0);
+}
+
+// interpolated_distance.rs: interpolated_distance.
+fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f32) -> f32 {
+    let w = angle_ratio(theta_i, theta_t, eta);
+    return w * d_v + (1.0 - w) * d_n;
+}
+
+// interpolated_distance.rs: approximate_distance.
+fn approximate_distance(mode: u32, theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f32) -> f32 {
+    if mode == DISTANCE_VIEW_ONLY {
+        return d_v;
+    }
+    if mode == DISTANCE_NORMAL_ONLY {
+        return d_n;
+    }
+    return interpolated_distance(theta_i, theta_t, eta, d_v, d_n);
+}
+
+// exit.rs: exit_normal_outside_silhouette.
+fn exit_normal_outside_silhouette(t1: vec3<f32>, look_dir: vec3<f32>) -> vec3<f32> {
+    let n = try_normalize(t1 - dot(look_dir, t1) * look_dir);
+    if n.w > 0.5 {
+        return n.xyz;
+    }
+    return t1;
+}
+
+// exit.rs: refract_exit. xyz = T2, w = 1 when the exit was a TIR.
+fn refract_exit(t1: vec3<f32>, n2: vec3<f32>, ior: f32, policy: u32) -> vec4<f32> {
+    let inward = face_forward_shading_normal(-n2, t1);
+    let t2 = refract_dir(t1, inward, ior);
+    if any(t2 != vec3<f32>(0.0)) {
+        let unit = robust_normalize(t2);
+        return vec4<f32>(select(t1, unit.xyz, unit.w > 0.5), 0.0);
+    }
+    if policy == TIR_CLAMP_TO_CRITICAL {
+        let tangent = try_normalize(t1 - dot(t1, inward) * inward);
+        return vec4<f32>(select(t1, tangent.xyz, tangent.w > 0.5), 1.0);
+    }
+    if policy == TIR_REFLECT_ONCE {
+        return vec4<f32>(reflect_dir(t1, inward), 1.0);
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+}
+
+// environment.rs: direction_to_latlong.
+fn direction_to_latlong(dir: vec3<f32>) -> vec2<f32> {
+    var u = atan2(dir.x, -dir.z) / TAU;
+    if u < 0.0 {
+        u = u + 1.0;
+    }
+    if u >= 1.0 {
+        u = 0.0;
+    }
+    let theta = atan2(sqrt(dir.x * dir.x + dir.z * dir.z), dir.y);
+    return vec2<f32>(u, theta / PI);
+}
