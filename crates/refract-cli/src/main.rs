@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use refract_core::Method;
 use refract_core::exit::TirPolicy;
 
+mod bench;
 mod compare;
 mod images;
 mod info;
@@ -35,6 +36,8 @@ enum Command {
     Compare(CompareArgs),
     /// Render one scene with one method (or the reference) to .png or .exr.
     Render(render::RenderArgs),
+    /// Reproduce Wyman 2005a Table 1: frame rates per model, method and backend, reference times.
+    Bench(bench::BenchArgs),
     /// List the built-in scenes.
     Scenes,
     /// Load a mesh (.obj, .gltf, .glb or builtin:NAME) and print its facts and d_N statistics.
@@ -152,6 +155,7 @@ fn main() -> ExitCode {
             Ok(())
         }),
         Some(Command::Render(args)) => render::run(&args),
+        Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Scenes) => {
             for (name, line, _) in scene_file::BUILTIN_SCENES {
                 println!("{name:<8} {line}");

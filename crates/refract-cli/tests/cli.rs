@@ -189,3 +189,49 @@ fn scenes_lists_the_builtins() {
             && text.contains("lens")
     );
 }
+
+#[test]
+fn bench_quick_writes_table_one() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let output = refract(
+        &[
+            "bench",
+            "--quick",
+            "--backends",
+            "cpu",
+            "--data",
+            data,
+            "--out",
+            "b",
+        ],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let records: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("b/bench.json")).expect("bench.json"),
+    )
+    .expect("json");
+    let records = records.as_array().expect("array");
+    assert!(records.len() >= 2, "sphere: wyman and single");
+    for field in [
+        "scene",
+        "triangles",
+        "method",
+        "backend",
+        "width",
+        "height",
+        "ms_median",
+        "ms_min",
+        "ms_max",
+        "frames",
+        "fps",
+    ] {
+        assert!(records[0].get(field).is_some(), "{field}");
+    }
+    let md = std::fs::read_to_string(dir.path().join("b/bench.md")).expect("bench.md");
+    assert!(
+        md.contains("| sphere | 1600 |") && md.contains("164.3"),
+        "{md}"
+    );
+}

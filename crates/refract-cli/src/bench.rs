@@ -1,0 +1,300 @@
+//! `refract bench`: Wyman 2005a Table 1 on the models we have — frame rates of `wyman`
+//! ("2-sided") and `single` ("1-sided") per backend, the reference render time, and the paper's
+//! figures beside ours.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use refract_core::exit::TirPolicy;
+use refract_core::{Camera, CameraDesc, Method};
+use refract_cpu::{MethodParams, PreparedRefractor, render_method};
+use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
+use refract_trace::{Environment, Refractor, Scene, TraceSettings, render};
+use serde::Serialize;
+
+use crate::compare::Backend;
+
+/// Arguments of `refract bench`.
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Comma-separated models: sphere (built-in), cow, teapot, bunny, horse (from --data).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "sphere,cow,teapot,bunny,horse"
+    )]
+    pub scenes: Vec<String>,
+    /// Comma-separated methods (Table 1 has wyman = 2-sided and single = 1-sided).
+    #[arg(long, value_delimiter = ',', default_value = "wyman,single")]
+    pub methods: Vec<Method>,
+    /// Comma-separated backends: cpu, gpu (gpu is skipped with a notice without an adapter).
+    #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
+    pub backends: Vec<String>,
+    /// Square resolution (Table 1: 1024).
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=8192))]
+    pub res: u32,
+    /// Timed frames per method (median reported; at least 20 for the table).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    pub frames: u32,
+    /// Where the meshes are (`meshes/cow.obj`, ...).
+    #[arg(long, default_value = "../shared/data")]
+    pub data: PathBuf,
+    /// Output directory for bench.json and bench.md.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// A small run for smoke tests: 128², 3 frames, sphere and cow only.
+    #[arg(long)]
+    pub quick: bool,
+}
+
+/// One row of `bench.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRecord {
+    scene: String,
+    triangles: usize,
+    method: String,
+    backend: String,
+    width: u32,
+    height: u32,
+    ms_median: f64,
+    ms_min: f64,
+    ms_max: f64,
+    frames: u32,
+    fps: f64,
+}
+
+/// Wyman 2005a Table 1 (GeForce 6800, 3.0 GHz Pentium 4, 1024²): 2-sided fps, 1-sided fps,
+/// ray-traced seconds.
+const PAPER: [(&str, f64, f64, f64); 3] = [
+    ("sphere", 164.3, 323.5, 6.1),
+    ("cow", 122.9, 295.7, 31.6),
+    ("teapot", 115.7, 306.9, 49.3),
+];
+
+/// Model name, file in `meshes/`, IOR (the paper's: 1.5 for the sphere and teapot, 1.2 else).
+const MODELS: [(&str, &str, f32); 5] = [
+    ("sphere", "builtin:sphere", 1.5),
+    ("cow", "cow.obj", 1.2),
+    ("teapot", "teapot.obj", 1.5),
+    ("bunny", "stanford-bunny.obj", 1.2),
+    ("horse", "horse.obj", 1.2),
+];
+
+fn load_model(name: &str, data: &std::path::Path) -> anyhow::Result<Option<(Mesh, f32)>> {
+    let Some(&(_, file, ior)) = MODELS.iter().find(|m| m.0 == name) else {
+        let names: Vec<&str> = MODELS.iter().map(|m| m.0).collect();
+        anyhow::bail!(
+            "--scenes: unknown model `{name}`; expected one of {}",
+            names.join(", ")
+        );
+    };
+    if file.starts_with(builtin::PREFIX) {
+        return Ok(Some((builtin::mesh(file)?, ior)));
+    }
+    let path = data.join("meshes").join(file);
+    if !path.is_file() {
+        eprintln!("note: {} not found; skipping {name}", path.display());
+        return Ok(None);
+    }
+    Ok(Some((load_mesh(&path, &LoadOptions::default())?.mesh, ior)))
+}
+
+fn stats(mut times: Vec<f64>) -> (f64, f64, f64) {
+    times.sort_by(f64::total_cmp);
+    (times[times.len() / 2], times[0], times[times.len() - 1])
+}
+
+/// Runs the benchmark and writes `bench.json` and `bench.md`.
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let (res, frames) = if args.quick {
+        (128, 3)
+    } else {
+        (args.res, args.frames)
+    };
+    let scenes: Vec<String> = if args.quick {
+        vec!["sphere".into(), "cow".into()]
+    } else {
+        args.scenes.clone()
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
+    let mut backends = Vec::new();
+    for b in &args.backends {
+        backends.push(match b.as_str() {
+            "cpu" => Backend::Cpu,
+            "gpu" => Backend::Gpu,
+            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
+        });
+    }
+    let gpu = if backends.contains(&Backend::Gpu) {
+        match refract_gpu::GpuContext::new() {
+            Ok(context) => {
+                let renderer = refract_gpu::GpuRenderer::new(&context)?;
+                Some((context, renderer))
+            }
+            Err(err) => {
+                eprintln!("note: {err}; benchmarking the CPU only");
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let camera = Camera::new(CameraDesc {
+        width: res,
+        height: res,
+        ..CameraDesc::default()
+    })?;
+    let mut records = Vec::new();
+    let mut reference_seconds = Vec::new();
+    for name in &scenes {
+        let Some((mesh, ior)) = load_model(name, &args.data)? else {
+            continue;
+        };
+        let triangles = mesh.triangles.len();
+        let d_n = normal_distances(&mesh, &MeshBvh::build(&mesh)).values;
+        let environment = Environment::Procedural;
+        let scene = Scene::new(Refractor::new(mesh, ior)?, environment);
+        let start = Instant::now();
+        render(&scene, &camera, &TraceSettings::default());
+        reference_seconds.push((name.clone(), start.elapsed().as_secs_f64()));
+        let prepared = PreparedRefractor {
+            mesh: &scene.refractor.mesh,
+            d_n: &d_n,
+        };
+        let gpu_scene = gpu.as_ref().map(|(context, _)| {
+            refract_gpu::GpuScene::new(context, &scene.refractor.mesh, &d_n, &scene.environment)
+        });
+        for &method in &args.methods {
+            let params = MethodParams {
+                method,
+                ior,
+                tir_policy: TirPolicy::ClampToCritical,
+            };
+            for &backend in &backends {
+                let times = match (backend, &gpu, &gpu_scene) {
+                    (Backend::Cpu, _, _) => {
+                        let mut times = Vec::new();
+                        for k in 0..frames + 3 {
+                            let start = Instant::now();
+                            render_method(&prepared, &scene.environment, &camera, &params)?;
+                            if k >= 3 {
+                                times.push(start.elapsed().as_secs_f64() * 1e3);
+                            }
+                        }
+                        times
+                    }
+                    (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
+                        let run = refract_gpu::GpuFrame::new(
+                            context, renderer, gpu_scene, &camera, &params,
+                        )?;
+                        let mut times = Vec::new();
+                        for k in 0..frames + 3 {
+                            let timing = run.execute(context, renderer, gpu_scene, false)?;
+                            if k >= 3 {
+                                times.push(timing.ms);
+                            }
+                        }
+                        times
+                    }
+                    _ => continue,
+                };
+                let (median, min, max) = stats(times);
+                let record = BenchRecord {
+                    scene: name.clone(),
+                    triangles,
+                    method: method.id().to_owned(),
+                    backend: backend.id().to_owned(),
+                    width: res,
+                    height: res,
+                    ms_median: median,
+                    ms_min: min,
+                    ms_max: max,
+                    frames,
+                    fps: 1e3 / median,
+                };
+                println!(
+                    "{:<8} {:>7} tris {:<9} {:<4} {:>9.2} ms  {:>7.1} fps",
+                    record.scene, triangles, record.method, record.backend, median, record.fps
+                );
+                records.push(record);
+            }
+        }
+    }
+    let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
+    write(&args.out.join("bench.json"), &json)?;
+    let md = table(&records, &reference_seconds, res, frames);
+    write(&args.out.join("bench.md"), &md)?;
+    println!("\n{md}");
+    Ok(())
+}
+
+fn write(path: &std::path::Path, text: &str) -> anyhow::Result<()> {
+    let temporary = path.with_extension("partial");
+    std::fs::write(&temporary, text)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    std::fs::rename(&temporary, path)
+        .with_context(|| format!("{}: cannot move into place", path.display()))
+}
+
+/// The Table 1 layout: per model, 2-sided and 1-sided fps per backend, the reference time, and
+/// the paper's numbers with our/paper ratios.
+fn table(records: &[BenchRecord], reference: &[(String, f64)], res: u32, frames: u32) -> String {
+    let fps = |scene: &str, method: &str, backend: &str| {
+        records
+            .iter()
+            .find(|r| r.scene == scene && r.method == method && r.backend == backend)
+            .map(|r| r.fps)
+    };
+    let cell = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.1}"));
+    let ratio = |ours: Option<f64>, paper: Option<f64>| match (ours, paper) {
+        (Some(o), Some(p)) => format!("{:.2}×", o / p),
+        _ => "–".to_owned(),
+    };
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# Wyman 2005a Table 1, reproduced\n\n{res}², median of {frames} frames after 3 warm-up frames; a frame is every \
+         per-frame pass (buffers + kernel; GPU: timestamp queries, queue waited). Reference: exact tracer, \
+         transmission, 1 spp, depth 8. Paper: GeForce 6800 + 3.0 GHz Pentium 4.\n"
+    );
+    if res != 1024 {
+        let _ = writeln!(
+            md,
+            "Note: the paper measured 1024²; the ratios below compare different resolutions.\n"
+        );
+    }
+    let _ = writeln!(
+        md,
+        "| model | triangles | 2-sided CPU fps | 1-sided CPU fps | 2-sided GPU fps | 1-sided GPU fps | ray traced (s) | \
+         paper 2-sided | paper 1-sided | paper ray traced (s) | CPU 2-sided / paper | GPU 2-sided / paper | paper RT / ours |"
+    );
+    let _ = writeln!(md, "|{}|", ["---"; 13].join("|"));
+    for (scene, seconds) in reference {
+        let triangles = records
+            .iter()
+            .find(|r| &r.scene == scene)
+            .map_or(0, |r| r.triangles);
+        let paper = PAPER.iter().find(|p| p.0 == scene);
+        let (p2, p1, prt) = (paper.map(|p| p.1), paper.map(|p| p.2), paper.map(|p| p.3));
+        let cpu2 = fps(scene, "wyman", "cpu");
+        let gpu2 = fps(scene, "wyman", "gpu");
+        let _ = writeln!(
+            md,
+            "| {scene} | {triangles} | {} | {} | {} | {} | {seconds:.3} | {} | {} | {} | {} | {} | {} |",
+            cell(cpu2),
+            cell(fps(scene, "single", "cpu")),
+            cell(gpu2),
+            cell(fps(scene, "single", "gpu")),
+            cell(p2),
+            cell(p1),
+            prt.map_or_else(|| "–".to_owned(), |v| format!("{v:.1}")),
+            ratio(cpu2, p2),
+            ratio(gpu2, p2),
+            prt.map_or_else(|| "–".to_owned(), |p| format!("{:.0}×", p / seconds)),
+        );
+    }
+    md
+}
