@@ -4,7 +4,9 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{MethodParams, PreparedRefractor, render_buffers, render_method, shade};
+use refract_cpu::{
+    CpuRenderer, MethodParams, PreparedRefractor, render_buffers, render_method, shade,
+};
 use refract_geometry::{Mesh, MeshBvh, builtin, normal_distances};
 use refract_trace::Environment;
 
@@ -44,8 +46,13 @@ fn cpu_methods(c: &mut Criterion) {
             assert!(
                 frame.aov.iter().any(|a| a.covered) && frame.color.iter().all(|c| c.is_finite())
             );
+            let mut renderer = CpuRenderer::default();
             group.bench_function(format!("{method}/frame"), |b| {
-                b.iter(|| render_method(&refractor, &environment, &camera, &params).expect("frame"))
+                b.iter(|| {
+                    renderer
+                        .render(&refractor, &environment, &camera, &params)
+                        .expect("frame");
+                })
             });
             let buffers = render_buffers(&refractor, &camera, method).expect("buffers");
             group.bench_function(format!("{method}/buffers"), |b| {

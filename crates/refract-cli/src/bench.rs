@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::Context;
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{MethodParams, PreparedRefractor, render_method};
+use refract_cpu::{CpuRenderer, MethodParams, PreparedRefractor};
 use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
 use refract_trace::{Environment, Refractor, Scene, TraceSettings, render};
 use serde::Serialize;
@@ -176,10 +176,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             for &backend in &backends {
                 let times = match (backend, &gpu, &gpu_scene) {
                     (Backend::Cpu, _, _) => {
+                        let mut renderer = CpuRenderer::default();
                         let mut times = Vec::new();
                         for k in 0..frames + 3 {
                             let start = Instant::now();
-                            render_method(&prepared, &scene.environment, &camera, &params)?;
+                            renderer.render(&prepared, &scene.environment, &camera, &params)?;
                             if k >= 3 {
                                 times.push(start.elapsed().as_secs_f64() * 1e3);
                             }

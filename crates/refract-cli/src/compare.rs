@@ -8,7 +8,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{MethodParams, PreparedRefractor, render_method};
+use refract_cpu::{CpuRenderer, MethodParams, PreparedRefractor, render_method};
 use refract_trace::{TraceSettings, render};
 
 use crate::images::{write_color, write_error_map, write_mask};
@@ -220,8 +220,9 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                     }
                     _ => {
                         let frame = render_method(&prepared, environment, &camera, &params)?;
+                        let mut renderer = CpuRenderer::default();
                         let ms = median_ms(options.frames, || {
-                            render_method(&prepared, environment, &camera, &params)?;
+                            renderer.render(&prepared, environment, &camera, &params)?;
                             Ok(())
                         })?;
                         (frame, ms)

@@ -6,7 +6,7 @@ use refract_core::kernel::{BackFaceSample, BackFaceSampler};
 use refract_core::{BackSurface, Camera};
 use refract_geometry::Mesh;
 
-use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize};
+use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize, rasterize_into};
 
 /// A refractor prepared for the CPU backend: its mesh and per-vertex `d_N`.
 pub struct PreparedRefractor<'a> {
@@ -76,10 +76,49 @@ impl BackFaceSampler for BackFaces {
         if !(uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h) {
             return None;
         }
-        let i = uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize;
-        self.buffer.covered[i].then(|| BackFaceSample {
-            n_ws: self.buffer.n_ws[i],
-            distance: (self.buffer.p_ws[i] - self.eye).length(),
+        let texel =
+            &self.buffer.texels[uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize];
+        texel.covered.then(|| BackFaceSample {
+            n_ws: texel.n_ws,
+            distance: (texel.p_ws - self.eye).length(),
         })
+    }
+}
+
+/// [`front_faces`] into an existing buffer, reusing its memory.
+pub fn front_faces_into(
+    refractor: &PreparedRefractor<'_>,
+    camera: &Camera,
+    buffer: &mut SurfaceBuffer,
+) {
+    rasterize_into(
+        &refractor.raster_mesh(),
+        camera,
+        Faces::Front,
+        DepthTest::Nearest,
+        buffer,
+    );
+}
+
+impl BackFaces {
+    /// Re-renders into this buffer's memory (for `camera` and `surface`).
+    pub fn render_into(
+        &mut self,
+        refractor: &PreparedRefractor<'_>,
+        camera: &Camera,
+        surface: BackSurface,
+    ) {
+        let test = match surface {
+            BackSurface::Furthest => DepthTest::Furthest,
+            BackSurface::Second => DepthTest::Nearest,
+        };
+        rasterize_into(
+            &refractor.raster_mesh(),
+            camera,
+            Faces::Back,
+            test,
+            &mut self.buffer,
+        );
+        self.eye = camera.eye();
     }
 }

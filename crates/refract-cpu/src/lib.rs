@@ -2,16 +2,16 @@
 //!
 //! The CPU backend: it produces the same image-space buffers a GPU rasteriser produces
 //! ([`raster`]: pixel centres, top-left rule, perspective-correct interpolation, near-plane
-//! clipping, parallel deterministic tiles), then runs refract-core's kernels per pixel
+//! clipping, parallel deterministic bands of rows), then runs refract-core's kernels per pixel
 //! ([`render`]) for the methods `single`, `wyman`, `wyman-dv` and `wyman-dn` (Wyman 2005a).
 
 pub mod buffers;
 pub mod raster;
 pub mod render;
 
-pub use buffers::{BackFaces, PreparedRefractor, front_faces};
-pub use raster::{DepthTest, Faces, SurfaceBuffer, rasterize};
+pub use buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
+pub use raster::{DepthTest, Faces, SurfaceBuffer, Texel, rasterize, rasterize_into};
 pub use render::{
-    CpuError, FrameBuffers, MethodAov, MethodFrame, MethodParams, render_buffers, render_method,
-    shade,
+    CpuError, CpuRenderer, FrameBuffers, MethodAov, MethodFrame, MethodParams, render_buffers,
+    render_method, shade,
 };

@@ -1,6 +1,7 @@
 //! A deterministic tiled triangle rasteriser producing the G-buffers of the image-space methods:
 //! pixel-centre sampling, the top-left fill rule on an 8-bit sub-pixel grid (as GPUs do),
-//! perspective-correct interpolation, near-plane clipping, and tiles rendered in parallel.
+//! perspective-correct interpolation, near-plane clipping, and bands of rows rendered in
+//! parallel.
 
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
@@ -9,8 +10,9 @@ use refract_core::Camera;
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
 const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: f64 = (1u32 << SUBPIXEL_BITS) as f64;
-/// Tile edge in pixels; each tile is rasterised by one task.
-const TILE: u32 = 32;
+/// Height in rows of a band; each band (full width) is rasterised by one task, straight into
+/// its rows of the output.
+const BAND: u32 = 16;
 
 /// Which faces are drawn (the others are culled), seen from the camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,24 +32,41 @@ pub enum DepthTest {
     Furthest,
 }
 
-/// Per-pixel surface data interpolated from the vertices. `covered[i]` is the explicit empty
-/// marker: other fields of an uncovered pixel are meaningless.
+/// One pixel of a [`SurfaceBuffer`]: the surviving fragment, or the explicit empty marker.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Texel {
+    /// Whether any fragment covered the pixel centre; the other fields are meaningless if not.
+    pub covered: bool,
+    /// Window depth in `[0, 1]`.
+    pub depth: f32,
+    /// Perspective-correct interpolated world position.
+    pub p_ws: Vec3,
+    /// Perspective-correct interpolated vertex normal (normalised).
+    pub n_ws: Vec3,
+    /// Perspective-correct interpolated per-vertex scalar (`d_N`).
+    pub scalar: f32,
+}
+
+impl Texel {
+    /// An uncovered pixel.
+    pub const EMPTY: Self = Self {
+        covered: false,
+        depth: 0.0,
+        p_ws: Vec3::ZERO,
+        n_ws: Vec3::ZERO,
+        scalar: 0.0,
+    };
+}
+
+/// Per-pixel surface data interpolated from the vertices, row-major from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceBuffer {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Whether any fragment covered the pixel centre.
-    pub covered: Vec<bool>,
-    /// Window depth in `[0, 1]`.
-    pub depth: Vec<f32>,
-    /// Perspective-correct interpolated world position.
-    pub p_ws: Vec<Vec3>,
-    /// Perspective-correct interpolated vertex normal (normalised).
-    pub n_ws: Vec<Vec3>,
-    /// Perspective-correct interpolated per-vertex scalar (`d_N`).
-    pub scalar: Vec<f32>,
+    /// `width × height` texels.
+    pub texels: Vec<Texel>,
 }
 
 /// A triangle mesh ready for rasterisation: world positions, normals and one scalar per vertex.
@@ -193,14 +212,32 @@ fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTria
 
 /// Rasterises `mesh` seen by `camera`, keeping `faces` and the fragment chosen by `test`.
 ///
-/// Deterministic: triangles are binned into tiles in index order and each tile is owned by one
-/// task, so the result does not depend on the thread count.
+/// Deterministic: triangles are binned into bands of rows in index order and each band is owned
+/// by one task, so the result does not depend on the thread count.
 pub fn rasterize(
     mesh: &RasterMesh<'_>,
     camera: &Camera,
     faces: Faces,
     test: DepthTest,
 ) -> SurfaceBuffer {
+    let mut buffer = SurfaceBuffer {
+        width: 0,
+        height: 0,
+        texels: Vec::new(),
+    };
+    rasterize_into(mesh, camera, faces, test, &mut buffer);
+    buffer
+}
+
+/// [`rasterize`] into an existing buffer, reusing its memory (a renderer's per-frame path: no
+/// allocation, no page faults once the buffer has reached its size).
+pub fn rasterize_into(
+    mesh: &RasterMesh<'_>,
+    camera: &Camera,
+    faces: Faces,
+    test: DepthTest,
+    buffer: &mut SurfaceBuffer,
+) {
     let world_to_clip = camera.world_to_clip();
     let clip: Vec<Vec4> = mesh
         .positions
@@ -239,95 +276,53 @@ pub fn rasterize(
         })
         .collect();
 
-    // Bin into tiles, preserving triangle order within each tile.
+    // Bin into bands of rows, preserving triangle order within each band.
     let (width, height) = (camera.width(), camera.height());
-    let tiles_x = width.div_ceil(TILE);
-    let tiles_y = height.div_ceil(TILE);
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tiles_x * tiles_y) as usize];
+    let bands = height.div_ceil(BAND);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands as usize];
     for (index, t) in triangles.iter().enumerate() {
-        for ty in t.min[1] / TILE..=t.max[1] / TILE {
-            for tx in t.min[0] / TILE..=t.max[0] / TILE {
-                bins[(ty * tiles_x + tx) as usize].push(index as u32);
-            }
+        for band in t.min[1] / BAND..=t.max[1] / BAND {
+            bins[band as usize].push(index as u32);
         }
     }
-
-    let tiles: Vec<TileResult> = bins
-        .par_iter()
-        .enumerate()
-        .map(|(tile, bin)| {
-            let (tx, ty) = (tile as u32 % tiles_x, tile as u32 / tiles_x);
-            rasterize_tile(
-                &triangles,
-                bin,
-                [tx * TILE, ty * TILE],
-                [width, height],
-                test,
-            )
-        })
-        .collect();
-
-    let n = (width * height) as usize;
-    let mut buffer = SurfaceBuffer {
-        width,
-        height,
-        covered: vec![false; n],
-        depth: vec![0.0; n],
-        p_ws: vec![Vec3::ZERO; n],
-        n_ws: vec![Vec3::ZERO; n],
-        scalar: vec![0.0; n],
-    };
-    for (tile, result) in tiles.into_iter().enumerate() {
-        let (tx, ty) = (tile as u32 % tiles_x, tile as u32 / tiles_x);
-        for (k, fragment) in result.fragments.into_iter().enumerate() {
-            let Some(f) = fragment else { continue };
-            let (x, y) = (tx * TILE + k as u32 % TILE, ty * TILE + k as u32 / TILE);
-            let i = (y * width + x) as usize;
-            buffer.covered[i] = true;
-            buffer.depth[i] = f.depth;
-            buffer.p_ws[i] = f.p_ws;
-            buffer.n_ws[i] = f.n_ws;
-            buffer.scalar[i] = f.scalar;
-        }
-    }
+    buffer.width = width;
+    buffer.height = height;
+    buffer.texels.clear();
     buffer
+        .texels
+        .resize((width * height) as usize, Texel::EMPTY);
+    buffer
+        .texels
+        .par_chunks_mut((BAND * width) as usize)
+        .zip(bins.par_iter())
+        .enumerate()
+        .for_each(|(band, (rows, bin))| {
+            rasterize_band(&triangles, bin, band as u32 * BAND, width, rows, test)
+        });
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Fragment {
-    depth: f32,
-    p_ws: Vec3,
-    n_ws: Vec3,
-    scalar: f32,
-}
-
-struct TileResult {
-    fragments: Vec<Option<Fragment>>,
-}
-
-fn rasterize_tile(
+/// Scan-converts the triangles of `bin` into `rows`, the texels of the rows starting at
+/// `first_row` (full width).
+fn rasterize_band(
     triangles: &[ScreenTriangle],
     bin: &[u32],
-    origin: [u32; 2],
-    size: [u32; 2],
+    first_row: u32,
+    width: u32,
+    rows: &mut [Texel],
     test: DepthTest,
-) -> TileResult {
-    let mut fragments: Vec<Option<Fragment>> = vec![None; (TILE * TILE) as usize];
-    let tile_max = [
-        (origin[0] + TILE).min(size[0]) - 1,
-        (origin[1] + TILE).min(size[1]) - 1,
-    ];
+) {
+    let last_row = first_row + (rows.len() as u32 / width) - 1;
     let half = (SUBPIXEL as i64) / 2;
     for &index in bin {
         let t = &triangles[index as usize];
         let [a, b, c] = t.xy;
         let (tl0, tl1, tl2) = (is_top_left(b, c), is_top_left(c, a), is_top_left(a, b));
-        for y in t.min[1].max(origin[1])..=t.max[1].min(tile_max[1]) {
-            for x in t.min[0].max(origin[0])..=t.max[0].min(tile_max[0]) {
-                let p = [
-                    i64::from(x) * SUBPIXEL as i64 + half,
-                    i64::from(y) * SUBPIXEL as i64 + half,
-                ];
+        let area = t.area as f64;
+        for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
+            let py = i64::from(y) * SUBPIXEL as i64 + half;
+            let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
+            for x in t.min[0]..=t.max[0] {
+                let p = [i64::from(x) * SUBPIXEL as i64 + half, py];
                 let (e0, e1, e2) = (edge(b, c, p), edge(c, a, p), edge(a, b, p));
                 let inside = (e0 > 0 || (e0 == 0 && tl0))
                     && (e1 > 0 || (e1 == 0 && tl1))
@@ -336,18 +331,17 @@ fn rasterize_tile(
                     continue;
                 }
                 // Screen-space barycentrics (exact integers, one rounding each).
-                let area = t.area as f64;
                 let l = [e0 as f64 / area, e1 as f64 / area, e2 as f64 / area].map(|v| v as f32);
                 let depth = l[0] * t.depth[0] + l[1] * t.depth[1] + l[2] * t.depth[2];
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
                 }
-                let k = ((y - origin[1]) * TILE + (x - origin[0])) as usize;
-                let better = match (&fragments[k], test) {
-                    (None, _) => true,
-                    (Some(f), DepthTest::Nearest) => depth < f.depth,
-                    (Some(f), DepthTest::Furthest) => depth > f.depth,
-                };
+                let texel = &mut row[x as usize];
+                let better = !texel.covered
+                    || match test {
+                        DepthTest::Nearest => depth < texel.depth,
+                        DepthTest::Furthest => depth > texel.depth,
+                    };
                 if !better {
                     continue;
                 }
@@ -356,14 +350,14 @@ fn rasterize_tile(
                 let sum = pw[0] + pw[1] + pw[2];
                 let pw = pw.map(|v| v / sum);
                 let [v0, v1, v2] = t.vertices;
-                fragments[k] = Some(Fragment {
+                *texel = Texel {
+                    covered: true,
                     depth,
                     p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
                     n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
                     scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
-                });
+                };
             }
         }
     }
-    TileResult { fragments }
 }

@@ -10,7 +10,7 @@ use refract_core::kernel::{
 use refract_core::{Camera, DistanceMode, Method};
 use refract_trace::Environment;
 
-use crate::buffers::{BackFaces, PreparedRefractor, front_faces};
+use crate::buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
 use crate::raster::SurfaceBuffer;
 
 /// Parameters of one method run.
@@ -124,23 +124,47 @@ pub fn shade(
         Method::TwoInterface { distance, .. } => distance,
     };
     let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
+    let mut frame = MethodFrame {
+        width: 0,
+        height: 0,
+        color: Vec::new(),
+        aov: Vec::new(),
+    };
+    shade_into(buffers, environment, camera, &kernel, &mut frame);
+    Ok(frame)
+}
+
+/// [`shade`] into an existing frame, reusing its memory.
+fn shade_into(
+    buffers: &FrameBuffers,
+    environment: &Environment,
+    camera: &Camera,
+    kernel: &ImageSpaceParams,
+    frame: &mut MethodFrame,
+) {
     let (width, height) = (camera.width(), camera.height());
     let front = &buffers.front;
-    let rows: Vec<(Vec<Vec3>, Vec<MethodAov>)> = (0..height)
-        .into_par_iter()
-        .map(|y| {
-            (0..width)
-                .map(|x| {
-                    let i = (y * width + x) as usize;
-                    let uv = Camera::pixel_center(x, y);
-                    if !front.covered[i] {
-                        let view = camera.pixel_ray(uv).dir;
-                        return (environment.radiance(view), MethodAov::BACKGROUND);
-                    }
+    let n = (width * height) as usize;
+    frame.width = width;
+    frame.height = height;
+    frame.color.resize(n, Vec3::ZERO);
+    frame.aov.resize(n, MethodAov::BACKGROUND);
+    // Rows in parallel, written in place.
+    frame
+        .color
+        .par_chunks_mut(width as usize)
+        .zip(frame.aov.par_chunks_mut(width as usize))
+        .enumerate()
+        .for_each(|(y, (colors, aovs))| {
+            let y = y as u32;
+            for x in 0..width {
+                let texel = &front.texels[(y * width + x) as usize];
+                let uv = Camera::pixel_center(x, y);
+                let (color, aov) = if texel.covered {
                     let surface = FrontSurface {
-                        p1_ws: front.p_ws[i],
-                        n1_ws: front.n_ws[i],
-                        d_n: front.scalar[i],
+                        p1_ws: texel.p_ws,
+                        n1_ws: texel.n_ws,
+                        d_n: texel.scalar,
                     };
                     shade_pixel(
                         &surface,
@@ -148,23 +172,18 @@ pub fn shade(
                         buffers.back.as_ref(),
                         environment,
                         camera,
-                        &kernel,
+                        kernel,
                     )
-                })
-                .unzip()
-        })
-        .collect();
-    let mut frame = MethodFrame {
-        width,
-        height,
-        color: Vec::new(),
-        aov: Vec::new(),
-    };
-    for (color, aov) in rows {
-        frame.color.extend(color);
-        frame.aov.extend(aov);
-    }
-    Ok(frame)
+                } else {
+                    (
+                        environment.radiance(camera.pixel_ray(uv).dir),
+                        MethodAov::BACKGROUND,
+                    )
+                };
+                colors[x as usize] = color;
+                aovs[x as usize] = aov;
+            }
+        });
 }
 
 fn shade_pixel(
@@ -224,4 +243,68 @@ pub fn render_method(
     ImageSpaceParams::new(params.ior, DistanceMode::Interpolated, params.tir_policy)?;
     let buffers = render_buffers(refractor, camera, params.method)?;
     shade(&buffers, environment, camera, params)
+}
+
+/// A CPU renderer that keeps its buffers and output between frames, as a real-time renderer
+/// does: after the first frame at a resolution, a frame allocates nothing.
+pub struct CpuRenderer {
+    buffers: FrameBuffers,
+    frame: MethodFrame,
+}
+
+impl Default for CpuRenderer {
+    fn default() -> Self {
+        let empty = || SurfaceBuffer {
+            width: 0,
+            height: 0,
+            texels: Vec::new(),
+        };
+        Self {
+            buffers: FrameBuffers {
+                front: empty(),
+                back: None,
+            },
+            frame: MethodFrame {
+                width: 0,
+                height: 0,
+                color: Vec::new(),
+                aov: Vec::new(),
+            },
+        }
+    }
+}
+
+impl CpuRenderer {
+    /// One frame of `params.method`: buffers and kernel, into the renderer's memory.
+    pub fn render(
+        &mut self,
+        refractor: &PreparedRefractor<'_>,
+        environment: &Environment,
+        camera: &Camera,
+        params: &MethodParams,
+    ) -> Result<&MethodFrame, CpuError> {
+        let distance = match params.method {
+            Method::Single => DistanceMode::Interpolated,
+            Method::TwoInterface { distance, .. } => distance,
+        };
+        let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
+        if refractor.d_n.len() != refractor.mesh.positions.len() {
+            return Err(CpuError::NormalDistances {
+                found: refractor.d_n.len(),
+                expected: refractor.mesh.positions.len(),
+            });
+        }
+        front_faces_into(refractor, camera, &mut self.buffers.front);
+        match (params.method, &mut self.buffers.back) {
+            (Method::Single, back) => *back = None,
+            (Method::TwoInterface { back: surface, .. }, Some(back)) => {
+                back.render_into(refractor, camera, surface)
+            }
+            (Method::TwoInterface { back: surface, .. }, back @ None) => {
+                *back = Some(BackFaces::render(refractor, camera, surface));
+            }
+        }
+        shade_into(&self.buffers, environment, camera, &kernel, &mut self.frame);
+        Ok(&self.frame)
+    }
 }
