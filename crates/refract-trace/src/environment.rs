@@ -70,17 +70,21 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
     const ZENITH: Vec3 = Vec3::new(0.12, 0.3, 0.75);
     if dir.y >= 0.0 {
         let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
-        let azimuth = dir.x.atan2(-dir.z).to_degrees().rem_euclid(360.0);
+        // Azimuth in [0, 360): atan2 gives (−180, 180], so one conditional add wraps it (the same
+        // number as `rem_euclid(360)`, without a call to fmodf).
+        let signed = dir.x.atan2(-dir.z).to_degrees();
+        let azimuth = if signed < 0.0 { signed + 360.0 } else { signed };
         let stripe = azimuth / 30.0;
+        let nearest = (stripe + 0.5).floor(); // stripe ≥ 0: rounds halves up, as `round` does
         // Meridians converge at the zenith: stop them below it.
-        if (stripe - stripe.round()).abs() < 0.06 && dir.y < 0.85 {
+        if (stripe - nearest).abs() < 0.06 && dir.y < 0.85 {
             let hue = [
                 Vec3::new(0.9, 0.1, 0.1),
                 Vec3::new(0.95, 0.6, 0.1),
                 Vec3::new(0.2, 0.8, 0.2),
                 Vec3::new(0.6, 0.2, 0.8),
             ];
-            sky = hue[(stripe.round() as usize) % 4];
+            sky = hue[(nearest as usize) % 4];
         }
         let sun = Vec3::new(0.4, 0.6, -0.7).normalize();
         if dir.dot(sun) > 0.995 {
@@ -89,7 +93,9 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
         sky
     } else {
         let p = dir / -dir.y; // hit on the plane y = −1
-        let check = ((p.x * 2.0).floor() + (p.z * 2.0).floor()).rem_euclid(2.0);
+        // Parity of an integer-valued float, a − 2⌊a/2⌋ (exact; equal to `rem_euclid(2)`).
+        let cells = (p.x * 2.0).floor() + (p.z * 2.0).floor();
+        let check = cells - 2.0 * (cells * 0.5).floor();
         let tile = if check < 1.0 {
             Vec3::splat(0.9)
         } else {
