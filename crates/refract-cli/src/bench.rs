@@ -120,14 +120,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
-    let mut backends = Vec::new();
-    for b in &args.backends {
-        backends.push(match b.as_str() {
-            "cpu" => Backend::Cpu,
-            "gpu" => Backend::Gpu,
-            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
-        });
-    }
+    let backends = Backend::parse_list(&args.backends)?;
     let gpu = if backends.contains(&Backend::Gpu) {
         match refract_gpu::GpuContext::new() {
             Ok(context) => {

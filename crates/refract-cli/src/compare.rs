@@ -26,6 +26,20 @@ pub enum Backend {
 }
 
 impl Backend {
+    /// Parses a `--backends` list (`cpu`, `gpu`).
+    pub fn parse_list(names: &[String]) -> anyhow::Result<Vec<Self>> {
+        names
+            .iter()
+            .map(|name| match name.as_str() {
+                "cpu" => Ok(Backend::Cpu),
+                "gpu" => Ok(Backend::Gpu),
+                other => {
+                    anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu")
+                }
+            })
+            .collect()
+    }
+
     /// The id in file names and metrics.
     pub fn id(self) -> &'static str {
         match self {

@@ -98,14 +98,7 @@ struct CompareArgs {
 }
 
 fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions> {
-    let mut backends = Vec::new();
-    for backend in &args.backends {
-        backends.push(match backend.as_str() {
-            "cpu" => compare::Backend::Cpu,
-            "gpu" => compare::Backend::Gpu,
-            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
-        });
-    }
+    let backends = compare::Backend::parse_list(&args.backends)?;
     // The default list tolerates a missing adapter (with a notice); an explicit list does not.
     let explicit = args.backends != ["cpu", "gpu"];
     Ok(compare::CompareOptions {

@@ -68,6 +68,15 @@ impl Method {
         }
     }
 
+    /// The distance approximation of the kernel (`Interpolated` for `single`, which does not
+    /// use one).
+    pub fn distance_mode(&self) -> DistanceMode {
+        match self {
+            Method::Single => DistanceMode::Interpolated,
+            Method::TwoInterface { distance, .. } => *distance,
+        }
+    }
+
     /// The same method with another back surface (no effect on `single`).
     pub fn with_back_surface(self, back: BackSurface) -> Self {
         match self {

@@ -119,10 +119,7 @@ pub fn shade(
     camera: &Camera,
     params: &MethodParams,
 ) -> Result<MethodFrame, CpuError> {
-    let distance = match params.method {
-        Method::Single => DistanceMode::Interpolated,
-        Method::TwoInterface { distance, .. } => distance,
-    };
+    let distance = params.method.distance_mode();
     let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
     let mut frame = MethodFrame {
         width: 0,
@@ -283,10 +280,7 @@ impl CpuRenderer {
         camera: &Camera,
         params: &MethodParams,
     ) -> Result<&MethodFrame, CpuError> {
-        let distance = match params.method {
-            Method::Single => DistanceMode::Interpolated,
-            Method::TwoInterface { distance, .. } => distance,
-        };
+        let distance = params.method.distance_mode();
         let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
         if refractor.d_n.len() != refractor.mesh.positions.len() {
             return Err(CpuError::NormalDistances {

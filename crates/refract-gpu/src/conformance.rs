@@ -5,6 +5,7 @@ use glam::Vec4;
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
+use crate::renderer::storage_entry;
 use crate::shaders::module_source;
 
 /// The entry points of the conformance module.
@@ -36,19 +37,13 @@ pub fn evaluate(
             source: wgpu::ShaderSource::Wgsl(module_source("conformance").into()),
         });
         // An explicit layout: an automatic one would drop the bindings an entry point ignores.
-        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("conformance"),
-            entries: &[storage(0, true), storage(1, true), storage(2, false)],
+            entries: &[
+                storage_entry(0, true),
+                storage_entry(1, true),
+                storage_entry(2, false),
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("conformance"),

@@ -128,7 +128,8 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+/// A compute-stage storage buffer binding.
+pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -353,10 +354,7 @@ impl GpuFrame {
         camera: &Camera,
         params: &MethodParams,
     ) -> Result<Self, GpuError> {
-        let distance = match params.method {
-            Method::Single => DistanceMode::Interpolated,
-            Method::TwoInterface { distance, .. } => distance,
-        };
+        let distance = params.method.distance_mode();
         ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
         let (width, height) = (camera.width(), camera.height());
         let limits = context.device.limits();
