@@ -37,13 +37,13 @@ fn check_buffer_against_rays(
             let i = (y * cam.width() + x) as usize;
             let ray = cam.pixel_ray(Camera::pixel_center(x, y));
             let hit = expected(&ray);
-            let texel = &buffer.texels[i];
-            let covered = texel.covered;
+            let texel = buffer.texel(i);
+            let covered = texel.is_some();
             if covered || hit.is_some() {
                 union += 1;
                 agree += usize::from(covered == hit.is_some());
             }
-            if let (true, Some(hit)) = (covered, hit) {
+            if let (Some(texel), Some(hit)) = (texel, hit) {
                 both += 1;
                 let p_err = (texel.p_ws - ray.at(hit.t)).length();
                 let n_err = (texel.n_ws - hit.shading_normal).length();

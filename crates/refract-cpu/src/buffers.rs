@@ -76,9 +76,10 @@ impl BackFaceSampler for BackFaces {
         if !(uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h) {
             return None;
         }
-        let texel =
-            &self.buffer.texels[uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize];
-        texel.covered.then(|| BackFaceSample {
+        let texel = self
+            .buffer
+            .texel(uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize)?;
+        Some(BackFaceSample {
             n_ws: texel.n_ws,
             distance: (texel.p_ws - self.eye).length(),
         })

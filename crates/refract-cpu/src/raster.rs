@@ -32,11 +32,13 @@ pub enum DepthTest {
     Furthest,
 }
 
-/// One pixel of a [`SurfaceBuffer`]: the surviving fragment, or the explicit empty marker.
+/// One pixel of a [`SurfaceBuffer`]: the fragment that survived the depth test. Whether a
+/// texel holds a fragment of the current frame is decided by its generation (see
+/// [`SurfaceBuffer::texel`]), so buffers are never cleared between frames.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Texel {
-    /// Whether any fragment covered the pixel centre; the other fields are meaningless if not.
-    pub covered: bool,
+    /// The buffer generation that wrote this texel; older ones are empty.
+    generation: u32,
     /// Window depth in `[0, 1]`.
     pub depth: f32,
     /// Perspective-correct interpolated world position.
@@ -48,9 +50,8 @@ pub struct Texel {
 }
 
 impl Texel {
-    /// An uncovered pixel.
-    pub const EMPTY: Self = Self {
-        covered: false,
+    const NEVER_WRITTEN: Self = Self {
+        generation: 0,
         depth: 0.0,
         p_ws: Vec3::ZERO,
         n_ws: Vec3::ZERO,
@@ -65,8 +66,50 @@ pub struct SurfaceBuffer {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// `width × height` texels.
-    pub texels: Vec<Texel>,
+    /// The current frame's generation (≥ 1 once rendered).
+    generation: u32,
+    texels: Vec<Texel>,
+}
+
+impl SurfaceBuffer {
+    /// An empty buffer (no pixels).
+    pub fn new() -> Self {
+        Self {
+            width: 0,
+            height: 0,
+            generation: 0,
+            texels: Vec::new(),
+        }
+    }
+
+    /// The fragment covering pixel `index` (row-major), or `None` where the pixel is empty:
+    /// the explicit empty marker.
+    #[inline]
+    pub fn texel(&self, index: usize) -> Option<&Texel> {
+        self.texels
+            .get(index)
+            .filter(|t| t.generation == self.generation && self.generation != 0)
+    }
+
+    /// Starts a frame of `width × height`: a new generation makes every texel empty without
+    /// touching memory (the buffer is only cleared when it is resized or the counter wraps).
+    fn begin_frame(&mut self, width: u32, height: u32) {
+        let size = (width * height) as usize;
+        if self.texels.len() != size || self.generation == u32::MAX {
+            self.texels.clear();
+            self.texels.resize(size, Texel::NEVER_WRITTEN);
+            self.generation = 0;
+        }
+        self.width = width;
+        self.height = height;
+        self.generation += 1;
+    }
+}
+
+impl Default for SurfaceBuffer {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// A triangle mesh ready for rasterisation: world positions, normals and one scalar per vertex.
@@ -220,11 +263,7 @@ pub fn rasterize(
     faces: Faces,
     test: DepthTest,
 ) -> SurfaceBuffer {
-    let mut buffer = SurfaceBuffer {
-        width: 0,
-        height: 0,
-        texels: Vec::new(),
-    };
+    let mut buffer = SurfaceBuffer::new();
     rasterize_into(mesh, camera, faces, test, &mut buffer);
     buffer
 }
@@ -285,19 +324,23 @@ pub fn rasterize_into(
             bins[band as usize].push(index as u32);
         }
     }
-    buffer.width = width;
-    buffer.height = height;
-    buffer.texels.clear();
-    buffer
-        .texels
-        .resize((width * height) as usize, Texel::EMPTY);
+    buffer.begin_frame(width, height);
+    let generation = buffer.generation;
     buffer
         .texels
         .par_chunks_mut((BAND * width) as usize)
         .zip(bins.par_iter())
         .enumerate()
         .for_each(|(band, (rows, bin))| {
-            rasterize_band(&triangles, bin, band as u32 * BAND, width, rows, test)
+            rasterize_band(
+                &triangles,
+                bin,
+                band as u32 * BAND,
+                width,
+                rows,
+                test,
+                generation,
+            )
         });
 }
 
@@ -310,6 +353,7 @@ fn rasterize_band(
     width: u32,
     rows: &mut [Texel],
     test: DepthTest,
+    generation: u32,
 ) {
     let last_row = first_row + (rows.len() as u32 / width) - 1;
     let half = (SUBPIXEL as i64) / 2;
@@ -317,27 +361,40 @@ fn rasterize_band(
         let t = &triangles[index as usize];
         let [a, b, c] = t.xy;
         let (tl0, tl1, tl2) = (is_top_left(b, c), is_top_left(c, a), is_top_left(a, b));
-        let area = t.area as f64;
+        let inv_area = 1.0 / t.area as f64;
+        // Edge functions step by −Δy·SUBPIXEL per pixel to the right (exact integer arithmetic).
+        let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL as i64);
         for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
-            let py = i64::from(y) * SUBPIXEL as i64 + half;
+            let p = [
+                i64::from(t.min[0]) * SUBPIXEL as i64 + half,
+                i64::from(y) * SUBPIXEL as i64 + half,
+            ];
+            let (mut e0, mut e1, mut e2) = (edge(b, c, p), edge(c, a, p), edge(a, b, p));
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             for x in t.min[0]..=t.max[0] {
-                let p = [i64::from(x) * SUBPIXEL as i64 + half, py];
-                let (e0, e1, e2) = (edge(b, c, p), edge(c, a, p), edge(a, b, p));
-                let inside = (e0 > 0 || (e0 == 0 && tl0))
-                    && (e1 > 0 || (e1 == 0 && tl1))
-                    && (e2 > 0 || (e2 == 0 && tl2));
+                let (f0, f1, f2) = (e0, e1, e2);
+                e0 += step[0];
+                e1 += step[1];
+                e2 += step[2];
+                let inside = (f0 > 0 || (f0 == 0 && tl0))
+                    && (f1 > 0 || (f1 == 0 && tl1))
+                    && (f2 > 0 || (f2 == 0 && tl2));
                 if !inside {
                     continue;
                 }
-                // Screen-space barycentrics (exact integers, one rounding each).
-                let l = [e0 as f64 / area, e1 as f64 / area, e2 as f64 / area].map(|v| v as f32);
+                // Screen-space barycentrics (exact integers, scaled by 1/area in f64).
+                let l = [
+                    f0 as f64 * inv_area,
+                    f1 as f64 * inv_area,
+                    f2 as f64 * inv_area,
+                ]
+                .map(|v| v as f32);
                 let depth = l[0] * t.depth[0] + l[1] * t.depth[1] + l[2] * t.depth[2];
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
                 }
                 let texel = &mut row[x as usize];
-                let better = !texel.covered
+                let better = texel.generation != generation
                     || match test {
                         DepthTest::Nearest => depth < texel.depth,
                         DepthTest::Furthest => depth > texel.depth,
@@ -351,7 +408,7 @@ fn rasterize_band(
                 let pw = pw.map(|v| v / sum);
                 let [v0, v1, v2] = t.vertices;
                 *texel = Texel {
-                    covered: true,
+                    generation,
                     depth,
                     p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
                     n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),

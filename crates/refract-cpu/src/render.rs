@@ -155,27 +155,27 @@ fn shade_into(
         .for_each(|(y, (colors, aovs))| {
             let y = y as u32;
             for x in 0..width {
-                let texel = &front.texels[(y * width + x) as usize];
                 let uv = Camera::pixel_center(x, y);
-                let (color, aov) = if texel.covered {
-                    let surface = FrontSurface {
-                        p1_ws: texel.p_ws,
-                        n1_ws: texel.n_ws,
-                        d_n: texel.scalar,
-                    };
-                    shade_pixel(
-                        &surface,
-                        uv,
-                        buffers.back.as_ref(),
-                        environment,
-                        camera,
-                        kernel,
-                    )
-                } else {
-                    (
+                let (color, aov) = match front.texel((y * width + x) as usize) {
+                    Some(texel) => {
+                        let surface = FrontSurface {
+                            p1_ws: texel.p_ws,
+                            n1_ws: texel.n_ws,
+                            d_n: texel.scalar,
+                        };
+                        shade_pixel(
+                            &surface,
+                            uv,
+                            buffers.back.as_ref(),
+                            environment,
+                            camera,
+                            kernel,
+                        )
+                    }
+                    None => (
                         environment.radiance(camera.pixel_ray(uv).dir),
                         MethodAov::BACKGROUND,
-                    )
+                    ),
                 };
                 colors[x as usize] = color;
                 aovs[x as usize] = aov;
@@ -251,11 +251,7 @@ pub struct CpuRenderer {
 
 impl Default for CpuRenderer {
     fn default() -> Self {
-        let empty = || SurfaceBuffer {
-            width: 0,
-            height: 0,
-            texels: Vec::new(),
-        };
+        let empty = SurfaceBuffer::new;
         Self {
             buffers: FrameBuffers {
                 front: empty(),
