@@ -7,7 +7,7 @@ use refract_core::exit::{ExitNormalSource, TirPolicy};
 use refract_core::kernel::{
     FrontSurface, ImageSpaceParams, InvalidIor, one_interface, two_interface,
 };
-use refract_core::{Camera, DistanceMode, Method};
+use refract_core::{Camera, Method};
 use refract_trace::Environment;
 
 use crate::buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
@@ -236,10 +236,9 @@ pub fn render_method(
     camera: &Camera,
     params: &MethodParams,
 ) -> Result<MethodFrame, CpuError> {
-    // Validate the IOR before spending time on buffers.
-    ImageSpaceParams::new(params.ior, DistanceMode::Interpolated, params.tir_policy)?;
-    let buffers = render_buffers(refractor, camera, params.method)?;
-    shade(&buffers, environment, camera, params)
+    let mut renderer = CpuRenderer::default();
+    renderer.render(refractor, environment, camera, params)?;
+    Ok(renderer.frame)
 }
 
 /// A CPU renderer that keeps its buffers and output between frames, as a real-time renderer
