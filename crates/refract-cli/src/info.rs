@@ -9,8 +9,9 @@ use refract_geometry::{LoadOptions, MeshBvh, builtin, load_mesh, normal_distance
 /// Arguments of `refract info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// A mesh file (.obj, .gltf, .glb) or a built-in shape (builtin:sphere, builtin:lens, ...).
-    pub mesh: String,
+    /// A mesh file (.obj, .gltf, .glb) or a built-in shape (builtin:sphere, builtin:lens, ...);
+    /// without one, only the GPU adapters are listed.
+    pub mesh: Option<String>,
     /// Keep the file's coordinates instead of centring and scaling into the unit sphere.
     #[arg(long)]
     pub no_normalize: bool,
@@ -19,17 +20,32 @@ pub struct InfoArgs {
     pub weld: Option<f32>,
 }
 
-/// Loads the mesh, builds the BVH and d_N, and prints facts and timings.
+/// Lists the GPU adapters; with a mesh, loads it, builds the BVH and d_N, and prints facts and
+/// timings.
 pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    let adapters = refract_gpu::list_adapters();
+    if adapters.is_empty() {
+        println!("GPU adapters     none (the GPU backend needs one; Debian: mesa-vulkan-drivers)");
+    }
+    for adapter in &adapters {
+        println!(
+            "GPU adapter      {} ({:?}, {:?})",
+            adapter.name, adapter.backend, adapter.device_type
+        );
+    }
+    let Some(mesh_spec) = &args.mesh else {
+        return Ok(());
+    };
+    println!();
     let start = Instant::now();
-    let (mesh, report, material) = if args.mesh.starts_with(builtin::PREFIX) {
-        (builtin::mesh(&args.mesh)?, None, None)
+    let (mesh, report, material) = if mesh_spec.starts_with(builtin::PREFIX) {
+        (builtin::mesh(mesh_spec)?, None, None)
     } else {
         let options = LoadOptions {
             normalize: !args.no_normalize,
             weld_relative_epsilon: args.weld,
         };
-        let path = PathBuf::from(&args.mesh);
+        let path = PathBuf::from(mesh_spec);
         let loaded = load_mesh(&path, &options)?;
         (loaded.mesh, Some(loaded.report), loaded.material)
     };

@@ -40,7 +40,7 @@ enum Command {
     Bench(bench::BenchArgs),
     /// List the built-in scenes.
     Scenes,
-    /// Load a mesh (.obj, .gltf, .glb or builtin:NAME) and print its facts and d_N statistics.
+    /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
     Info(info::InfoArgs),
 }
 

@@ -235,3 +235,15 @@ fn bench_quick_writes_table_one() {
         "{md}"
     );
 }
+
+#[test]
+fn info_lists_adapters_and_mesh_facts() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(&["info", "builtin:lens"], dir.path());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(text.contains("GPU adapter"), "{text}");
+    assert!(text.contains("watertight       yes"), "{text}");
+    let output = refract(&["info", "missing.obj"], dir.path());
+    assert!(!output.status.success() && stderr(&output).contains("missing.obj"));
+}

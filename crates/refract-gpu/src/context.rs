@@ -62,6 +62,16 @@ impl fmt::Debug for GpuContext {
     }
 }
 
+/// Every adapter wgpu can see (honouring `WGPU_BACKEND`), for `refract info`.
+pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .iter()
+        .map(wgpu::Adapter::get_info)
+        .collect()
+}
+
 impl GpuContext {
     /// Opens the first adapter, honouring `WGPU_BACKEND` (which backends to try) and
     /// `WGPU_ADAPTER_NAME` (a substring of the adapter name), and creates a device with the

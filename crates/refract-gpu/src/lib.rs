@@ -13,5 +13,5 @@ pub mod context;
 pub mod renderer;
 pub mod shaders;
 
-pub use context::{GpuContext, GpuError};
+pub use context::{GpuContext, GpuError, list_adapters};
 pub use renderer::{GpuFrame, GpuRenderer, GpuScene, GpuTiming, render_method};
