@@ -7,9 +7,18 @@ use anyhow::{Context, bail};
 use glam::Vec3;
 use refract_core::{Camera, CameraDesc, Method};
 use refract_cpu::{MethodParams, PreparedRefractor, render_method};
-use refract_trace::{Frame, PixelAov, Refractor, TraceSettings, render};
+use refract_trace::{Frame, PixelAov, Refractor, TraceMode, TraceSettings, render};
 
 use crate::TirArg;
+
+/// The reference tracer's mode.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum TraceArg {
+    /// Only the refracted path (the reference for image-space methods).
+    Transmission,
+    /// Fresnel-split reflected and refracted branches.
+    Full,
+}
 use crate::scene_file::load_scene;
 
 /// Arguments of `refract render`.
@@ -29,6 +38,13 @@ pub struct RenderArgs {
     /// Samples per pixel of the reference.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub spp: u32,
+    /// Reference mode: `transmission` (refracted path only, TIR reflects) or `full` (Fresnel
+    /// splitting at every interface).
+    #[arg(long, value_enum, default_value = "transmission")]
+    pub trace: TraceArg,
+    /// Reference depth limit (refractor interactions per path).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub depth: u32,
     /// Override the scene's index of refraction.
     #[arg(long, allow_negative_numbers = true)]
     pub ior: Option<f32>,
@@ -87,6 +103,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             &loaded.scene,
             &camera,
             &TraceSettings {
+                mode: match args.trace {
+                    TraceArg::Transmission => TraceMode::Transmission,
+                    TraceArg::Full => TraceMode::Full,
+                },
+                max_depth: args.depth,
                 spp: args.spp,
                 ..TraceSettings::default()
             },
