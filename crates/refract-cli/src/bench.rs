@@ -15,6 +15,7 @@ use refract_trace::{Environment, Refractor, Scene, TraceSettings, render};
 use serde::Serialize;
 
 use crate::compare::Backend;
+use crate::timing::{FrameTimes, time_frames, wall_ms};
 
 /// Arguments of `refract bench`.
 #[derive(Debug, clap::Args)]
@@ -101,11 +102,6 @@ fn load_model(name: &str, data: &std::path::Path) -> anyhow::Result<Option<(Mesh
     Ok(Some((load_mesh(&path, &LoadOptions::default())?.mesh, ior)))
 }
 
-fn stats(mut times: Vec<f64>) -> (f64, f64, f64) {
-    times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], times[0], times[times.len() - 1])
-}
-
 /// Runs the benchmark and writes `bench.json` and `bench.md`.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let (res, frames) = if args.quick {
@@ -170,32 +166,24 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 let times = match (backend, &gpu, &gpu_scene) {
                     (Backend::Cpu, _, _) => {
                         let mut renderer = CpuRenderer::default();
-                        let mut times = Vec::new();
-                        for k in 0..frames + 3 {
-                            let start = Instant::now();
-                            renderer.render(&prepared, &scene.environment, &camera, &params)?;
-                            if k >= 3 {
-                                times.push(start.elapsed().as_secs_f64() * 1e3);
-                            }
-                        }
-                        times
+                        time_frames(3, frames, || {
+                            wall_ms(|| {
+                                renderer.render(&prepared, &scene.environment, &camera, &params)?;
+                                Ok(())
+                            })
+                        })?
                     }
                     (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
                         let run = refract_gpu::GpuFrame::new(
                             context, renderer, gpu_scene, &camera, &params,
                         )?;
-                        let mut times = Vec::new();
-                        for k in 0..frames + 3 {
-                            let timing = run.execute(context, renderer, gpu_scene, false)?;
-                            if k >= 3 {
-                                times.push(timing.ms);
-                            }
-                        }
-                        times
+                        time_frames(3, frames, || {
+                            Ok(run.execute(context, renderer, gpu_scene, false)?.ms)
+                        })?
                     }
                     _ => continue,
                 };
-                let (median, min, max) = stats(times);
+                let FrameTimes { median, min, max } = times;
                 let record = BenchRecord {
                     scene: name.clone(),
                     triangles,

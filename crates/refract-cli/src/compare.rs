@@ -15,6 +15,7 @@ use crate::images::{write_color, write_error_map, write_mask};
 use crate::metrics::{MetricsRecord, evaluate, reference_record};
 use crate::report::{SceneImages, write_reports};
 use crate::scene_file::load_scene;
+use crate::timing::{time_frames, wall_ms};
 
 /// Which backends run the methods.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,21 +93,6 @@ fn bar(len: u64, message: &str) -> ProgressBar {
     }
     bar.set_message(message.to_owned());
     bar
-}
-
-/// Median of `frames` timed runs after two warm-up runs, in milliseconds.
-fn median_ms(frames: u32, mut run: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
-    for _ in 0..2 {
-        run()?;
-    }
-    let mut times = Vec::with_capacity(frames as usize);
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        run()?;
-        times.push(start.elapsed().as_secs_f64() * 1e3);
-    }
-    times.sort_by(f64::total_cmp);
-    Ok(times[times.len() / 2])
 }
 
 /// Runs the comparison and writes everything into `options.out`; returns the records.
@@ -222,24 +208,21 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         )?;
                         run.execute(context, renderer, gpu_scene, true)?;
                         let frame = run.read(context)?;
-                        let mut times = Vec::new();
-                        for k in 0..options.frames + 2 {
-                            let timing = run.execute(context, renderer, gpu_scene, false)?;
-                            if k >= 2 {
-                                times.push(timing.ms);
-                            }
-                        }
-                        times.sort_by(f64::total_cmp);
-                        (frame, times[times.len() / 2])
+                        let times = time_frames(2, options.frames, || {
+                            Ok(run.execute(context, renderer, gpu_scene, false)?.ms)
+                        })?;
+                        (frame, times.median)
                     }
                     _ => {
                         let frame = render_method(&prepared, environment, &camera, &params)?;
                         let mut renderer = CpuRenderer::default();
-                        let ms = median_ms(options.frames, || {
-                            renderer.render(&prepared, environment, &camera, &params)?;
-                            Ok(())
+                        let times = time_frames(2, options.frames, || {
+                            wall_ms(|| {
+                                renderer.render(&prepared, environment, &camera, &params)?;
+                                Ok(())
+                            })
                         })?;
-                        (frame, ms)
+                        (frame, times.median)
                     }
                 };
                 let (mut record, maps) = evaluate(&reference, &frame, diameter);

@@ -16,6 +16,7 @@ mod metrics;
 mod render;
 mod report;
 mod scene_file;
+mod timing;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
