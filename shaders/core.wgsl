@@ -1,7 +1,7 @@
 // refract-core's twin in WGSL. Every function mirrors the Rust function of the same name in
 // crates/refract-core (same formulas, same branches); tests/gpu_conformance.rs holds them to it.
-// Constants (FACE_FORWARD_EPSILON, NORMAL_INCIDENCE_ANGLE, policy and mode codes) come from the
-// header that crates/refract-gpu generates from Rust.
+// Constants (FACE_FORWARD_EPSILON, NORMAL_INCIDENCE_ANGLE, UNIT_TOLERANCE, policy and mode
+// codes) come from the header that crates/refract-gpu generates from Rust.
 
 const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;
@@ -11,6 +11,13 @@ const F32_MAX: f32 = 3.40282347e38;
 // vector.rs: robust_normalize. xyz = the unit vector, w = 1 when valid, 0 when v is zero or
 // not finite.
 fn robust_normalize(v: vec3<f32>) -> vec4<f32> {
+    let length_squared = dot(v, v);
+    if abs(length_squared - 1.0) <= UNIT_TOLERANCE {
+        return vec4<f32>(v, 1.0);
+    }
+    if length_squared >= 1e-30 && length_squared <= F32_MAX {
+        return vec4<f32>(v * (1.0 / sqrt(length_squared)), 1.0);
+    }
     let scale = max(max(abs(v.x), abs(v.y)), abs(v.z));
     if !(scale > 0.0 && scale <= F32_MAX) {
         return vec4<f32>(0.0);

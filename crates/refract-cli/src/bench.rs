@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::Context;
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{CpuRenderer, MethodParams, PreparedRefractor};
+use refract_cpu::{CpuRenderer, FrameOutputs, MethodParams, PreparedRefractor};
 use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
 use refract_trace::{Environment, Refractor, Scene, TraceSettings, render};
 use serde::Serialize;
@@ -165,7 +165,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             for &backend in &backends {
                 let times = match (backend, &gpu, &gpu_scene) {
                     (Backend::Cpu, _, _) => {
-                        let mut renderer = CpuRenderer::default();
+                        // Colour only, as displayed: the AOVs are for comparisons.
+                        let mut renderer = CpuRenderer::new(FrameOutputs::Color);
                         time_frames(3, frames, || {
                             wall_ms(|| {
                                 renderer.render(&prepared, &scene.environment, &camera, &params)?;

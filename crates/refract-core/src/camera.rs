@@ -131,6 +131,9 @@ pub struct Camera {
     look_dir: Vec3,
     tan_half_fov_y: f32,
     aspect: f32,
+    /// View-space ray direction per pixel position: `dir_vs.xy = uv_px · ray_scale + ray_offset`.
+    ray_scale: Vec2,
+    ray_offset: Vec2,
 }
 
 impl Camera {
@@ -164,6 +167,7 @@ impl Camera {
         let world_to_view = look_at_mat4(desc.eye, desc.target, up);
         let view_to_clip = perspective(desc.fov_y, aspect, desc.near, desc.far);
         let world_to_clip = view_to_clip * world_to_view;
+        let tan_half_fov_y = (0.5 * desc.fov_y).tan();
         Ok(Self {
             desc,
             world_to_view,
@@ -172,8 +176,14 @@ impl Camera {
             world_to_clip,
             clip_to_world: world_to_clip.inverse(),
             look_dir,
-            tan_half_fov_y: (0.5 * desc.fov_y).tan(),
+            tan_half_fov_y,
             aspect,
+            // x_vs = (2u/W − 1)·aspect·tan(fov/2), y_vs = (1 − 2v/H)·tan(fov/2).
+            ray_scale: Vec2::new(
+                2.0 * aspect * tan_half_fov_y / desc.width as f32,
+                -2.0 * tan_half_fov_y / desc.height as f32,
+            ),
+            ray_offset: Vec2::new(-aspect * tan_half_fov_y, tan_half_fov_y),
         })
     }
 
@@ -241,7 +251,7 @@ impl Camera {
         if clip.w.is_nan() || clip.w <= 0.0 {
             return None;
         }
-        let ndc = clip.xyz() / clip.w;
+        let ndc = clip.xyz() * clip.w.recip();
         Some(Vec3::new(
             0.5 * (ndc.x + 1.0) * self.desc.width as f32,
             0.5 * (1.0 - ndc.y) * self.desc.height as f32,
@@ -270,18 +280,17 @@ impl Camera {
 
     /// The primary ray through pixel position `uv_px` (use [`Self::pixel_center`] for pixel
     /// centres): origin at the eye, direction `normalize(view_to_world · (x_ndc·a·tan(fov/2),
-    /// y_ndc·tan(fov/2), −1))`, `a = W/H`.
+    /// y_ndc·tan(fov/2), −1))`, `a = W/H` (the affine map from pixels to view-space `x, y`
+    /// precomputed, so that a ray costs no division besides the normalisation).
     #[inline]
     pub fn pixel_ray(&self, uv_px: Vec2) -> Ray {
-        let ndc = self.pixel_to_ndc(uv_px);
-        let dir_vs = Vec3::new(
-            ndc.x * self.aspect * self.tan_half_fov_y,
-            ndc.y * self.tan_half_fov_y,
-            -1.0,
-        );
+        let xy = uv_px * self.ray_scale + self.ray_offset;
         Ray {
             origin: self.desc.eye,
-            dir: self.view_to_world.transform_vector3(dir_vs).normalize(),
+            dir: self
+                .view_to_world
+                .transform_vector3(xy.extend(-1.0))
+                .normalize(),
         }
     }
 

@@ -5,17 +5,19 @@ use core::f32::consts::{PI, TAU};
 
 use glam::{Vec2, Vec3};
 
+use crate::arctangent::atan2;
+
 /// Texture coordinates of a unit world direction:
 /// `u = atan2(d.x, −d.z) / 2π` wrapped to `[0, 1)`, `v = acos(d.y) / π` (`v = 0` straight up),
 /// with `acos(d.y)` evaluated as `atan2(√(d.x² + d.z²), d.y)`, which keeps its digits at the
 /// poles.
 #[inline]
 pub fn direction_to_latlong(dir: Vec3) -> Vec2 {
-    let u = dir.x.atan2(-dir.z) / TAU;
+    let u = atan2(dir.x, -dir.z) / TAU;
     let u = if u < 0.0 { u + 1.0 } else { u };
     // `u + 1` can round to exactly 1 for tiny negative u.
     let u = if u >= 1.0 { 0.0 } else { u };
-    let theta = (dir.x * dir.x + dir.z * dir.z).sqrt().atan2(dir.y);
+    let theta = atan2((dir.x * dir.x + dir.z * dir.z).sqrt(), dir.y);
     Vec2::new(u, theta / PI)
 }
 

@@ -8,6 +8,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::exit::{ExitNormalSource, TirPolicy};
 use crate::interpolated_distance::{DistanceMode, NORMAL_INCIDENCE_ANGLE};
 use crate::optics::FACE_FORWARD_EPSILON;
+use crate::vector::UNIT_TOLERANCE;
 
 /// Per-frame uniforms of the GPU passes (`shaders/frame.wgsl`, `struct FrameUniforms`).
 /// Matrices are column-major, as glam and WGSL store them.
@@ -100,6 +101,7 @@ pub fn wgsl_constants() -> String {
             "const NORMAL_INCIDENCE_ANGLE: f32 = {};",
             f(NORMAL_INCIDENCE_ANGLE)
         ),
+        format!("const UNIT_TOLERANCE: f32 = {};", f(UNIT_TOLERANCE)),
         format!(
             "const TIR_CLAMP_TO_CRITICAL: u32 = {}u;",
             tir_policy_code(TirPolicy::ClampToCritical)

@@ -21,6 +21,7 @@
 //!
 //! The crate has no I/O, no threads, no GPU and allocates nothing.
 
+pub mod arctangent;
 pub mod camera;
 pub mod environment;
 pub mod exit;

@@ -2,13 +2,36 @@
 
 use glam::Vec3;
 
+use crate::arctangent::atan2;
+
+/// `|‖v‖² − 1|` below which [`robust_normalize`] returns `v` itself: ten `f32` ulps, the
+/// rounding of a normalisation or of Snell's formula on unit vectors.
+pub const UNIT_TOLERANCE: f32 = 10.0 * f32::EPSILON;
+
 /// Normalises `v`, or returns `None` when `v` is zero or not finite.
 ///
-/// Unlike `Vec3::try_normalize`, vectors whose squared length overflows `f32` (components
-/// above ~1.8e19) are still normalised: `v` is first divided by its largest absolute component,
+/// A `v` already unit to within [`UNIT_TOLERANCE`] is returned as is (most vectors of the
+/// per-pixel kernels are: interpolated-then-normalised normals, Snell's `T` from unit inputs);
+/// otherwise `v̂ = v · (1/‖v‖)` when `‖v‖²` is comfortably inside the normal `f32` range (one square root
+/// and one division, the per-pixel case). Unlike `Vec3::try_normalize`, vectors whose squared
+/// length overflows or underflows `f32` (components above ~1.8e19 or below ~1e-15) are still
+/// normalised: `v` is first scaled by its largest absolute component,
 /// `v̂ = (v / max|vᵢ|) / ‖v / max|vᵢ|‖`.
 #[inline]
 pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
+    let length_squared = v.length_squared();
+    if (length_squared - 1.0).abs() <= UNIT_TOLERANCE {
+        return Some(v);
+    }
+    // Also false for NaN. Below 1e-30 the squares of small components would lose digits.
+    if (1e-30..=f32::MAX).contains(&length_squared) {
+        return Some(v * length_squared.sqrt().recip());
+    }
+    robust_normalize_scaled(v)
+}
+
+#[cold]
+fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {
     let scale = v.abs().max_element();
     if !(scale > 0.0 && scale.is_finite()) {
         return None;
@@ -16,13 +39,14 @@ pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
     (v / scale).try_normalize()
 }
 
-/// The angle between two unit vectors, `θ = atan2(‖a × b‖, a · b)` in `[0, π]`.
+/// The angle between two unit vectors, `θ = atan2(‖a × b‖, a · b)` in `[0, π]` (with
+/// [`atan2`](crate::arctangent::atan2): relative precision kept for small angles).
 ///
 /// Well conditioned everywhere, unlike `acos(a · b)`, which loses most of its digits near 0 and
 /// π. Wyman 2005a §3.1 needs `θt/θi` near normal incidence, where `acos` would be useless.
 #[inline]
 pub fn angle_between(a: Vec3, b: Vec3) -> f32 {
-    a.cross(b).length().atan2(a.dot(b))
+    atan2(a.cross(b).length(), a.dot(b))
 }
 
 #[cfg(test)]

@@ -2,11 +2,15 @@
 //! the back faces (normal and distance of the furthest or second surface).
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use refract_core::kernel::{BackFaceSample, BackFaceSampler};
 use refract_core::{BackSurface, Camera};
 use refract_geometry::Mesh;
 
-use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize, rasterize_into};
+use crate::raster::{
+    DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize, rasterize_bands,
+    rasterize_into,
+};
 
 /// A refractor prepared for the CPU backend: its mesh and per-vertex `d_N`.
 pub struct PreparedRefractor<'a> {
@@ -17,7 +21,7 @@ pub struct PreparedRefractor<'a> {
 }
 
 impl PreparedRefractor<'_> {
-    fn raster_mesh(&self) -> RasterMesh<'_> {
+    pub(crate) fn raster_mesh(&self) -> RasterMesh<'_> {
         RasterMesh {
             positions: &self.mesh.positions,
             normals: &self.mesh.normals,
@@ -37,10 +41,27 @@ pub fn front_faces(refractor: &PreparedRefractor<'_>, camera: &Camera) -> Surfac
     )
 }
 
-/// The back-face buffer read through [`BackFaceSampler`] at the nearest texel.
+/// The back-face buffer (Wyman 2005a §3.2, "BackfaceNormals" and "BackfaceZBuf"): the
+/// rasterised back faces, resolved right after each band is rasterised into what the kernel
+/// reads, the outward normal and the distance from the eye (16 bytes a pixel).
+#[derive(Clone, Debug, Default)]
 pub struct BackFaces {
     buffer: SurfaceBuffer,
-    eye: Vec3,
+    resolved: Vec<BackTexel>,
+}
+
+/// One resolved back-face texel; a negative distance marks an empty pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct BackTexel {
+    n_ws: Vec3,
+    distance: f32,
+}
+
+impl BackTexel {
+    const EMPTY: Self = Self {
+        n_ws: Vec3::ZERO,
+        distance: -1.0,
+    };
 }
 
 impl BackFaces {
@@ -51,15 +72,47 @@ impl BackFaces {
         camera: &Camera,
         surface: BackSurface,
     ) -> Self {
+        let mut back = Self::default();
+        back.render_into(refractor, camera, surface);
+        back
+    }
+
+    /// [`BackFaces::render`] into this buffer's memory.
+    pub fn render_into(
+        &mut self,
+        refractor: &PreparedRefractor<'_>,
+        camera: &Camera,
+        surface: BackSurface,
+    ) {
         let test = match surface {
             BackSurface::Furthest => DepthTest::Furthest,
             BackSurface::Second => DepthTest::Nearest,
         };
-        let buffer = rasterize(&refractor.raster_mesh(), camera, Faces::Back, test);
-        Self {
-            buffer,
-            eye: camera.eye(),
-        }
+        let eye = camera.eye();
+        let width = camera.width();
+        self.resolved
+            .resize((width * camera.height()) as usize, BackTexel::EMPTY);
+        rasterize_bands(
+            &refractor.raster_mesh(),
+            camera,
+            Faces::Back,
+            test,
+            &mut self.buffer,
+            self.resolved.par_chunks_mut(band_pixels(width)),
+            |band, resolved| {
+                for (row, resolved) in resolved.chunks_exact_mut(width as usize).enumerate() {
+                    let y = band.first_row + row as u32;
+                    for (x, out) in resolved.iter_mut().enumerate() {
+                        *out = band
+                            .texel(x as u32, y)
+                            .map_or(BackTexel::EMPTY, |t| BackTexel {
+                                n_ws: t.n_ws,
+                                distance: (t.p_ws - eye).length(),
+                            });
+                    }
+                }
+            },
+        );
     }
 
     /// The underlying buffer.
@@ -76,12 +129,10 @@ impl BackFaceSampler for BackFaces {
         if !(uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h) {
             return None;
         }
-        let texel = self
-            .buffer
-            .texel(uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize)?;
-        Some(BackFaceSample {
+        let texel = self.resolved[uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize];
+        (texel.distance >= 0.0).then_some(BackFaceSample {
             n_ws: texel.n_ws,
-            distance: (texel.p_ws - self.eye).length(),
+            distance: texel.distance,
         })
     }
 }
@@ -99,27 +150,4 @@ pub fn front_faces_into(
         DepthTest::Nearest,
         buffer,
     );
-}
-
-impl BackFaces {
-    /// Re-renders into this buffer's memory (for `camera` and `surface`).
-    pub fn render_into(
-        &mut self,
-        refractor: &PreparedRefractor<'_>,
-        camera: &Camera,
-        surface: BackSurface,
-    ) {
-        let test = match surface {
-            BackSurface::Furthest => DepthTest::Furthest,
-            BackSurface::Second => DepthTest::Nearest,
-        };
-        rasterize_into(
-            &refractor.raster_mesh(),
-            camera,
-            Faces::Back,
-            test,
-            &mut self.buffer,
-        );
-        self.eye = camera.eye();
-    }
 }

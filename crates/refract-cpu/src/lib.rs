@@ -10,8 +10,11 @@ pub mod raster;
 pub mod render;
 
 pub use buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
-pub use raster::{DepthTest, Faces, SurfaceBuffer, Texel, rasterize, rasterize_into};
+pub use raster::{
+    BAND_ROWS, Band, DepthTest, Faces, SurfaceBuffer, Texel, band_pixels, rasterize,
+    rasterize_bands, rasterize_into,
+};
 pub use render::{
-    CpuError, CpuRenderer, FrameBuffers, MethodAov, MethodFrame, MethodParams, render_buffers,
-    render_method, shade,
+    CpuError, CpuRenderer, FrameBuffers, FrameOutputs, MethodAov, MethodFrame, MethodParams,
+    render_buffers, render_method, shade,
 };

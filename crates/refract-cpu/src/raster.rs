@@ -1,7 +1,13 @@
-//! A deterministic tiled triangle rasteriser producing the G-buffers of the image-space methods:
-//! pixel-centre sampling, the top-left fill rule on an 8-bit sub-pixel grid (as GPUs do),
-//! perspective-correct interpolation, near-plane clipping, and bands of rows rendered in
+//! A deterministic visibility-buffer rasteriser producing the G-buffers of the image-space
+//! methods: pixel-centre sampling, the top-left fill rule on an 8-bit sub-pixel grid (as GPUs
+//! do), perspective-correct interpolation, near-plane clipping, and bands of rows rendered in
 //! parallel.
+//!
+//! The scan conversion keeps only what the depth test needs per pixel (window depth and a
+//! triangle id, 8 bytes); the attributes of the surviving fragment are interpolated when a
+//! pixel is read ([`SurfaceBuffer::texel`], [`Band::texel`]), so overdraw costs an edge test
+//! and a depth compare, never an interpolation. A renderer can run its per-pixel work band by
+//! band right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
 
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
@@ -9,10 +15,17 @@ use refract_core::Camera;
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
 const SUBPIXEL_BITS: u32 = 8;
-const SUBPIXEL: f64 = (1u32 << SUBPIXEL_BITS) as f64;
+const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
 /// Height in rows of a band; each band (full width) is rasterised by one task, straight into
 /// its rows of the output.
-const BAND: u32 = 16;
+pub const BAND_ROWS: u32 = 16;
+/// Input triangles set up per task; the set-up triangles of a chunk are stored together and a
+/// triangle id is `chunk · CHUNK_SLOTS + index in chunk`.
+const CHUNK_TRIANGLES: usize = 4096;
+/// Near-plane clipping turns a triangle into at most two.
+const CHUNK_SLOTS: u32 = 2 * CHUNK_TRIANGLES as u32;
+/// The triangle id of an empty pixel.
+const EMPTY: u32 = u32::MAX;
 
 /// Which faces are drawn (the others are culled), seen from the camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,13 +45,39 @@ pub enum DepthTest {
     Furthest,
 }
 
-/// One pixel of a [`SurfaceBuffer`]: the fragment that survived the depth test. Whether a
-/// texel holds a fragment of the current frame is decided by its generation (see
-/// [`SurfaceBuffer::texel`]), so buffers are never cleared between frames.
+impl DepthTest {
+    /// The depth of an empty pixel: every fragment passes against it.
+    fn cleared(self) -> Visibility {
+        let depth = match self {
+            Self::Nearest => f32::INFINITY,
+            Self::Furthest => f32::NEG_INFINITY,
+        };
+        Visibility {
+            depth,
+            triangle: EMPTY,
+        }
+    }
+
+    #[inline]
+    fn passes(self, depth: f32, stored: f32) -> bool {
+        match self {
+            Self::Nearest => depth < stored,
+            Self::Furthest => depth > stored,
+        }
+    }
+}
+
+/// One pixel of the visibility buffer: the depth and id of the fragment that survived.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Visibility {
+    depth: f32,
+    triangle: u32,
+}
+
+/// The surface seen at one pixel: the attributes of the fragment that survived the depth test,
+/// interpolated at the pixel centre.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Texel {
-    /// The buffer generation that wrote this texel; older ones are empty.
-    generation: u32,
     /// Window depth in `[0, 1]`.
     pub depth: f32,
     /// Perspective-correct interpolated world position.
@@ -47,69 +86,6 @@ pub struct Texel {
     pub n_ws: Vec3,
     /// Perspective-correct interpolated per-vertex scalar (`d_N`).
     pub scalar: f32,
-}
-
-impl Texel {
-    const NEVER_WRITTEN: Self = Self {
-        generation: 0,
-        depth: 0.0,
-        p_ws: Vec3::ZERO,
-        n_ws: Vec3::ZERO,
-        scalar: 0.0,
-    };
-}
-
-/// Per-pixel surface data interpolated from the vertices, row-major from the top.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SurfaceBuffer {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// The current frame's generation (≥ 1 once rendered).
-    generation: u32,
-    texels: Vec<Texel>,
-}
-
-impl SurfaceBuffer {
-    /// An empty buffer (no pixels).
-    pub fn new() -> Self {
-        Self {
-            width: 0,
-            height: 0,
-            generation: 0,
-            texels: Vec::new(),
-        }
-    }
-
-    /// The fragment covering pixel `index` (row-major), or `None` where the pixel is empty:
-    /// the explicit empty marker.
-    #[inline]
-    pub fn texel(&self, index: usize) -> Option<&Texel> {
-        self.texels
-            .get(index)
-            .filter(|t| t.generation == self.generation && self.generation != 0)
-    }
-
-    /// Starts a frame of `width × height`: a new generation makes every texel empty without
-    /// touching memory (the buffer is only cleared when it is resized or the counter wraps).
-    fn begin_frame(&mut self, width: u32, height: u32) {
-        let size = (width * height) as usize;
-        if self.texels.len() != size || self.generation == u32::MAX {
-            self.texels.clear();
-            self.texels.resize(size, Texel::NEVER_WRITTEN);
-            self.generation = 0;
-        }
-        self.width = width;
-        self.height = height;
-        self.generation += 1;
-    }
-}
-
-impl Default for SurfaceBuffer {
-    fn default() -> Self {
-        Self::new()
-    }
 }
 
 /// A triangle mesh ready for rasterisation: world positions, normals and one scalar per vertex.
@@ -144,19 +120,27 @@ impl ClipVertex {
     }
 }
 
-/// A triangle set up for scan conversion: fixed-point screen positions (`y` down), edge data,
-/// and what perspective-correct interpolation needs.
+/// The attributes of a corner, interpolated when a pixel is read.
+#[derive(Clone, Copy, Debug)]
+struct Attributes {
+    p_ws: Vec3,
+    n_ws: Vec3,
+    scalar: f32,
+}
+
+/// A triangle set up for scan conversion: fixed-point screen positions (`y` down), and what
+/// perspective-correct interpolation needs.
 #[derive(Clone, Copy, Debug)]
 struct ScreenTriangle {
     /// Fixed-point pixel coordinates of the corners, in clockwise-on-screen order.
     xy: [[i64; 2]; 3],
-    /// Twice the signed area in fixed point (positive).
-    area: i64,
+    /// `1 / (twice the area in fixed point)`.
+    inv_area: f64,
     /// Window depth of each corner.
     depth: [f32; 3],
     /// `1/w` of each corner.
     inv_w: [f32; 3],
-    vertices: [ClipVertex; 3],
+    attributes: [Attributes; 3],
     /// Pixel bounds, inclusive.
     min: [u32; 2],
     max: [u32; 2],
@@ -172,6 +156,50 @@ fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
 fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     (dy == 0 && dx > 0) || dy < 0
+}
+
+/// The fixed-point position of the centre of pixel `(x, y)`.
+#[inline]
+fn pixel_center_fixed(x: u32, y: u32) -> [i64; 2] {
+    [
+        i64::from(x) * SUBPIXEL + SUBPIXEL / 2,
+        i64::from(y) * SUBPIXEL + SUBPIXEL / 2,
+    ]
+}
+
+impl ScreenTriangle {
+    /// Screen-space barycentrics from the exact integer edge functions, scaled by 1/area in f64.
+    #[inline]
+    fn barycentrics(&self, e: [i64; 3]) -> [f32; 3] {
+        e.map(|e| (e as f64 * self.inv_area) as f32)
+    }
+
+    #[inline]
+    fn depth_at(&self, l: [f32; 3]) -> f32 {
+        l[0] * self.depth[0] + l[1] * self.depth[1] + l[2] * self.depth[2]
+    }
+
+    /// The attributes at pixel `(x, y)`'s centre (inside or not): perspective-correct weights
+    /// `λᵢ/wᵢ` normalised, as the scan conversion computed the depth.
+    fn texel(&self, x: u32, y: u32) -> Texel {
+        let p = pixel_center_fixed(x, y);
+        let [a, b, c] = self.xy;
+        let l = self.barycentrics([edge(b, c, p), edge(c, a, p), edge(a, b, p)]);
+        let pw = [
+            l[0] * self.inv_w[0],
+            l[1] * self.inv_w[1],
+            l[2] * self.inv_w[2],
+        ];
+        let sum = pw[0] + pw[1] + pw[2];
+        let pw = pw.map(|v| v / sum);
+        let [v0, v1, v2] = self.attributes;
+        Texel {
+            depth: self.depth_at(l),
+            p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
+            n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
+            scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
+        }
+    }
 }
 
 /// Clips a triangle against the near plane `z_clip ≥ 0` (Sutherland–Hodgman): 0, 3 or 4
@@ -204,8 +232,8 @@ fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTria
             return None;
         }
         xy[k] = [
-            (f64::from(px) * SUBPIXEL).round() as i64,
-            (f64::from(py) * SUBPIXEL).round() as i64,
+            (f64::from(px) * SUBPIXEL as f64).round() as i64,
+            (f64::from(py) * SUBPIXEL as f64).round() as i64,
         ];
         depth[k] = ndc.z;
         inv_w[k] = 1.0 / c.w;
@@ -231,26 +259,162 @@ fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTria
     let size = [camera.width() as i64, camera.height() as i64];
     // Pixels whose centre (x + ½) can lie inside [lo, hi].
     let first = |k: usize| {
-        ((lo(k) - (SUBPIXEL as i64) / 2) as f64 / SUBPIXEL)
-            .ceil()
-            .max(0.0) as i64
+        let n = lo(k) - SUBPIXEL / 2;
+        (n.div_euclid(SUBPIXEL) + i64::from(n.rem_euclid(SUBPIXEL) != 0)).max(0)
     };
-    let last = |k: usize| {
-        (((hi(k) - (SUBPIXEL as i64) / 2) as f64 / SUBPIXEL).floor() as i64).min(size[k] - 1)
-    };
+    let last = |k: usize| ((hi(k) - SUBPIXEL / 2).div_euclid(SUBPIXEL)).min(size[k] - 1);
     let (x0, x1, y0, y1) = (first(0), last(0), first(1), last(1));
     if x0 > x1 || y0 > y1 {
         return None;
     }
     Some(ScreenTriangle {
         xy,
-        area,
+        inv_area: 1.0 / area as f64,
         depth,
         inv_w,
-        vertices,
+        attributes: vertices.map(|v| Attributes {
+            p_ws: v.p_ws,
+            n_ws: v.n_ws,
+            scalar: v.scalar,
+        }),
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
     })
+}
+
+/// The set-up triangles of one frame, stored per input chunk (the chunks' memory is reused
+/// from frame to frame).
+#[derive(Clone, Debug, Default)]
+struct TriangleStore {
+    chunks: Vec<Vec<ScreenTriangle>>,
+}
+
+impl TriangleStore {
+    #[inline]
+    fn get(&self, id: u32) -> &ScreenTriangle {
+        &self.chunks[(id / CHUNK_SLOTS) as usize][(id % CHUNK_SLOTS) as usize]
+    }
+
+    /// Projects, clips and sets up every triangle of `mesh`, in parallel, keeping index order.
+    fn set_up(&mut self, mesh: &RasterMesh<'_>, clip: &[Vec4], camera: &Camera, faces: Faces) {
+        let chunks = mesh.triangles.len().div_ceil(CHUNK_TRIANGLES);
+        self.chunks.resize_with(chunks, Vec::new);
+        self.chunks
+            .par_iter_mut()
+            .zip(mesh.triangles.par_chunks(CHUNK_TRIANGLES))
+            .for_each(|(out, chunk)| {
+                out.clear();
+                let mut polygon = Vec::with_capacity(4);
+                for tri in chunk {
+                    let v = tri.map(|i| ClipVertex {
+                        clip: clip[i as usize],
+                        p_ws: mesh.positions[i as usize],
+                        n_ws: mesh.normals[i as usize],
+                        scalar: mesh.scalars[i as usize],
+                    });
+                    if v.iter().all(|v| v.clip.z >= 0.0) {
+                        out.extend(setup(v, camera, faces));
+                    } else {
+                        clip_near(v, &mut polygon);
+                        for k in 1..polygon.len().saturating_sub(1) {
+                            out.extend(setup(
+                                [polygon[0], polygon[k], polygon[k + 1]],
+                                camera,
+                                faces,
+                            ));
+                        }
+                    }
+                }
+            });
+    }
+
+    /// Every triangle with its id, in index order.
+    fn iter(&self) -> impl Iterator<Item = (u32, &ScreenTriangle)> {
+        self.chunks.iter().enumerate().flat_map(|(c, chunk)| {
+            chunk
+                .iter()
+                .enumerate()
+                .map(move |(i, t)| (c as u32 * CHUNK_SLOTS + i as u32, t))
+        })
+    }
+}
+
+/// Per-pixel surface data of one pass, row-major from the top: which fragment survived the
+/// depth test at each pixel, with its attributes interpolated on demand.
+///
+/// The buffer keeps all its memory between frames: after the first frame at a resolution,
+/// rasterising into it allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub struct SurfaceBuffer {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    visibility: Vec<Visibility>,
+    triangles: TriangleStore,
+    /// Scratch: clip-space vertex positions and the per-band triangle lists.
+    clip: Vec<Vec4>,
+    bins: Vec<Vec<u32>>,
+}
+
+impl SurfaceBuffer {
+    /// An empty buffer (no pixels).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The fragment covering pixel `index` (row-major), or `None` where the pixel is empty.
+    #[inline]
+    pub fn texel(&self, index: usize) -> Option<Texel> {
+        let v = self.visibility.get(index)?;
+        (v.triangle != EMPTY).then(|| {
+            let (x, y) = (index as u32 % self.width, index as u32 / self.width);
+            self.triangles.get(v.triangle).texel(x, y)
+        })
+    }
+
+    /// Whether pixel `index` (row-major) is covered.
+    #[inline]
+    pub fn is_covered(&self, index: usize) -> bool {
+        self.visibility
+            .get(index)
+            .is_some_and(|v| v.triangle != EMPTY)
+    }
+}
+
+/// The rows of one band right after they were rasterised, for per-pixel work while they are in
+/// cache (see [`rasterize_bands`]).
+pub struct Band<'a> {
+    /// The first row of the band (rows `first_row..first_row + rows()`).
+    pub first_row: u32,
+    width: u32,
+    visibility: &'a [Visibility],
+    triangles: &'a TriangleStore,
+}
+
+impl Band<'_> {
+    /// The number of rows in this band.
+    pub fn rows(&self) -> u32 {
+        self.visibility.len() as u32 / self.width
+    }
+
+    /// The image width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// The fragment covering pixel `(x, y)` (`y` an image row inside this band), or `None`.
+    #[inline]
+    pub fn texel(&self, x: u32, y: u32) -> Option<Texel> {
+        let v = self.visibility[((y - self.first_row) * self.width + x) as usize];
+        (v.triangle != EMPTY).then(|| self.triangles.get(v.triangle).texel(x, y))
+    }
+}
+
+/// The number of pixels in a full band at `width` (the chunk size of per-band outputs for
+/// [`rasterize_bands`]).
+pub fn band_pixels(width: u32) -> usize {
+    (BAND_ROWS * width) as usize
 }
 
 /// Rasterises `mesh` seen by `camera`, keeping `faces` and the fragment chosen by `test`.
@@ -277,143 +441,129 @@ pub fn rasterize_into(
     test: DepthTest,
     buffer: &mut SurfaceBuffer,
 ) {
-    let world_to_clip = camera.world_to_clip();
-    let clip: Vec<Vec4> = mesh
-        .positions
-        .par_iter()
-        .map(|p| world_to_clip * p.extend(1.0))
-        .collect();
+    let bands = camera.height().div_ceil(BAND_ROWS) as usize;
+    rasterize_bands(
+        mesh,
+        camera,
+        faces,
+        test,
+        buffer,
+        rayon::iter::repeat_n((), bands),
+        |_, ()| {},
+    );
+}
 
-    // Set up every (clipped) triangle, in index order.
-    let triangles: Vec<ScreenTriangle> = mesh
-        .triangles
-        .par_chunks(4096)
-        .flat_map_iter(|chunk| {
-            let mut polygon = Vec::with_capacity(4);
-            let mut out = Vec::new();
-            for tri in chunk {
-                let v = tri.map(|i| ClipVertex {
-                    clip: clip[i as usize],
-                    p_ws: mesh.positions[i as usize],
-                    n_ws: mesh.normals[i as usize],
-                    scalar: mesh.scalars[i as usize],
-                });
-                if v.iter().all(|v| v.clip.z >= 0.0) {
-                    out.extend(setup(v, camera, faces));
-                } else {
-                    clip_near(v, &mut polygon);
-                    for k in 1..polygon.len().saturating_sub(1) {
-                        out.extend(setup(
-                            [polygon[0], polygon[k], polygon[k + 1]],
-                            camera,
-                            faces,
-                        ));
-                    }
-                }
-            }
-            out
-        })
-        .collect();
+/// [`rasterize_into`], then `per_band(band, output)` for each band of [`BAND_ROWS`] rows as
+/// soon as it is rasterised, on the task that rasterised it. `outputs` yields one item per band
+/// in order, e.g. `pixels.par_chunks_mut(band_pixels(width))`.
+///
+/// # Panics
+/// If `outputs` does not have one item per band (`height.div_ceil(BAND_ROWS)`).
+pub fn rasterize_bands<O, F>(
+    mesh: &RasterMesh<'_>,
+    camera: &Camera,
+    faces: Faces,
+    test: DepthTest,
+    buffer: &mut SurfaceBuffer,
+    outputs: O,
+    per_band: F,
+) where
+    O: IndexedParallelIterator,
+    F: Fn(&Band<'_>, O::Item) + Sync + Send,
+{
+    let (width, height) = (camera.width(), camera.height());
+    let bands = height.div_ceil(BAND_ROWS) as usize;
+    assert_eq!(outputs.len(), bands, "one output per band of rows");
+    let SurfaceBuffer {
+        width: buffer_width,
+        height: buffer_height,
+        visibility,
+        triangles,
+        clip,
+        bins,
+    } = buffer;
+    *buffer_width = width;
+    *buffer_height = height;
+
+    let world_to_clip = camera.world_to_clip();
+    clip.resize(mesh.positions.len(), Vec4::ZERO);
+    clip.par_iter_mut()
+        .zip(mesh.positions.par_iter())
+        .for_each(|(c, p)| *c = world_to_clip * p.extend(1.0));
+    triangles.set_up(mesh, clip, camera, faces);
 
     // Bin into bands of rows, preserving triangle order within each band.
-    let (width, height) = (camera.width(), camera.height());
-    let bands = height.div_ceil(BAND);
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); bands as usize];
-    for (index, t) in triangles.iter().enumerate() {
-        for band in t.min[1] / BAND..=t.max[1] / BAND {
-            bins[band as usize].push(index as u32);
+    bins.resize_with(bands, Vec::new);
+    bins.iter_mut().for_each(Vec::clear);
+    for (id, t) in triangles.iter() {
+        for band in t.min[1] / BAND_ROWS..=t.max[1] / BAND_ROWS {
+            bins[band as usize].push(id);
         }
     }
-    buffer.begin_frame(width, height);
-    let generation = buffer.generation;
-    buffer
-        .texels
-        .par_chunks_mut((BAND * width) as usize)
+
+    visibility.resize((width * height) as usize, test.cleared());
+    let triangles = &*triangles;
+    visibility
+        .par_chunks_mut(band_pixels(width))
         .zip(bins.par_iter())
+        .zip(outputs)
         .enumerate()
-        .for_each(|(band, (rows, bin))| {
-            rasterize_band(
-                &triangles,
-                bin,
-                band as u32 * BAND,
+        .for_each(|(band, ((rows, bin), output))| {
+            let first_row = band as u32 * BAND_ROWS;
+            rows.fill(test.cleared());
+            rasterize_band(triangles, bin, first_row, width, rows, test);
+            let band = Band {
+                first_row,
                 width,
-                rows,
-                test,
-                generation,
-            )
+                visibility: rows,
+                triangles,
+            };
+            per_band(&band, output);
         });
 }
 
-/// Scan-converts the triangles of `bin` into `rows`, the texels of the rows starting at
-/// `first_row` (full width).
+/// Scan-converts the triangles of `bin` into `rows`, the visibility of the rows starting at
+/// `first_row` (full width): per pixel an edge test and, inside, a depth compare.
 fn rasterize_band(
-    triangles: &[ScreenTriangle],
+    triangles: &TriangleStore,
     bin: &[u32],
     first_row: u32,
     width: u32,
-    rows: &mut [Texel],
+    rows: &mut [Visibility],
     test: DepthTest,
-    generation: u32,
 ) {
     let last_row = first_row + (rows.len() as u32 / width) - 1;
-    let half = (SUBPIXEL as i64) / 2;
-    for &index in bin {
-        let t = &triangles[index as usize];
+    for &id in bin {
+        let t = triangles.get(id);
         let [a, b, c] = t.xy;
         let (tl0, tl1, tl2) = (is_top_left(b, c), is_top_left(c, a), is_top_left(a, b));
-        let inv_area = 1.0 / t.area as f64;
         // Edge functions step by −Δy·SUBPIXEL per pixel to the right (exact integer arithmetic).
-        let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL as i64);
+        // A pixel centre on an edge is inside when the edge is top-left: for integers,
+        // `e > 0 || (e == 0 && top_left)` is `e + bias ≥ 0` with bias −1, or 0 on a top-left
+        // edge; and all three are ≥ 0 exactly when their bitwise OR is (no sign bit set).
+        let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL);
+        let bias = [tl0, tl1, tl2].map(|tl| i64::from(tl) - 1);
         for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
-            let p = [
-                i64::from(t.min[0]) * SUBPIXEL as i64 + half,
-                i64::from(y) * SUBPIXEL as i64 + half,
-            ];
-            let (mut e0, mut e1, mut e2) = (edge(b, c, p), edge(c, a, p), edge(a, b, p));
+            let p = pixel_center_fixed(t.min[0], y);
+            let mut e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             for x in t.min[0]..=t.max[0] {
-                let (f0, f1, f2) = (e0, e1, e2);
-                e0 += step[0];
-                e1 += step[1];
-                e2 += step[2];
-                let inside = (f0 > 0 || (f0 == 0 && tl0))
-                    && (f1 > 0 || (f1 == 0 && tl1))
-                    && (f2 > 0 || (f2 == 0 && tl2));
-                if !inside {
+                let f = e;
+                e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
+                if ((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) < 0 {
                     continue;
                 }
-                // Screen-space barycentrics (exact integers, scaled by 1/area in f64).
-                let l = [
-                    f0 as f64 * inv_area,
-                    f1 as f64 * inv_area,
-                    f2 as f64 * inv_area,
-                ]
-                .map(|v| v as f32);
-                let depth = l[0] * t.depth[0] + l[1] * t.depth[1] + l[2] * t.depth[2];
+                let depth = t.depth_at(t.barycentrics(f));
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
                 }
-                let texel = &mut row[x as usize];
-                let better = texel.generation != generation
-                    || match test {
-                        DepthTest::Nearest => depth < texel.depth,
-                        DepthTest::Furthest => depth > texel.depth,
+                let stored = &mut row[x as usize];
+                if test.passes(depth, stored.depth) {
+                    *stored = Visibility {
+                        depth,
+                        triangle: id,
                     };
-                if !better {
-                    continue;
                 }
-                // Perspective-correct weights: λᵢ/wᵢ normalised.
-                let pw = [l[0] * t.inv_w[0], l[1] * t.inv_w[1], l[2] * t.inv_w[2]];
-                let sum = pw[0] + pw[1] + pw[2];
-                let pw = pw.map(|v| v / sum);
-                let [v0, v1, v2] = t.vertices;
-                *texel = Texel {
-                    generation,
-                    depth,
-                    p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
-                    n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
-                    scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
-                };
             }
         }
     }

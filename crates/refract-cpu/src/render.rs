@@ -2,6 +2,7 @@
 //! (rows in parallel), then the environment lookup.
 
 use glam::Vec3;
+use rayon::iter::Either;
 use rayon::prelude::*;
 use refract_core::exit::{ExitNormalSource, TirPolicy};
 use refract_core::kernel::{
@@ -10,8 +11,8 @@ use refract_core::kernel::{
 use refract_core::{Camera, Method};
 use refract_trace::Environment;
 
-use crate::buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
-use crate::raster::SurfaceBuffer;
+use crate::buffers::{BackFaces, PreparedRefractor, front_faces};
+use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, Texel, band_pixels, rasterize_bands};
 
 /// Parameters of one method run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,7 +71,7 @@ impl MethodAov {
 }
 
 /// A rendered method frame: linear RGB colour and AOVs, row-major from the top.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct MethodFrame {
     /// Width in pixels.
     pub width: u32,
@@ -96,12 +97,7 @@ pub fn render_buffers(
     camera: &Camera,
     method: Method,
 ) -> Result<FrameBuffers, CpuError> {
-    if refractor.d_n.len() != refractor.mesh.positions.len() {
-        return Err(CpuError::NormalDistances {
-            found: refractor.d_n.len(),
-            expected: refractor.mesh.positions.len(),
-        });
-    }
+    check_normal_distances(refractor)?;
     let back = match method {
         Method::Single => None,
         Method::TwoInterface { back, .. } => Some(BackFaces::render(refractor, camera, back)),
@@ -119,33 +115,21 @@ pub fn shade(
     camera: &Camera,
     params: &MethodParams,
 ) -> Result<MethodFrame, CpuError> {
-    let distance = params.method.distance_mode();
-    let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
-    let mut frame = MethodFrame {
-        width: 0,
-        height: 0,
-        color: Vec::new(),
-        aov: Vec::new(),
-    };
-    shade_into(buffers, environment, camera, &kernel, &mut frame);
-    Ok(frame)
-}
-
-/// [`shade`] into an existing frame, reusing its memory.
-fn shade_into(
-    buffers: &FrameBuffers,
-    environment: &Environment,
-    camera: &Camera,
-    kernel: &ImageSpaceParams,
-    frame: &mut MethodFrame,
-) {
+    let kernel = kernel_params(params)?;
     let (width, height) = (camera.width(), camera.height());
-    let front = &buffers.front;
     let n = (width * height) as usize;
-    frame.width = width;
-    frame.height = height;
-    frame.color.resize(n, Vec3::ZERO);
-    frame.aov.resize(n, MethodAov::BACKGROUND);
+    let mut frame = MethodFrame {
+        width,
+        height,
+        color: vec![Vec3::ZERO; n],
+        aov: vec![MethodAov::BACKGROUND; n],
+    };
+    let context = ShadeContext {
+        back: buffers.back.as_ref(),
+        environment,
+        camera,
+        kernel: &kernel,
+    };
     // Rows in parallel, written in place.
     frame
         .color
@@ -155,77 +139,96 @@ fn shade_into(
         .for_each(|(y, (colors, aovs))| {
             let y = y as u32;
             for x in 0..width {
-                let uv = Camera::pixel_center(x, y);
-                let (color, aov) = match front.texel((y * width + x) as usize) {
-                    Some(texel) => {
-                        let surface = FrontSurface {
-                            p1_ws: texel.p_ws,
-                            n1_ws: texel.n_ws,
-                            d_n: texel.scalar,
-                        };
-                        shade_pixel(
-                            &surface,
-                            uv,
-                            buffers.back.as_ref(),
-                            environment,
-                            camera,
-                            kernel,
-                        )
-                    }
-                    None => (
-                        environment.radiance(camera.pixel_ray(uv).dir),
-                        MethodAov::BACKGROUND,
-                    ),
-                };
-                colors[x as usize] = color;
-                aovs[x as usize] = aov;
+                let texel = buffers.front.texel((y * width + x) as usize);
+                (colors[x as usize], aovs[x as usize]) = context.pixel(texel, x, y);
             }
         });
+    Ok(frame)
 }
 
-fn shade_pixel(
-    surface: &FrontSurface,
-    uv: glam::Vec2,
-    back: Option<&BackFaces>,
-    environment: &Environment,
-    camera: &Camera,
-    kernel: &ImageSpaceParams,
-) -> (Vec3, MethodAov) {
-    let covered = MethodAov {
-        covered: true,
-        ..MethodAov::BACKGROUND
-    };
-    match back {
-        None => match one_interface(camera, surface, kernel) {
-            Ok(path) => (
-                environment.radiance(path.t1),
-                MethodAov {
-                    t2: path.t1,
-                    tir: path.tir_entry,
-                    ..covered
-                },
-            ),
-            Err(_) => (Vec3::ZERO, covered),
-        },
-        Some(back) => match two_interface(camera, uv, surface, back, kernel) {
-            Ok(path) => {
-                let color = if path.t2 == Vec3::ZERO {
-                    Vec3::ZERO
-                } else {
-                    environment.radiance(path.t2)
-                };
-                let aov = MethodAov {
-                    p2: path.p2,
-                    t2: path.t2,
-                    n2: path.n2,
-                    n2_source: Some(path.n2_source),
-                    tir: path.tir_exit || path.entry.tir_entry,
-                    ..covered
-                };
-                (color, aov)
+fn kernel_params(params: &MethodParams) -> Result<ImageSpaceParams, CpuError> {
+    let distance = params.method.distance_mode();
+    Ok(ImageSpaceParams::new(
+        params.ior,
+        distance,
+        params.tir_policy,
+    )?)
+}
+
+/// What the per-pixel work of a frame reads.
+struct ShadeContext<'a> {
+    back: Option<&'a BackFaces>,
+    environment: &'a Environment,
+    camera: &'a Camera,
+    kernel: &'a ImageSpaceParams,
+}
+
+impl ShadeContext<'_> {
+    /// Colour and AOVs of pixel `(x, y)`, whose front surface is `front` (or none).
+    #[inline]
+    fn pixel(&self, front: Option<Texel>, x: u32, y: u32) -> (Vec3, MethodAov) {
+        let uv = Camera::pixel_center(x, y);
+        let Some(texel) = front else {
+            let background = self.environment.radiance(self.camera.pixel_ray(uv).dir);
+            return (background, MethodAov::BACKGROUND);
+        };
+        let surface = FrontSurface {
+            p1_ws: texel.p_ws,
+            n1_ws: texel.n_ws,
+            d_n: texel.scalar,
+        };
+        let covered = MethodAov {
+            covered: true,
+            ..MethodAov::BACKGROUND
+        };
+        match self.back {
+            None => match one_interface(self.camera, &surface, self.kernel) {
+                Ok(path) => (
+                    self.environment.radiance(path.t1),
+                    MethodAov {
+                        t2: path.t1,
+                        tir: path.tir_entry,
+                        ..covered
+                    },
+                ),
+                Err(_) => (Vec3::ZERO, covered),
+            },
+            Some(back) => match two_interface(self.camera, uv, &surface, back, self.kernel) {
+                Ok(path) => {
+                    let color = if path.t2 == Vec3::ZERO {
+                        Vec3::ZERO
+                    } else {
+                        self.environment.radiance(path.t2)
+                    };
+                    let aov = MethodAov {
+                        p2: path.p2,
+                        t2: path.t2,
+                        n2: path.n2,
+                        n2_source: Some(path.n2_source),
+                        tir: path.tir_exit || path.entry.tir_entry,
+                        ..covered
+                    };
+                    (color, aov)
+                }
+                Err(_) => (Vec3::ZERO, covered),
+            },
+        }
+    }
+
+    /// The pixels of a band of rows just rasterised: colours, and AOVs when asked for.
+    fn band(&self, band: &Band<'_>, colors: &mut [Vec3], mut aovs: Option<&mut [MethodAov]>) {
+        let width = band.width() as usize;
+        for (row, colors) in colors.chunks_exact_mut(width).enumerate() {
+            let y = band.first_row + row as u32;
+            for (x, color) in colors.iter_mut().enumerate() {
+                let x = x as u32;
+                let (c, aov) = self.pixel(band.texel(x, y), x, y);
+                *color = c;
+                if let Some(aovs) = aovs.as_deref_mut() {
+                    aovs[row * width + x as usize] = aov;
+                }
             }
-            Err(_) => (Vec3::ZERO, covered),
-        },
+        }
     }
 }
 
@@ -241,32 +244,41 @@ pub fn render_method(
     Ok(renderer.frame)
 }
 
+/// What a frame writes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameOutputs {
+    /// Colour and every [`MethodAov`] (what comparisons against the reference need).
+    #[default]
+    ColorAndAovs,
+    /// Colour only, as a real-time renderer displays it ([`MethodFrame::aov`] stays empty).
+    Color,
+}
+
 /// A CPU renderer that keeps its buffers and output between frames, as a real-time renderer
 /// does: after the first frame at a resolution, a frame allocates nothing.
+///
+/// A frame is two passes (Wyman 2005a §4): the back faces are rasterised and resolved into
+/// normals and distances; then the front faces are rasterised band by band, and each band of
+/// rows is shaded by the kernel right after it is rasterised, while it is in cache (the front
+/// surface is never stored as a whole G-buffer). The result is bit-identical to
+/// [`render_buffers`] followed by [`shade`].
+#[derive(Default)]
 pub struct CpuRenderer {
-    buffers: FrameBuffers,
+    outputs: FrameOutputs,
+    front: SurfaceBuffer,
+    back: BackFaces,
     frame: MethodFrame,
 }
 
-impl Default for CpuRenderer {
-    fn default() -> Self {
-        let empty = SurfaceBuffer::new;
+impl CpuRenderer {
+    /// A renderer writing `outputs`.
+    pub fn new(outputs: FrameOutputs) -> Self {
         Self {
-            buffers: FrameBuffers {
-                front: empty(),
-                back: None,
-            },
-            frame: MethodFrame {
-                width: 0,
-                height: 0,
-                color: Vec::new(),
-                aov: Vec::new(),
-            },
+            outputs,
+            ..Self::default()
         }
     }
-}
 
-impl CpuRenderer {
     /// One frame of `params.method`: buffers and kernel, into the renderer's memory.
     pub fn render(
         &mut self,
@@ -275,25 +287,59 @@ impl CpuRenderer {
         camera: &Camera,
         params: &MethodParams,
     ) -> Result<&MethodFrame, CpuError> {
-        let distance = params.method.distance_mode();
-        let kernel = ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
-        if refractor.d_n.len() != refractor.mesh.positions.len() {
-            return Err(CpuError::NormalDistances {
-                found: refractor.d_n.len(),
-                expected: refractor.mesh.positions.len(),
-            });
-        }
-        front_faces_into(refractor, camera, &mut self.buffers.front);
-        match (params.method, &mut self.buffers.back) {
-            (Method::Single, back) => *back = None,
-            (Method::TwoInterface { back: surface, .. }, Some(back)) => {
-                back.render_into(refractor, camera, surface)
+        let kernel = kernel_params(params)?;
+        check_normal_distances(refractor)?;
+        let back = match params.method {
+            Method::Single => None,
+            Method::TwoInterface { back: surface, .. } => {
+                self.back.render_into(refractor, camera, surface);
+                Some(&self.back)
             }
-            (Method::TwoInterface { back: surface, .. }, back @ None) => {
-                *back = Some(BackFaces::render(refractor, camera, surface));
+        };
+        let context = ShadeContext {
+            back,
+            environment,
+            camera,
+            kernel: &kernel,
+        };
+        let (width, height) = (camera.width(), camera.height());
+        let n = (width * height) as usize;
+        let frame = &mut self.frame;
+        frame.width = width;
+        frame.height = height;
+        frame.color.resize(n, Vec3::ZERO);
+        let band = band_pixels(width);
+        let colors = frame.color.par_chunks_mut(band);
+        let outputs = match self.outputs {
+            FrameOutputs::ColorAndAovs => {
+                frame.aov.resize(n, MethodAov::BACKGROUND);
+                Either::Left(colors.zip(frame.aov.par_chunks_mut(band).map(Some)))
             }
-        }
-        shade_into(&self.buffers, environment, camera, &kernel, &mut self.frame);
+            FrameOutputs::Color => {
+                frame.aov.clear();
+                Either::Right(colors.map(|colors| (colors, None)))
+            }
+        };
+        rasterize_bands(
+            &refractor.raster_mesh(),
+            camera,
+            Faces::Front,
+            DepthTest::Nearest,
+            &mut self.front,
+            outputs,
+            |rows, (colors, aovs)| context.band(rows, colors, aovs),
+        );
         Ok(&self.frame)
+    }
+}
+
+fn check_normal_distances(refractor: &PreparedRefractor<'_>) -> Result<(), CpuError> {
+    if refractor.d_n.len() == refractor.mesh.positions.len() {
+        Ok(())
+    } else {
+        Err(CpuError::NormalDistances {
+            found: refractor.d_n.len(),
+            expected: refractor.mesh.positions.len(),
+        })
     }
 }

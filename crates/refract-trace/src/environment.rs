@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use refract_core::arctangent::atan2;
 use refract_core::environment::sample_latlong_bilinear;
 
 use crate::error::TraceError;
@@ -66,15 +67,16 @@ impl Environment {
 /// - Ground (`d.y < 0`): a black-and-white checkerboard on the plane `y = −1` (squares of 0.5),
 ///   fading into the horizon colour far away so that it does not alias.
 pub fn procedural_radiance(dir: Vec3) -> Vec3 {
+    /// `normalize(0.4, 0.6, −0.7)`.
+    const SUN: Vec3 = Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05);
     const HORIZON: Vec3 = Vec3::new(0.85, 0.88, 0.92);
     const ZENITH: Vec3 = Vec3::new(0.12, 0.3, 0.75);
     if dir.y >= 0.0 {
         let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
-        // Azimuth in [0, 360): atan2 gives (−180, 180], so one conditional add wraps it (the same
-        // number as `rem_euclid(360)`, without a call to fmodf).
-        let signed = dir.x.atan2(-dir.z).to_degrees();
-        let azimuth = if signed < 0.0 { signed + 360.0 } else { signed };
-        let stripe = azimuth / 30.0;
+        // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
+        // wraps it (the same number as `rem_euclid(12)`, without a call to fmodf).
+        let signed = atan2(dir.x, -dir.z) * (6.0 / core::f32::consts::PI);
+        let stripe = if signed < 0.0 { signed + 12.0 } else { signed };
         let nearest = (stripe + 0.5).floor(); // stripe ≥ 0: rounds halves up, as `round` does
         // Meridians converge at the zenith: stop them below it.
         if (stripe - nearest).abs() < 0.06 && dir.y < 0.85 {
@@ -86,13 +88,12 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
             ];
             sky = hue[(nearest as usize) % 4];
         }
-        let sun = Vec3::new(0.4, 0.6, -0.7).normalize();
-        if dir.dot(sun) > 0.995 {
+        if dir.dot(SUN) > 0.995 {
             sky = Vec3::new(8.0, 7.0, 5.0);
         }
         sky
     } else {
-        let p = dir / -dir.y; // hit on the plane y = −1
+        let p = dir * (-dir.y).recip(); // hit on the plane y = −1
         // Parity of an integer-valued float, a − 2⌊a/2⌋ (exact; equal to `rem_euclid(2)`).
         let cells = (p.x * 2.0).floor() + (p.z * 2.0).floor();
         let check = cells - 2.0 * (cells * 0.5).floor();
