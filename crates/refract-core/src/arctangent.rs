@@ -17,7 +17,7 @@
 use core::f32::consts::{FRAC_PI_2, PI};
 
 /// Coefficients of `P(s)`, constant term first.
-const P: [f32; 9] = [
+pub(crate) const ATAN_POLYNOMIAL: [f32; 9] = [
     -0.333_333_3,
     0.199_997_66,
     -0.142_791_1,
@@ -36,6 +36,7 @@ fn atan_unit(a: f32) -> f32 {
     let s = a * a;
     let s2 = s * s;
     let s4 = s2 * s2;
+    const P: [f32; 9] = ATAN_POLYNOMIAL;
     let p01 = P[0] + P[1] * s;
     let p23 = P[2] + P[3] * s;
     let p45 = P[4] + P[5] * s;

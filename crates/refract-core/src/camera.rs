@@ -11,6 +11,8 @@ use core::fmt;
 use glam::camera::rh::{proj::directx::perspective, view::look_at_mat4};
 use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
 
+use crate::lanes::{F32x8, Vec2x8, Vec3x8};
+
 /// A ray `origin + t · dir`, `dir` unit length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
@@ -294,6 +296,16 @@ impl Camera {
         }
     }
 
+    /// [`Self::pixel_ray`]'s direction for eight pixel positions at once (bit-identical).
+    #[inline]
+    pub fn pixel_ray_dir_x8(&self, uv_px: Vec2x8) -> Vec3x8 {
+        let x = uv_px.x * F32x8::splat(self.ray_scale.x) + F32x8::splat(self.ray_offset.x);
+        let y = uv_px.y * F32x8::splat(self.ray_scale.y) + F32x8::splat(self.ray_offset.y);
+        let z = F32x8::splat(-1.0);
+        let dir = Vec3x8::transform_vector3(&self.view_to_world, Vec3x8 { x, y, z });
+        dir * (F32x8::ONE / dir.length())
+    }
+
     /// Euclidean distance from the eye, `‖p − eye‖`: the quantity stored in back-face buffers.
     #[inline]
     pub fn distance_from_eye(&self, p_ws: Vec3) -> f32 {
@@ -312,6 +324,22 @@ mod tests {
             ..CameraDesc::default()
         })
         .expect("valid camera")
+    }
+
+    #[test]
+    fn eight_pixel_rays_equal_the_scalar_rays_bit_for_bit() {
+        let cam = camera();
+        for row in [0, 1, 239, 479] {
+            for first in (0..640).step_by(8) {
+                let uv: [Vec2; 8] = core::array::from_fn(|i| {
+                    Camera::pixel_center(first + i as u32, row) + Vec2::new(0.1 * i as f32, 0.0)
+                });
+                let lanes = cam.pixel_ray_dir_x8(Vec2x8::from_lanes(&uv)).to_lanes();
+                for i in 0..8 {
+                    assert_eq!(lanes[i].to_array(), cam.pixel_ray(uv[i]).dir.to_array());
+                }
+            }
+        }
     }
 
     #[test]

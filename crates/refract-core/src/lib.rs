@@ -8,6 +8,8 @@
 //! * [`interpolated_distance`]: Wyman 2005a §3.1, the distance `d~` from `P1` to `P2`.
 //! * [`exit`]: Wyman 2005a §3.2–3.3, the exit normal and the second-interface TIR policy.
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
+//! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
+//! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`method`]: the method ids (`single`, `wyman`, `wyman-dv`, `wyman-dn`) and back surfaces.
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
 //! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear.
@@ -29,6 +31,8 @@ pub mod fresnel;
 pub mod gpu;
 pub mod interpolated_distance;
 pub mod kernel;
+pub mod kernel_x8;
+pub mod lanes;
 pub mod method;
 pub mod optics;
 pub mod vector;

@@ -8,6 +8,7 @@
 pub mod buffers;
 pub mod raster;
 pub mod render;
+mod shade;
 
 pub use buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
 pub use raster::{

@@ -5,14 +5,13 @@ use glam::Vec3;
 use rayon::iter::Either;
 use rayon::prelude::*;
 use refract_core::exit::{ExitNormalSource, TirPolicy};
-use refract_core::kernel::{
-    FrontSurface, ImageSpaceParams, InvalidIor, one_interface, two_interface,
-};
+use refract_core::kernel::{ImageSpaceParams, InvalidIor};
 use refract_core::{Camera, Method};
 use refract_trace::Environment;
 
 use crate::buffers::{BackFaces, PreparedRefractor, front_faces};
-use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, Texel, band_pixels, rasterize_bands};
+use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::shade::ShadeContext;
 
 /// Parameters of one method run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,10 +137,13 @@ pub fn shade(
         .enumerate()
         .for_each(|(y, (colors, aovs))| {
             let y = y as u32;
-            for x in 0..width {
-                let texel = buffers.front.texel((y * width + x) as usize);
-                (colors[x as usize], aovs[x as usize]) = context.pixel(texel, x, y);
-            }
+            let row = (y * width) as usize;
+            context.row(
+                y,
+                |x| buffers.front.texel(row + x as usize),
+                colors,
+                Some(aovs),
+            );
         });
     Ok(frame)
 }
@@ -155,80 +157,20 @@ fn kernel_params(params: &MethodParams) -> Result<ImageSpaceParams, CpuError> {
     )?)
 }
 
-/// What the per-pixel work of a frame reads.
-struct ShadeContext<'a> {
-    back: Option<&'a BackFaces>,
-    environment: &'a Environment,
-    camera: &'a Camera,
-    kernel: &'a ImageSpaceParams,
-}
-
-impl ShadeContext<'_> {
-    /// Colour and AOVs of pixel `(x, y)`, whose front surface is `front` (or none).
-    #[inline]
-    fn pixel(&self, front: Option<Texel>, x: u32, y: u32) -> (Vec3, MethodAov) {
-        let uv = Camera::pixel_center(x, y);
-        let Some(texel) = front else {
-            let background = self.environment.radiance(self.camera.pixel_ray(uv).dir);
-            return (background, MethodAov::BACKGROUND);
-        };
-        let surface = FrontSurface {
-            p1_ws: texel.p_ws,
-            n1_ws: texel.n_ws,
-            d_n: texel.scalar,
-        };
-        let covered = MethodAov {
-            covered: true,
-            ..MethodAov::BACKGROUND
-        };
-        match self.back {
-            None => match one_interface(self.camera, &surface, self.kernel) {
-                Ok(path) => (
-                    self.environment.radiance(path.t1),
-                    MethodAov {
-                        t2: path.t1,
-                        tir: path.tir_entry,
-                        ..covered
-                    },
-                ),
-                Err(_) => (Vec3::ZERO, covered),
-            },
-            Some(back) => match two_interface(self.camera, uv, &surface, back, self.kernel) {
-                Ok(path) => {
-                    let color = if path.t2 == Vec3::ZERO {
-                        Vec3::ZERO
-                    } else {
-                        self.environment.radiance(path.t2)
-                    };
-                    let aov = MethodAov {
-                        p2: path.p2,
-                        t2: path.t2,
-                        n2: path.n2,
-                        n2_source: Some(path.n2_source),
-                        tir: path.tir_exit || path.entry.tir_entry,
-                        ..covered
-                    };
-                    (color, aov)
-                }
-                Err(_) => (Vec3::ZERO, covered),
-            },
-        }
-    }
-
-    /// The pixels of a band of rows just rasterised: colours, and AOVs when asked for.
-    fn band(&self, band: &Band<'_>, colors: &mut [Vec3], mut aovs: Option<&mut [MethodAov]>) {
-        let width = band.width() as usize;
-        for (row, colors) in colors.chunks_exact_mut(width).enumerate() {
-            let y = band.first_row + row as u32;
-            for (x, color) in colors.iter_mut().enumerate() {
-                let x = x as u32;
-                let (c, aov) = self.pixel(band.texel(x, y), x, y);
-                *color = c;
-                if let Some(aovs) = aovs.as_deref_mut() {
-                    aovs[row * width + x as usize] = aov;
-                }
-            }
-        }
+/// The pixels of a band of rows just rasterised: colours, and AOVs when asked for.
+fn shade_band(
+    context: &ShadeContext<'_>,
+    band: &Band<'_>,
+    colors: &mut [Vec3],
+    mut aovs: Option<&mut [MethodAov]>,
+) {
+    let width = band.width() as usize;
+    for (row, colors) in colors.chunks_exact_mut(width).enumerate() {
+        let y = band.first_row + row as u32;
+        let aovs = aovs
+            .as_deref_mut()
+            .map(|aovs| &mut aovs[row * width..][..width]);
+        context.row(y, |x| band.texel(x, y), colors, aovs);
     }
 }
 
@@ -327,7 +269,7 @@ impl CpuRenderer {
             DepthTest::Nearest,
             &mut self.front,
             outputs,
-            |rows, (colors, aovs)| context.band(rows, colors, aovs),
+            |rows, (colors, aovs)| shade_band(&context, rows, colors, aovs),
         );
         Ok(&self.frame)
     }

@@ -6,6 +6,7 @@ use std::path::Path;
 use glam::Vec3;
 use refract_core::arctangent::atan2;
 use refract_core::environment::sample_latlong_bilinear;
+use refract_core::lanes::{F32x8, Vec3x8, atan2 as atan2_x8};
 
 use crate::error::TraceError;
 
@@ -57,7 +58,33 @@ impl Environment {
             Self::Procedural => procedural_radiance(dir),
         }
     }
+
+    /// [`Self::radiance`] for eight unit directions at once (bit-identical per lane).
+    #[inline]
+    pub fn radiance_x8(&self, dir: Vec3x8) -> Vec3x8 {
+        match self {
+            Self::Procedural => procedural_radiance_x8(dir),
+            Self::Constant(c) => Vec3x8::splat(*c),
+            Self::LatLong { .. } => {
+                let dirs = dir.to_lanes();
+                Vec3x8::from_lanes(&dirs.map(|d| self.radiance(d)))
+            }
+        }
+    }
 }
+
+/// The procedural sky's sun direction, `normalize(0.4, 0.6, −0.7)`.
+const SUN: Vec3 = Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05);
+const SUN_RADIANCE: Vec3 = Vec3::new(8.0, 7.0, 5.0);
+const HORIZON: Vec3 = Vec3::new(0.85, 0.88, 0.92);
+const ZENITH: Vec3 = Vec3::new(0.12, 0.3, 0.75);
+/// The meridian stripes' colours, in turn from azimuth 0 (`−z`).
+const STRIPE_HUES: [Vec3; 4] = [
+    Vec3::new(0.9, 0.1, 0.1),
+    Vec3::new(0.95, 0.6, 0.1),
+    Vec3::new(0.2, 0.8, 0.2),
+    Vec3::new(0.6, 0.2, 0.8),
+];
 
 /// The built-in environment: structure everywhere, so refraction errors are visible.
 ///
@@ -67,10 +94,6 @@ impl Environment {
 /// - Ground (`d.y < 0`): a black-and-white checkerboard on the plane `y = −1` (squares of 0.5),
 ///   fading into the horizon colour far away so that it does not alias.
 pub fn procedural_radiance(dir: Vec3) -> Vec3 {
-    /// `normalize(0.4, 0.6, −0.7)`.
-    const SUN: Vec3 = Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05);
-    const HORIZON: Vec3 = Vec3::new(0.85, 0.88, 0.92);
-    const ZENITH: Vec3 = Vec3::new(0.12, 0.3, 0.75);
     if dir.y >= 0.0 {
         let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
         // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
@@ -80,16 +103,10 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
         let nearest = (stripe + 0.5).floor(); // stripe ≥ 0: rounds halves up, as `round` does
         // Meridians converge at the zenith: stop them below it.
         if (stripe - nearest).abs() < 0.06 && dir.y < 0.85 {
-            let hue = [
-                Vec3::new(0.9, 0.1, 0.1),
-                Vec3::new(0.95, 0.6, 0.1),
-                Vec3::new(0.2, 0.8, 0.2),
-                Vec3::new(0.6, 0.2, 0.8),
-            ];
-            sky = hue[(nearest as usize) % 4];
+            sky = STRIPE_HUES[(nearest as usize) % 4];
         }
         if dir.dot(SUN) > 0.995 {
-            sky = Vec3::new(8.0, 7.0, 5.0);
+            sky = SUN_RADIANCE;
         }
         sky
     } else {
@@ -105,6 +122,47 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
         let fade = (-dir.y * 4.0).min(1.0); // grazing rays see the horizon
         HORIZON.lerp(tile, fade)
     }
+}
+
+/// [`procedural_radiance`] for eight directions at once: both branches evaluated and selected
+/// per lane, with the same operations, so each lane has the scalar function's bits.
+pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
+    let splat = F32x8::splat;
+    let lerp = |a: Vec3x8, b: Vec3x8, s: F32x8| a * (F32x8::ONE - s) + b * s;
+    let (horizon, zenith) = (Vec3x8::splat(HORIZON), Vec3x8::splat(ZENITH));
+
+    let s = dir.y.sqrt();
+    let mut sky = lerp(horizon, zenith, s);
+    let signed = atan2_x8(dir.x, -dir.z) * splat(6.0 / core::f32::consts::PI);
+    let stripe = signed
+        .simd_lt(F32x8::ZERO)
+        .select(signed + splat(12.0), signed);
+    let nearest = (stripe + splat(0.5)).floor();
+    let on_stripe = (stripe - nearest).abs().simd_lt(splat(0.06)) & dir.y.simd_lt(splat(0.85));
+    // `nearest as usize % 4` for the integers 0..=12, exactly.
+    let hue = nearest - splat(4.0) * (nearest * splat(0.25)).floor();
+    for (k, colour) in STRIPE_HUES.iter().enumerate() {
+        let this = on_stripe & hue.simd_eq(splat(k as f32));
+        sky = Vec3x8::select(this, Vec3x8::splat(*colour), sky);
+    }
+    sky = Vec3x8::select(
+        dir.dot(Vec3x8::splat(SUN)).simd_gt(splat(0.995)),
+        Vec3x8::splat(SUN_RADIANCE),
+        sky,
+    );
+
+    let p = dir * (F32x8::ONE / -dir.y); // not `recip`: wide's is the 12-bit estimate
+    let cells = (p.x * splat(2.0)).floor() + (p.z * splat(2.0)).floor();
+    let check = cells - splat(2.0) * (cells * splat(0.5)).floor();
+    let tile = check.simd_lt(F32x8::ONE).select(splat(0.9), splat(0.05));
+    let fade = (-dir.y * splat(4.0)).min(F32x8::ONE);
+    let tile = Vec3x8 {
+        x: tile,
+        y: tile,
+        z: tile,
+    };
+    let ground = lerp(horizon, tile, fade);
+    Vec3x8::select(dir.y.simd_ge(F32x8::ZERO), sky, ground)
 }
 
 /// Loads a lat-long `.exr` (half or float, RGB or RGBA) or Radiance `.hdr` map. Negative and
@@ -212,5 +270,42 @@ mod tests {
             stripe.x > 0.8 && stripe.y < 0.2,
             "red stripe toward −z: {stripe}"
         );
+    }
+
+    /// Eight lanes give the scalar function's bits, over directions that cover the sky, the
+    /// stripes (and their edges), the sun, the ground and the horizon.
+    #[test]
+    fn eight_lanes_equal_the_scalar_sky_bit_for_bit() {
+        let (n_theta, n_phi) = (181, 720);
+        let mut dirs = Vec::new();
+        for t in 0..n_theta {
+            for p in 0..n_phi {
+                let theta = core::f32::consts::PI * t as f32 / (n_theta - 1) as f32;
+                let phi = core::f32::consts::TAU * (p as f32 + 0.25) / n_phi as f32;
+                let (st, ct) = theta.sin_cos();
+                dirs.push(Vec3::new(st * phi.sin(), ct, -st * phi.cos()));
+            }
+        }
+        dirs.push(Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05));
+        dirs.extend([
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Z,
+            Vec3::NEG_Z,
+            Vec3::new(0.0, -0.0, -1.0),
+        ]);
+        while !dirs.len().is_multiple_of(8) {
+            dirs.push(Vec3::Y);
+        }
+        let environment = Environment::Procedural;
+        for chunk in dirs.chunks_exact(8) {
+            let lanes: [Vec3; 8] = chunk.try_into().expect("eight");
+            let wide = environment
+                .radiance_x8(Vec3x8::from_lanes(&lanes))
+                .to_lanes();
+            for (d, w) in lanes.iter().zip(wide) {
+                assert_eq!(w.to_array(), procedural_radiance(*d).to_array(), "{d}");
+            }
+        }
     }
 }

@@ -175,7 +175,7 @@ impl Collector {
                     mesh.name().unwrap_or("?")
                 )));
             }
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(error(format!(
                     "{} indices is not a whole number of triangles",
                     indices.len()

@@ -32,7 +32,7 @@ pub(super) fn read(path: &Path) -> Result<RawMesh, GeometryError> {
     let (mut positions, mut normals, mut uvs, mut triangles) = (vec![], vec![], vec![], vec![]);
     for model in &models {
         let mesh = &model.mesh;
-        if mesh.indices.len() % 3 != 0 {
+        if !mesh.indices.len().is_multiple_of(3) {
             return Err(GeometryError::Obj {
                 path: path.to_owned(),
                 message: format!("object `{}` has a face that is not a polygon", model.name),

@@ -1,0 +1,261 @@
+//! Eight pixels at a time: structure-of-arrays vectors over `wide::f32x8` for the lane twin of
+//! the kernels ([`crate::kernel_x8`]).
+//!
+//! A pixel of the two-interface kernel is a chain of ~20 dependent square roots, divisions and
+//! polynomials: one pixel at a time the CPU mostly waits. Eight independent pixels per
+//! instruction keep its pipelines full. Every operation here performs exactly the IEEE
+//! operations of its glam counterpart in the same order (`dot = (x·x' + y·y') + z·z'`,
+//! `normalize = v · (1/√(v·v))`, ...), so a lane computes the same bits as the scalar code; the
+//! tests of [`crate::kernel_x8`] hold them to it.
+
+use core::ops::{Add, Mul, Neg, Sub};
+
+use glam::{Mat4, Vec2, Vec3};
+use wide::f32x8;
+
+use crate::arctangent::ATAN_POLYNOMIAL;
+
+/// The number of lanes.
+pub const LANES: usize = 8;
+
+/// Eight `f32` lanes.
+pub type F32x8 = f32x8;
+
+/// A lane mask: all bits set where true (as `wide`'s comparisons return).
+pub type Mask = f32x8;
+
+/// Eight 3D vectors, one per lane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vec3x8 {
+    /// The `x` components.
+    pub x: F32x8,
+    /// The `y` components.
+    pub y: F32x8,
+    /// The `z` components.
+    pub z: F32x8,
+}
+
+impl Vec3x8 {
+    /// All lanes zero.
+    pub const ZERO: Self = Self::splat(Vec3::ZERO);
+
+    /// The same vector in every lane.
+    #[inline]
+    pub const fn splat(v: Vec3) -> Self {
+        Self {
+            x: F32x8::splat(v.x),
+            y: F32x8::splat(v.y),
+            z: F32x8::splat(v.z),
+        }
+    }
+
+    /// Lane `i` of each array.
+    #[inline]
+    pub fn from_lanes(lanes: &[Vec3; LANES]) -> Self {
+        Self {
+            x: F32x8::new(lanes.map(|v| v.x)),
+            y: F32x8::new(lanes.map(|v| v.y)),
+            z: F32x8::new(lanes.map(|v| v.z)),
+        }
+    }
+
+    /// The vector of each lane.
+    #[inline]
+    pub fn to_lanes(self) -> [Vec3; LANES] {
+        let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
+        core::array::from_fn(|i| Vec3::new(x[i], y[i], z[i]))
+    }
+
+    /// `(x·x' + y·y') + z·z'`, as [`Vec3::dot`].
+    #[inline]
+    pub fn dot(self, rhs: Self) -> F32x8 {
+        (self.x * rhs.x) + (self.y * rhs.y) + (self.z * rhs.z)
+    }
+
+    /// As [`Vec3::cross`].
+    #[inline]
+    pub fn cross(self, rhs: Self) -> Self {
+        Self {
+            x: self.y * rhs.z - rhs.y * self.z,
+            y: self.z * rhs.x - rhs.z * self.x,
+            z: self.x * rhs.y - rhs.x * self.y,
+        }
+    }
+
+    /// `√(v·v)`, as [`Vec3::length`].
+    #[inline]
+    pub fn length(self) -> F32x8 {
+        self.dot(self).sqrt()
+    }
+
+    /// Lane-wise `if mask { a } else { b }`.
+    #[inline]
+    pub fn select(mask: Mask, a: Self, b: Self) -> Self {
+        Self {
+            x: mask.select(a.x, b.x),
+            y: mask.select(a.y, b.y),
+            z: mask.select(a.z, b.z),
+        }
+    }
+
+    /// Lanes where all three components are finite.
+    #[inline]
+    pub fn is_finite(self) -> Mask {
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    }
+
+    /// Lanes equal to the zero vector (either sign of zero), as `v == Vec3::ZERO`.
+    #[inline]
+    pub fn is_zero(self) -> Mask {
+        let zero = F32x8::ZERO;
+        self.x.simd_eq(zero) & self.y.simd_eq(zero) & self.z.simd_eq(zero)
+    }
+
+    /// `v · (1/√(v·v))` and the lanes where `1/√(v·v)` is finite and positive, as
+    /// [`Vec3::try_normalize`] (other lanes hold garbage).
+    #[inline]
+    pub fn try_normalize(self) -> (Self, Mask) {
+        let rcp = F32x8::ONE / self.length();
+        (self * rcp, rcp.is_finite() & rcp.simd_gt(F32x8::ZERO))
+    }
+
+    /// `M · (v, 0)`, as [`Mat4::transform_vector3`].
+    #[inline]
+    pub fn transform_vector3(m: &Mat4, v: Self) -> Self {
+        let column = |c: glam::Vec4| Vec3x8::splat(c.truncate());
+        let (c0, c1, c2) = (column(m.x_axis), column(m.y_axis), column(m.z_axis));
+        // glam: ((c0·x) + c1·y) + c2·z, added in that order (addition commutes bitwise).
+        c0 * v.x + c1 * v.y + c2 * v.z
+    }
+}
+
+impl Add for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Self {
+            x: self.x + rhs.x,
+            y: self.y + rhs.y,
+            z: self.z + rhs.z,
+        }
+    }
+}
+
+impl Sub for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn sub(self, rhs: Self) -> Self {
+        Self {
+            x: self.x - rhs.x,
+            y: self.y - rhs.y,
+            z: self.z - rhs.z,
+        }
+    }
+}
+
+impl Neg for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Self {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}
+
+/// Scales each lane's vector by that lane's scalar.
+impl Mul<F32x8> for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn mul(self, s: F32x8) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+/// Scales each lane's vector by that lane's scalar.
+impl Mul<Vec3x8> for F32x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn mul(self, v: Vec3x8) -> Vec3x8 {
+        v * self
+    }
+}
+
+/// Eight 2D points, one per lane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vec2x8 {
+    /// The `x` components.
+    pub x: F32x8,
+    /// The `y` components.
+    pub y: F32x8,
+}
+
+impl Vec2x8 {
+    /// Lane `i` of each array.
+    #[inline]
+    pub fn from_lanes(lanes: &[Vec2; LANES]) -> Self {
+        Self {
+            x: F32x8::new(lanes.map(|v| v.x)),
+            y: F32x8::new(lanes.map(|v| v.y)),
+        }
+    }
+}
+
+/// [`crate::arctangent::atan2`] on eight lanes: the same operations, so the same bits.
+#[inline]
+pub fn atan2(y: F32x8, x: F32x8) -> F32x8 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = (ax.min(ay), ax.max(ay));
+    let a = hi.simd_gt(F32x8::ZERO).select(lo / hi, F32x8::ZERO);
+    let p = ATAN_POLYNOMIAL.map(F32x8::splat);
+    let s = a * a;
+    let s2 = s * s;
+    let s4 = s2 * s2;
+    let p01 = p[0] + p[1] * s;
+    let p23 = p[2] + p[3] * s;
+    let p45 = p[4] + p[5] * s;
+    let p67 = p[6] + p[7] * s;
+    let p03 = p01 + p23 * s2;
+    let p47 = p45 + p67 * s2;
+    let poly = p03 + (p47 + p[8] * s4) * s4;
+    let mut r = a + a * s * poly;
+    r = ay
+        .simd_gt(ax)
+        .select(F32x8::splat(core::f32::consts::FRAC_PI_2) - r, r);
+    r = x
+        .is_sign_negative()
+        .select(F32x8::splat(core::f32::consts::PI) - r, r);
+    let nan = x.is_nan() | y.is_nan();
+    nan.select(F32x8::splat(f32::NAN), r.copysign(y))
+}
+
+/// `a < b` lane-wise.
+#[inline]
+pub fn lt(a: F32x8, b: F32x8) -> Mask {
+    a.simd_lt(b)
+}
+
+/// `a ≤ b` lane-wise.
+#[inline]
+pub fn le(a: F32x8, b: F32x8) -> Mask {
+    a.simd_le(b)
+}
+
+/// The lanes of a mask as booleans.
+#[inline]
+pub fn mask_lanes(mask: Mask) -> [bool; LANES] {
+    let bits = mask.to_bitmask();
+    core::array::from_fn(|i| bits & (1 << i) != 0)
+}
+
+/// A mask from booleans.
+#[inline]
+pub fn mask_from_lanes(lanes: [bool; LANES]) -> Mask {
+    F32x8::new(lanes.map(|b| if b { f32::from_bits(u32::MAX) } else { 0.0 }))
+}
