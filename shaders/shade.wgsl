@@ -29,12 +29,22 @@ fn is_finite3(v: vec3<f32>) -> bool {
     return a.x <= F32_MAX && a.y <= F32_MAX && a.z <= F32_MAX;
 }
 
+// Whether the AOVs (T2, P~2, N2) are stored: false for colour-only frames (a pipeline
+// constant; the CPU backend's FrameOutputs::Color).
+override WRITE_AOVS: bool = true;
+
+fn write_aovs(i: u32, t2: vec4<f32>, p2: vec4<f32>, n2: vec4<f32>) {
+    if WRITE_AOVS {
+        out_t2[i] = t2;
+        out_p2[i] = p2;
+        out_n2[i] = n2;
+    }
+}
+
 fn write_degenerate(i: u32) {
     // A covered pixel whose kernel reported a degenerate input: black, no path.
     out_color[i] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    out_t2[i] = vec4<f32>(0.0);
-    out_p2[i] = vec4<f32>(0.0);
-    out_n2[i] = vec4<f32>(0.0);
+    write_aovs(i, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
 }
 
 @compute @workgroup_size(8, 8)
@@ -48,9 +58,7 @@ fn shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let n1_covered = textureLoad(front_n1, coords, 0);
     if n1_covered.w < 0.5 {
         out_color[i] = vec4<f32>(environment_radiance(pixel_ray_dir(uv)), 0.0);
-        out_t2[i] = vec4<f32>(0.0);
-        out_p2[i] = vec4<f32>(0.0);
-        out_n2[i] = vec4<f32>(0.0);
+        write_aovs(i, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
         return;
     }
     let p1_dn = textureLoad(front_p1_dn, coords, 0);
@@ -77,9 +85,7 @@ fn shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let t1 = t1_4.xyz;
     if frame.method_kind == METHOD_SINGLE {
         out_color[i] = vec4<f32>(environment_radiance(t1), 1.0);
-        out_t2[i] = vec4<f32>(t1, select(0.0, 1.0, tir_entry));
-        out_p2[i] = vec4<f32>(0.0);
-        out_n2[i] = vec4<f32>(0.0);
+        write_aovs(i, vec4<f32>(t1, select(0.0, 1.0, tir_entry)), vec4<f32>(0.0), vec4<f32>(0.0));
         return;
     }
 
@@ -93,9 +99,7 @@ fn shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let has_d_v = back.w >= 0.0 && d_v >= 0.0 && d_v <= F32_MAX;
     if tir_entry {
         out_color[i] = vec4<f32>(environment_radiance(t1), 1.0);
-        out_t2[i] = vec4<f32>(t1, 1.0);
-        out_p2[i] = vec4<f32>(p1, f32(EXIT_NORMAL_FALLBACK));
-        out_n2[i] = vec4<f32>(n1, 1.0);
+        write_aovs(i, vec4<f32>(t1, 1.0), vec4<f32>(p1, f32(EXIT_NORMAL_FALLBACK)), vec4<f32>(n1, 1.0));
         return;
     }
     let theta_i = angle_between(-view, n1);
@@ -126,7 +130,5 @@ fn shade(@builtin(global_invocation_id) id: vec3<u32>) {
         color = environment_radiance(exit.xyz);
     }
     out_color[i] = vec4<f32>(color, 1.0);
-    out_t2[i] = vec4<f32>(exit.xyz, select(0.0, 1.0, exit.w > 0.5 || tir_entry));
-    out_p2[i] = vec4<f32>(p2, f32(source));
-    out_n2[i] = vec4<f32>(n2, 1.0);
+    write_aovs(i, vec4<f32>(exit.xyz, select(0.0, 1.0, exit.w > 0.5 || tir_entry)), vec4<f32>(p2, f32(source)), vec4<f32>(n2, 1.0));
 }

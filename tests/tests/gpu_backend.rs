@@ -160,3 +160,47 @@ fn gpu_errors_are_reported() {
         .expect_err("too large");
     assert!(err.to_string().contains("100000x4"), "{err}");
 }
+
+/// A colour-only frame (`WRITE_AOVS = false`) has the colours of the full frame and no AOVs.
+#[test]
+fn gpu_colour_only_frames_have_the_same_colours() {
+    let Some(context) = GpuContext::for_tests() else {
+        return;
+    };
+    let renderer = GpuRenderer::new(&context).expect("pipelines");
+    let scene = TestScene::builtin("torus", 1.33);
+    let cam = camera(64);
+    let gpu_scene = GpuScene::new(
+        &context,
+        &scene.scene.refractor.mesh,
+        &scene.d_n,
+        &scene.scene.environment,
+    );
+    for method in Method::ALL {
+        let params = MethodParams {
+            method,
+            ior: 1.33,
+            tir_policy: TirPolicy::ClampToCritical,
+        };
+        let frame = |outputs| {
+            let frame = refract_gpu::GpuFrame::with_outputs(
+                &context, &renderer, &gpu_scene, &cam, &params, outputs,
+            )
+            .expect("frame");
+            frame
+                .execute(&context, &renderer, &gpu_scene, true)
+                .expect("execute");
+            frame.read(&context).expect("read")
+        };
+        let full = frame(refract_cpu::FrameOutputs::ColorAndAovs);
+        let colour = frame(refract_cpu::FrameOutputs::Color);
+        assert!(colour.aov.is_empty() && full.aov.len() == 64 * 64);
+        let worst = full
+            .color
+            .iter()
+            .zip(&colour.color)
+            .map(|(a, b)| (*a - *b).abs().max_element())
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 1e-5, "{method}: colours differ by {worst}");
+    }
+}

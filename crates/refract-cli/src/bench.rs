@@ -175,8 +175,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                         })?
                     }
                     (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
-                        let run = refract_gpu::GpuFrame::new(
-                            context, renderer, gpu_scene, &camera, &params,
+                        let run = refract_gpu::GpuFrame::with_outputs(
+                            context,
+                            renderer,
+                            gpu_scene,
+                            &camera,
+                            &params,
+                            FrameOutputs::Color,
                         )?;
                         time_frames(3, frames, || {
                             Ok(run.execute(context, renderer, gpu_scene, false)?.ms)

@@ -190,8 +190,8 @@ impl ScreenTriangle {
             l[1] * self.inv_w[1],
             l[2] * self.inv_w[2],
         ];
-        let sum = pw[0] + pw[1] + pw[2];
-        let pw = pw.map(|v| v / sum);
+        let inv_sum = 1.0 / (pw[0] + pw[1] + pw[2]);
+        let pw = pw.map(|v| v * inv_sum);
         let [v0, v1, v2] = self.attributes;
         Texel {
             depth: self.depth_at(l),

@@ -136,53 +136,61 @@ impl ShadeContext<'_> {
     /// `T1` for `single`); black where the kernel reports a degenerate input or the TIR policy
     /// absorbs the ray.
     fn covered(&self, group: &Group<FrontSurface>, y: u32, out: &mut RowOut<'_>) {
-        let covered = MethodAov {
+        const COVERED: MethodAov = MethodAov {
             covered: true,
             ..MethodAov::BACKGROUND
         };
-        let (directions, aovs): ([Option<Vec3>; LANES], [MethodAov; LANES]) = match self.back {
+        // Lanes that look nothing up (degenerate input, absorbed ray) are black.
+        let lookup = |direction: Option<Vec3>| direction.unwrap_or(Vec3::Y);
+        match self.back {
             None => {
                 let paths = one_interface_x8(self.camera, &group.items, self.kernel);
-                (
-                    paths.map(|p| p.ok().map(|p| p.t1)),
-                    paths.map(|p| match p {
-                        Ok(path) => MethodAov {
+                let directions = paths.each_ref().map(|p| p.as_ref().ok().map(|p| p.t1));
+                let radiance = self.radiance(directions.map(lookup));
+                for (i, path) in paths.iter().enumerate().take(group.len) {
+                    match path {
+                        Ok(path) => out.write(group.x[i], radiance[i], || MethodAov {
                             t2: path.t1,
                             tir: path.tir_entry,
-                            ..covered
-                        },
-                        Err(_) => covered,
-                    }),
-                )
+                            ..COVERED
+                        }),
+                        Err(_) => out.write(group.x[i], Vec3::ZERO, || COVERED),
+                    }
+                }
             }
             Some(back) => {
                 let uv: [Vec2; LANES] = group.x.map(|x| Camera::pixel_center(x, y));
                 let paths = two_interface_x8(self.camera, &uv, &group.items, back, self.kernel);
-                (
-                    paths.map(|p| p.ok().map(|p| p.t2).filter(|t2| *t2 != Vec3::ZERO)),
-                    paths.map(|p| match p {
-                        Ok(path) => MethodAov {
+                let directions = paths
+                    .each_ref()
+                    .map(|p| p.as_ref().ok().map(|p| p.t2).filter(|t2| *t2 != Vec3::ZERO));
+                let radiance = self.radiance(directions.map(lookup));
+                for (i, path) in paths.iter().enumerate().take(group.len) {
+                    let color = if directions[i].is_some() {
+                        radiance[i]
+                    } else {
+                        Vec3::ZERO
+                    };
+                    match path {
+                        Ok(path) => out.write(group.x[i], color, || MethodAov {
                             p2: path.p2,
                             t2: path.t2,
                             n2: path.n2,
                             n2_source: Some(path.n2_source),
                             tir: path.tir_exit || path.entry.tir_entry,
-                            ..covered
-                        },
-                        Err(_) => covered,
-                    }),
-                )
+                            ..COVERED
+                        }),
+                        Err(_) => out.write(group.x[i], color, || COVERED),
+                    }
+                }
             }
-        };
-        let lookups = Vec3x8::from_lanes(&directions.map(|d| d.unwrap_or(Vec3::Y)));
-        let radiance = self.environment.radiance_x8(lookups).to_lanes();
-        for i in 0..group.len {
-            let color = if directions[i].is_some() {
-                radiance[i]
-            } else {
-                Vec3::ZERO
-            };
-            out.write(group.x[i], color, || aovs[i]);
         }
+    }
+
+    #[inline]
+    fn radiance(&self, directions: [Vec3; LANES]) -> [Vec3; LANES] {
+        self.environment
+            .radiance_x8(Vec3x8::from_lanes(&directions))
+            .to_lanes()
     }
 }

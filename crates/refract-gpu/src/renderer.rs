@@ -10,7 +10,7 @@ use refract_core::gpu::{
 };
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera, DistanceMode, ExitNormalSource, Method};
-use refract_cpu::{MethodAov, MethodFrame, MethodParams};
+use refract_cpu::{FrameOutputs, MethodAov, MethodFrame, MethodParams};
 use refract_geometry::Mesh;
 use refract_trace::Environment;
 use wgpu::util::DeviceExt;
@@ -113,6 +113,8 @@ pub struct GpuRenderer {
     front: wgpu::RenderPipeline,
     shade_layout: wgpu::BindGroupLayout,
     shade: wgpu::ComputePipeline,
+    /// The kernel without AOV stores (`WRITE_AOVS = false`).
+    shade_color_only: wgpu::ComputePipeline,
 }
 
 fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -274,14 +276,21 @@ impl GpuRenderer {
                 bind_group_layouts: &[Some(&shade_layout)],
                 immediate_size: 0,
             });
-        let shade = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("shade"),
-            layout: Some(&shade_pipeline_layout),
-            module: &shade_module,
-            entry_point: Some("shade"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let shade_pipeline = |label, constants: &[(&str, f64)]| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&shade_pipeline_layout),
+                module: &shade_module,
+                entry_point: Some("shade"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
+                cache: None,
+            })
+        };
+        let shade = shade_pipeline("shade", &[]);
+        let shade_color_only = shade_pipeline("shade (colour only)", &[("WRITE_AOVS", 0.0)]);
         Self {
             raster_layout,
             back_furthest,
@@ -289,6 +298,7 @@ impl GpuRenderer {
             front,
             shade_layout,
             shade,
+            shade_color_only,
         }
     }
 }
@@ -298,6 +308,7 @@ pub struct GpuFrame {
     width: u32,
     height: u32,
     method: Method,
+    outputs_kind: FrameOutputs,
     raster_group: wgpu::BindGroup,
     shade_group: wgpu::BindGroup,
     back_view: wgpu::TextureView,
@@ -346,13 +357,33 @@ pub struct GpuTiming {
 
 impl GpuFrame {
     /// Allocates targets and buffers for `params` at the camera's resolution, checking the
-    /// adapter's limits.
+    /// adapter's limits. The frame writes colours and AOVs.
     pub fn new(
         context: &GpuContext,
         renderer: &GpuRenderer,
         scene: &GpuScene,
         camera: &Camera,
         params: &MethodParams,
+    ) -> Result<Self, GpuError> {
+        Self::with_outputs(
+            context,
+            renderer,
+            scene,
+            camera,
+            params,
+            FrameOutputs::ColorAndAovs,
+        )
+    }
+
+    /// [`GpuFrame::new`] writing `outputs`: with [`FrameOutputs::Color`] the kernel stores only
+    /// the colour (as a real-time renderer would) and [`GpuFrame::read`] returns no AOVs.
+    pub fn with_outputs(
+        context: &GpuContext,
+        renderer: &GpuRenderer,
+        scene: &GpuScene,
+        camera: &Camera,
+        params: &MethodParams,
+        outputs: FrameOutputs,
     ) -> Result<Self, GpuError> {
         let distance = params.method.distance_mode();
         ImageSpaceParams::new(params.ior, distance, params.tir_policy)?;
@@ -379,7 +410,10 @@ impl GpuFrame {
                 limits.max_storage_buffer_binding_size
             )));
         }
-        context.checked(|| Self::allocate(context, renderer, scene, camera, params, distance))
+        let mut frame = context
+            .checked(|| Self::allocate(context, renderer, scene, camera, params, distance))?;
+        frame.outputs_kind = outputs;
+        Ok(frame)
     }
 
     fn allocate(
@@ -529,6 +563,7 @@ impl GpuFrame {
             width,
             height,
             method: params.method,
+            outputs_kind: FrameOutputs::ColorAndAovs,
             raster_group,
             shade_group,
             back_view,
@@ -645,7 +680,10 @@ impl GpuFrame {
                     }
                 }),
             });
-            pass.set_pipeline(&renderer.shade);
+            pass.set_pipeline(match self.outputs_kind {
+                FrameOutputs::ColorAndAovs => &renderer.shade,
+                FrameOutputs::Color => &renderer.shade_color_only,
+            });
             pass.set_bind_group(0, &self.shade_group, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
@@ -698,6 +736,9 @@ impl GpuFrame {
             frame
                 .color
                 .push(Vec3::new(color[i][0], color[i][1], color[i][2]));
+            if self.outputs_kind == FrameOutputs::Color {
+                continue;
+            }
             if color[i][3] < 0.5 {
                 frame.aov.push(MethodAov::BACKGROUND);
                 continue;
