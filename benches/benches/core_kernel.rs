@@ -7,6 +7,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec2;
 use rayon::prelude::*;
 use refract_core::kernel::{one_interface, two_interface};
+use refract_core::kernel_x8::{one_interface_x8, two_interface_x8};
 use refract_core::{
     BackFaceSample, BackFaceSampler, Camera, CameraDesc, DistanceMode, FrontSurface,
     ImageSpaceParams, TirPolicy,
@@ -107,6 +108,49 @@ fn kernels(c: &mut Criterion) {
             pixels
                 .par_iter()
                 .map(|(_, f)| one_interface(&camera, black_box(f), &params).map_or(0.0, |p| p.t1.x))
+                .sum::<f32>()
+        })
+    });
+    // The lane twins, eight pixels per call (the CPU backend's path).
+    let groups: Vec<([Vec2; 8], [FrontSurface; 8])> = pixels
+        .chunks_exact(8)
+        .map(|chunk| {
+            (
+                core::array::from_fn(|i| chunk[i].0),
+                core::array::from_fn(|i| chunk[i].1),
+            )
+        })
+        .collect();
+    let (uv, f) = &groups[groups.len() / 2];
+    let lanes = two_interface_x8(&camera, uv, f, &back, &params);
+    for i in 0..8 {
+        let scalar = two_interface(&camera, uv[i], &f[i], &back, &params);
+        assert_eq!(format!("{:?}", lanes[i]), format!("{scalar:?}"));
+    }
+    group.throughput(Throughput::Elements(8 * groups.len() as u64));
+    group.bench_function("two_interface_x8", |b| {
+        b.iter(|| {
+            groups
+                .par_iter()
+                .map(|(uv, f)| {
+                    two_interface_x8(&camera, uv, f, &back, &params)
+                        .iter()
+                        .map(|p| p.as_ref().map_or(0.0, |p| p.t2.x))
+                        .sum::<f32>()
+                })
+                .sum::<f32>()
+        })
+    });
+    group.bench_function("one_interface_x8", |b| {
+        b.iter(|| {
+            groups
+                .par_iter()
+                .map(|(_, f)| {
+                    one_interface_x8(&camera, black_box(f), &params)
+                        .iter()
+                        .map(|p| p.as_ref().map_or(0.0, |p| p.t1.x))
+                        .sum::<f32>()
+                })
                 .sum::<f32>()
         })
     });

@@ -5,7 +5,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc, Method};
 use refract_cpu::{
-    CpuRenderer, MethodParams, PreparedRefractor, render_buffers, render_method, shade,
+    CpuRenderer, FrameBuffers, FrameOutputs, MethodFrame, MethodParams, PreparedRefractor,
+    render_buffers_into, render_method, shade_into,
 };
 use refract_geometry::{Mesh, MeshBvh, builtin, normal_distances};
 use refract_trace::Environment;
@@ -54,12 +55,26 @@ fn cpu_methods(c: &mut Criterion) {
                         .expect("frame");
                 })
             });
-            let buffers = render_buffers(&refractor, &camera, method).expect("buffers");
-            group.bench_function(format!("{method}/buffers"), |b| {
-                b.iter(|| render_buffers(&refractor, &camera, method).expect("buffers"))
+            let mut colour_only = CpuRenderer::new(FrameOutputs::Color);
+            group.bench_function(format!("{method}/frame-colour-only"), |b| {
+                b.iter(|| {
+                    colour_only
+                        .render(&refractor, &environment, &camera, &params)
+                        .expect("frame");
+                })
             });
+            // The two-step path, stage by stage (memory reused as in a frame).
+            let mut buffers = FrameBuffers::default();
+            group.bench_function(format!("{method}/buffers"), |b| {
+                b.iter(|| {
+                    render_buffers_into(&refractor, &camera, method, &mut buffers).expect("buffers")
+                })
+            });
+            let mut frame = MethodFrame::default();
             group.bench_function(format!("{method}/kernel"), |b| {
-                b.iter(|| shade(&buffers, &environment, &camera, &params).expect("shade"))
+                b.iter(|| {
+                    shade_into(&buffers, &environment, &camera, &params, &mut frame).expect("shade")
+                })
             });
         }
         group.finish();

@@ -17,5 +17,5 @@ pub use raster::{
 };
 pub use render::{
     CpuError, CpuRenderer, FrameBuffers, FrameOutputs, MethodAov, MethodFrame, MethodParams,
-    render_buffers, render_method, shade,
+    render_buffers, render_buffers_into, render_method, shade, shade_into,
 };

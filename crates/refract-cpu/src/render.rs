@@ -9,7 +9,7 @@ use refract_core::kernel::{ImageSpaceParams, InvalidIor};
 use refract_core::{Camera, Method};
 use refract_trace::Environment;
 
-use crate::buffers::{BackFaces, PreparedRefractor, front_faces};
+use crate::buffers::{BackFaces, PreparedRefractor, front_faces_into};
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::shade::ShadeContext;
 
@@ -83,6 +83,7 @@ pub struct MethodFrame {
 }
 
 /// The buffers of one frame: front faces always, back faces for two-interface methods.
+#[derive(Default)]
 pub struct FrameBuffers {
     /// Front faces (P1, N1, d_N).
     pub front: SurfaceBuffer,
@@ -96,15 +97,28 @@ pub fn render_buffers(
     camera: &Camera,
     method: Method,
 ) -> Result<FrameBuffers, CpuError> {
+    let mut buffers = FrameBuffers::default();
+    render_buffers_into(refractor, camera, method, &mut buffers)?;
+    Ok(buffers)
+}
+
+/// [`render_buffers`] into existing buffers, reusing their memory.
+pub fn render_buffers_into(
+    refractor: &PreparedRefractor<'_>,
+    camera: &Camera,
+    method: Method,
+    buffers: &mut FrameBuffers,
+) -> Result<(), CpuError> {
     check_normal_distances(refractor)?;
-    let back = match method {
-        Method::Single => None,
-        Method::TwoInterface { back, .. } => Some(BackFaces::render(refractor, camera, back)),
-    };
-    Ok(FrameBuffers {
-        front: front_faces(refractor, camera),
-        back,
-    })
+    match method {
+        Method::Single => buffers.back = None,
+        Method::TwoInterface { back, .. } => buffers
+            .back
+            .get_or_insert_with(BackFaces::default)
+            .render_into(refractor, camera, back),
+    }
+    front_faces_into(refractor, camera, &mut buffers.front);
+    Ok(())
 }
 
 /// The per-pixel kernel over the buffers, and the environment lookup.
@@ -114,15 +128,26 @@ pub fn shade(
     camera: &Camera,
     params: &MethodParams,
 ) -> Result<MethodFrame, CpuError> {
+    let mut frame = MethodFrame::default();
+    shade_into(buffers, environment, camera, params, &mut frame)?;
+    Ok(frame)
+}
+
+/// [`shade`] into an existing frame (colours and AOVs), reusing its memory.
+pub fn shade_into(
+    buffers: &FrameBuffers,
+    environment: &Environment,
+    camera: &Camera,
+    params: &MethodParams,
+    frame: &mut MethodFrame,
+) -> Result<(), CpuError> {
     let kernel = kernel_params(params)?;
     let (width, height) = (camera.width(), camera.height());
     let n = (width * height) as usize;
-    let mut frame = MethodFrame {
-        width,
-        height,
-        color: vec![Vec3::ZERO; n],
-        aov: vec![MethodAov::BACKGROUND; n],
-    };
+    frame.width = width;
+    frame.height = height;
+    frame.color.resize(n, Vec3::ZERO);
+    frame.aov.resize(n, MethodAov::BACKGROUND);
     let context = ShadeContext {
         back: buffers.back.as_ref(),
         environment,
@@ -145,7 +170,7 @@ pub fn shade(
                 Some(aovs),
             );
         });
-    Ok(frame)
+    Ok(())
 }
 
 fn kernel_params(params: &MethodParams) -> Result<ImageSpaceParams, CpuError> {
