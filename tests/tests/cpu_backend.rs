@@ -412,3 +412,28 @@ fn fused_bands_match_the_two_step_path_and_colour_only_frames() {
         );
     }
 }
+
+/// Eight texels resolved at once equal the scalar resolve bit for bit.
+#[test]
+fn eight_lane_texels_equal_scalar_texels() {
+    let scene = TestScene::builtin("torus", 1.33);
+    let cam = camera(96);
+    let prepared = scene.prepared();
+    let front = front_faces(&prepared, &cam);
+    let mut checked = 0;
+    for y in 0..96u32 {
+        let covered: Vec<u32> = (0..96)
+            .filter(|&x| front.is_covered((y * 96 + x) as usize))
+            .collect();
+        for chunk in covered.chunks(8) {
+            let x: [u32; 8] = core::array::from_fn(|i| chunk[i.min(chunk.len() - 1)]);
+            let lanes = front.texels_x8(&x, y);
+            for (xi, lane) in x.iter().zip(lanes) {
+                let scalar = front.texel((y * 96 + xi) as usize).expect("covered");
+                assert_eq!(format!("{lane:?}"), format!("{scalar:?}"), "({xi}, {y})");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 1000);
+}

@@ -21,6 +21,21 @@ use crate::lanes::{F32x8, LANES, Mask, Vec3x8, atan2, le, lt, mask_lanes};
 use crate::optics::FACE_FORWARD_EPSILON;
 use crate::vector::{UNIT_TOLERANCE, robust_normalize};
 
+/// `P1`, `N1` and `d_N` of eight front surfaces, as lanes (plain loops: `array::map` and
+/// `from_fn` are not always inlined, and this runs per pixel).
+#[inline]
+fn front_lanes(front: &[FrontSurface; LANES]) -> (Vec3x8, Vec3x8, F32x8) {
+    let (mut p1, mut n1, mut d_n) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES], [0.0; LANES]);
+    for (i, f) in front.iter().enumerate() {
+        (p1[i], n1[i], d_n[i]) = (f.p1_ws, f.n1_ws, f.d_n);
+    }
+    (
+        Vec3x8::from_lanes(&p1),
+        Vec3x8::from_lanes(&n1),
+        F32x8::new(d_n),
+    )
+}
+
 /// [`robust_normalize`]'s two common paths (already unit: `v`; otherwise `v · (1/√(v·v))`) and
 /// the lanes they cover; the other lanes need the scaled path of the scalar function.
 #[inline]
@@ -91,13 +106,13 @@ pub fn one_interface_x8(
     front: &[FrontSurface; LANES],
     params: &ImageSpaceParams,
 ) -> [Result<OneInterfacePath, DegenerateInput>; LANES] {
-    let p1 = Vec3x8::from_lanes(&front.map(|f| f.p1_ws));
-    let n1 = Vec3x8::from_lanes(&front.map(|f| f.n1_ws));
+    let (p1, n1, _) = front_lanes(front);
     let e = entry(camera, p1, n1, F32x8::splat(params.eta_in()));
     let scalar = mask_lanes(e.scalar);
     let (view, n1, t1) = (e.view.to_lanes(), e.n1.to_lanes(), e.t1.to_lanes());
-    core::array::from_fn(|i| {
-        if scalar[i] {
+    let mut paths = [Err(DegenerateInput::NonFiniteResult); LANES];
+    for (i, path) in paths.iter_mut().enumerate() {
+        *path = if scalar[i] {
             one_interface(camera, &front[i], params)
         } else {
             Ok(OneInterfacePath {
@@ -106,8 +121,9 @@ pub fn one_interface_x8(
                 t1: t1[i],
                 tir_entry: false,
             })
-        }
-    })
+        };
+    }
+    paths
 }
 
 /// [`two_interface`] for eight pixels: lane `i` is
@@ -119,20 +135,24 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     back: &S,
     params: &ImageSpaceParams,
 ) -> [Result<TwoInterfacePath, DegenerateInput>; LANES] {
-    let p1 = Vec3x8::from_lanes(&front.map(|f| f.p1_ws));
-    let d_n = F32x8::new(front.map(|f| f.d_n));
+    let (p1, n1, d_n) = front_lanes(front);
     let eta = F32x8::splat(params.eta_in());
-    let e = entry(camera, p1, Vec3x8::from_lanes(&front.map(|f| f.n1_ws)), eta);
+    let e = entry(camera, p1, n1, eta);
     let d_n_ok = d_n.simd_ge(F32x8::ZERO) & d_n.is_finite();
 
     // d_V at P1's own pixel (Wyman 2005a §3.1), looked up lane by lane.
-    let d_v: [Option<f32>; LANES] = core::array::from_fn(|i| {
-        back.back_face(uv_px[i])
+    let mut d_v = [None; LANES];
+    let mut d_v_or_n = d_n.to_array();
+    for i in 0..LANES {
+        d_v[i] = back
+            .back_face(uv_px[i])
             .map(|b| b.distance - camera.distance_from_eye(front[i].p1_ws))
-            .filter(|d| *d >= 0.0 && d.is_finite())
-    });
-    let d_n_lanes = d_n.to_array();
-    let d_v_or_n = F32x8::new(core::array::from_fn(|i| d_v[i].unwrap_or(d_n_lanes[i])));
+            .filter(|d| *d >= 0.0 && d.is_finite());
+        if let Some(d) = d_v[i] {
+            d_v_or_n[i] = d;
+        }
+    }
+    let d_v_or_n = F32x8::new(d_v_or_n);
 
     // d~ (Wyman 2005a §3.1).
     let theta_i = angle_between(-e.view, e.n1);
@@ -155,15 +175,18 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     // N2 from the back faces at P~2's pixel (§3.2), else the silhouette fallback (§3.3).
     let (px, py, in_front) = world_to_pixel_xy(camera, p2);
     let (px, py, in_front) = (px.to_array(), py.to_array(), mask_lanes(in_front));
-    let sampled: [Option<Vec3>; LANES] = core::array::from_fn(|i| {
-        if !in_front[i] {
-            return None;
+    let (mut sampled, mut sampled_n2) = ([false; LANES], [Vec3::ZERO; LANES]);
+    for i in 0..LANES {
+        let normal = in_front[i]
+            .then(|| back.back_face(Vec2::new(px[i], py[i])))
+            .flatten()
+            .and_then(|b| robust_normalize(b.n_ws));
+        if let Some(n) = normal {
+            (sampled[i], sampled_n2[i]) = (true, n);
         }
-        back.back_face(Vec2::new(px[i], py[i]))
-            .and_then(|b| robust_normalize(b.n_ws))
-    });
-    let sampled_mask = crate::lanes::mask_from_lanes(sampled.map(|n| n.is_some()));
-    let sampled_n2 = Vec3x8::from_lanes(&sampled.map(|n| n.unwrap_or(Vec3::ZERO)));
+    }
+    let sampled_mask = crate::lanes::mask_from_lanes(sampled);
+    let sampled_n2 = Vec3x8::from_lanes(&sampled_n2);
     let look = Vec3x8::splat(camera.look_dir());
     let (fallback, fallback_ok) = (e.t1 - look.dot(e.t1) * look).try_normalize();
     let fallback = Vec3x8::select(fallback_ok, fallback, e.t1);
@@ -189,11 +212,13 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     let (view, n1, t1) = (e.view.to_lanes(), e.n1.to_lanes(), e.t1.to_lanes());
     let (p2, n2, t2) = (p2.to_lanes(), n2.to_lanes(), t2.to_lanes());
     let (d_tilde, tir_exit) = (d_tilde.to_array(), mask_lanes(tir_exit));
-    core::array::from_fn(|i| {
+    let mut paths = [Err(DegenerateInput::NonFiniteResult); LANES];
+    for (i, path) in paths.iter_mut().enumerate() {
         if scalar[i] {
-            return two_interface(camera, uv_px[i], &front[i], back, params);
+            *path = two_interface(camera, uv_px[i], &front[i], back, params);
+            continue;
         }
-        Ok(TwoInterfacePath {
+        *path = Ok(TwoInterfacePath {
             entry: OneInterfacePath {
                 view: view[i],
                 n1: n1[i],
@@ -204,15 +229,16 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
             d_tilde: d_tilde[i],
             p2: p2[i],
             n2: n2[i],
-            n2_source: if sampled[i].is_some() {
+            n2_source: if sampled[i] {
                 ExitNormalSource::BackFace
             } else {
                 ExitNormalSource::SilhouetteFallback
             },
             t2: t2[i],
             tir_exit: tir_exit[i],
-        })
-    })
+        });
+    }
+    paths
 }
 
 /// [`Camera::world_to_pixel`]'s `(u_px, v_px)` and the lanes in front of the eye (`w > 0`).

@@ -52,10 +52,15 @@ impl Vec3x8 {
     /// Lane `i` of each array.
     #[inline]
     pub fn from_lanes(lanes: &[Vec3; LANES]) -> Self {
+        // Plain loops: `array::map`/`from_fn` are not always inlined, and these run per pixel.
+        let (mut x, mut y, mut z) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for (i, v) in lanes.iter().enumerate() {
+            (x[i], y[i], z[i]) = (v.x, v.y, v.z);
+        }
         Self {
-            x: F32x8::new(lanes.map(|v| v.x)),
-            y: F32x8::new(lanes.map(|v| v.y)),
-            z: F32x8::new(lanes.map(|v| v.z)),
+            x: F32x8::new(x),
+            y: F32x8::new(y),
+            z: F32x8::new(z),
         }
     }
 
@@ -63,7 +68,11 @@ impl Vec3x8 {
     #[inline]
     pub fn to_lanes(self) -> [Vec3; LANES] {
         let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
-        core::array::from_fn(|i| Vec3::new(x[i], y[i], z[i]))
+        let mut lanes = [Vec3::ZERO; LANES];
+        for (i, v) in lanes.iter_mut().enumerate() {
+            *v = Vec3::new(x[i], y[i], z[i]);
+        }
+        lanes
     }
 
     /// `(x·x' + y·y') + z·z'`, as [`Vec3::dot`].
@@ -200,9 +209,13 @@ impl Vec2x8 {
     /// Lane `i` of each array.
     #[inline]
     pub fn from_lanes(lanes: &[Vec2; LANES]) -> Self {
+        let (mut x, mut y) = ([0.0; LANES], [0.0; LANES]);
+        for (i, v) in lanes.iter().enumerate() {
+            (x[i], y[i]) = (v.x, v.y);
+        }
         Self {
-            x: F32x8::new(lanes.map(|v| v.x)),
-            y: F32x8::new(lanes.map(|v| v.y)),
+            x: F32x8::new(x),
+            y: F32x8::new(y),
         }
     }
 }
@@ -251,11 +264,19 @@ pub fn le(a: F32x8, b: F32x8) -> Mask {
 #[inline]
 pub fn mask_lanes(mask: Mask) -> [bool; LANES] {
     let bits = mask.to_bitmask();
-    core::array::from_fn(|i| bits & (1 << i) != 0)
+    let mut lanes = [false; LANES];
+    for (i, lane) in lanes.iter_mut().enumerate() {
+        *lane = bits & (1 << i) != 0;
+    }
+    lanes
 }
 
 /// A mask from booleans.
 #[inline]
 pub fn mask_from_lanes(lanes: [bool; LANES]) -> Mask {
-    F32x8::new(lanes.map(|b| if b { f32::from_bits(u32::MAX) } else { 0.0 }))
+    let mut bits = [0.0; LANES];
+    for (bit, lane) in bits.iter_mut().zip(lanes) {
+        *bit = if lane { f32::from_bits(u32::MAX) } else { 0.0 };
+    }
+    F32x8::new(bits)
 }

@@ -4,11 +4,12 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{BackFaceSample, BackFaceSampler};
+use refract_core::lanes::LANES;
 use refract_core::{BackSurface, Camera};
 use refract_geometry::Mesh;
 
 use crate::raster::{
-    DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize, rasterize_bands,
+    Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize, rasterize_bands,
     rasterize_into,
 };
 
@@ -101,15 +102,7 @@ impl BackFaces {
             self.resolved.par_chunks_mut(band_pixels(width)),
             |band, resolved| {
                 for (row, resolved) in resolved.chunks_exact_mut(width as usize).enumerate() {
-                    let y = band.first_row + row as u32;
-                    for (x, out) in resolved.iter_mut().enumerate() {
-                        *out = band
-                            .texel(x as u32, y)
-                            .map_or(BackTexel::EMPTY, |t| BackTexel {
-                                n_ws: t.n_ws,
-                                distance: (t.p_ws - eye).length(),
-                            });
-                    }
+                    resolve_row(band, band.first_row + row as u32, eye, resolved);
                 }
             },
         );
@@ -118,6 +111,45 @@ impl BackFaces {
     /// The underlying buffer.
     pub fn buffer(&self) -> &SurfaceBuffer {
         &self.buffer
+    }
+}
+
+/// Resolves row `y` of a band of back faces into normals and distances from `eye`; covered
+/// pixels are resolved eight at a time.
+fn resolve_row(band: &Band<'_>, y: u32, eye: Vec3, resolved: &mut [BackTexel]) {
+    fn flush(
+        band: &Band<'_>,
+        y: u32,
+        eye: Vec3,
+        group: &mut [u32; LANES],
+        len: usize,
+        resolved: &mut [BackTexel],
+    ) {
+        let first = group[0];
+        group[len..].fill(first);
+        let texels = band.texels_x8(group, y);
+        for (&x, t) in group.iter().zip(&texels).take(len) {
+            resolved[x as usize] = BackTexel {
+                n_ws: t.n_ws,
+                distance: (t.p_ws - eye).length(),
+            };
+        }
+    }
+    let (mut group, mut len) = ([0u32; LANES], 0);
+    for x in 0..resolved.len() as u32 {
+        if band.is_covered(x, y) {
+            group[len] = x;
+            len += 1;
+            if len == LANES {
+                flush(band, y, eye, &mut group, len, resolved);
+                len = 0;
+            }
+        } else {
+            resolved[x as usize] = BackTexel::EMPTY;
+        }
+    }
+    if len > 0 {
+        flush(band, y, eye, &mut group, len, resolved);
     }
 }
 

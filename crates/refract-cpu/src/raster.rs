@@ -12,6 +12,7 @@
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
+use refract_core::lanes::{F32x8, LANES, Vec3x8};
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
 const SUBPIXEL_BITS: u32 = 8;
@@ -202,6 +203,82 @@ impl ScreenTriangle {
     }
 }
 
+/// [`ScreenTriangle::texel`] for eight pixels (lane `i`: triangle `triangles[i]`, pixel
+/// `(x[i], y)`): the barycentrics lane by lane, the interpolation on eight SIMD lanes with the
+/// same operations in the same order, so each texel has the scalar function's bits.
+fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+    // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
+    let mut l = [[0.0f32; LANES]; 3];
+    let (mut depth, mut inv_w, mut scalar) =
+        ([[0.0f32; LANES]; 3], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+    let (mut p, mut n) = ([[Vec3::ZERO; LANES]; 3], [[Vec3::ZERO; LANES]; 3]);
+    for (i, t) in triangles.iter().enumerate() {
+        let q = pixel_center_fixed(x[i], y);
+        let [a, b, c] = t.xy;
+        let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+        for k in 0..3 {
+            l[k][i] = li[k];
+            depth[k][i] = t.depth[k];
+            inv_w[k][i] = t.inv_w[k];
+            scalar[k][i] = t.attributes[k].scalar;
+            p[k][i] = t.attributes[k].p_ws;
+            n[k][i] = t.attributes[k].n_ws;
+        }
+    }
+    let f = F32x8::new;
+    let (l0, l1, l2) = (f(l[0]), f(l[1]), f(l[2]));
+    let depth = l0 * f(depth[0]) + l1 * f(depth[1]) + l2 * f(depth[2]);
+    let pw = [l0 * f(inv_w[0]), l1 * f(inv_w[1]), l2 * f(inv_w[2])];
+    let inv_sum = F32x8::ONE / (pw[0] + pw[1] + pw[2]);
+    let (w0, w1, w2) = (pw[0] * inv_sum, pw[1] * inv_sum, pw[2] * inv_sum);
+    let v = Vec3x8::from_lanes;
+    let p_ws = v(&p[0]) * w0 + v(&p[1]) * w1 + v(&p[2]) * w2;
+    let (n_ws, n_ok) = (v(&n[0]) * w0 + v(&n[1]) * w1 + v(&n[2]) * w2).try_normalize();
+    let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
+    let scalar = w0 * f(scalar[0]) + w1 * f(scalar[1]) + w2 * f(scalar[2]);
+
+    let (depth, scalar) = (depth.to_array(), scalar.to_array());
+    let (p_ws, n_ws) = (p_ws.to_lanes(), n_ws.to_lanes());
+    let mut texels = [Texel {
+        depth: 0.0,
+        p_ws: Vec3::ZERO,
+        n_ws: Vec3::ZERO,
+        scalar: 0.0,
+    }; LANES];
+    for (i, texel) in texels.iter_mut().enumerate() {
+        *texel = Texel {
+            depth: depth[i],
+            p_ws: p_ws[i],
+            n_ws: n_ws[i],
+            scalar: scalar[i],
+        };
+    }
+    texels
+}
+
+/// The triangles seen at pixels `x` of a row (`row` starts at the row's first pixel).
+///
+/// # Panics
+/// If one of the pixels is empty.
+#[inline]
+fn gather_triangles<'t>(
+    row: &[Visibility],
+    triangles: &'t TriangleStore,
+    x: &[u32; LANES],
+    y: u32,
+) -> [&'t ScreenTriangle; LANES] {
+    let triangle = |x: u32| {
+        let v = row[x as usize];
+        assert!(v.triangle != EMPTY, "pixel ({x}, {y}) is empty");
+        triangles.get(v.triangle)
+    };
+    let mut gathered = [triangle(x[0]); LANES];
+    for (slot, &x) in gathered.iter_mut().zip(x).skip(1) {
+        *slot = triangle(x);
+    }
+    gathered
+}
+
 /// Clips a triangle against the near plane `z_clip ≥ 0` (Sutherland–Hodgman): 0, 3 or 4
 /// vertices, attributes interpolated linearly in clip space.
 fn clip_near(v: [ClipVertex; 3], out: &mut Vec<ClipVertex>) {
@@ -373,6 +450,20 @@ impl SurfaceBuffer {
         })
     }
 
+    /// The fragments covering eight pixels of row `y` (`x[i]`), all of which must be covered
+    /// (see [`Self::is_covered`]); each is [`Self::texel`]'s, bit for bit.
+    ///
+    /// # Panics
+    /// If one of the pixels is empty or outside the buffer.
+    pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+        let row = (y * self.width) as usize;
+        texels_x8(
+            gather_triangles(&self.visibility[row..], &self.triangles, x, y),
+            x,
+            y,
+        )
+    }
+
     /// Whether pixel `index` (row-major) is covered.
     #[inline]
     pub fn is_covered(&self, index: usize) -> bool {
@@ -401,6 +492,22 @@ impl Band<'_> {
     /// The image width in pixels.
     pub fn width(&self) -> u32 {
         self.width
+    }
+
+    /// Whether pixel `(x, y)` (`y` an image row inside this band) is covered.
+    #[inline]
+    pub fn is_covered(&self, x: u32, y: u32) -> bool {
+        self.visibility[((y - self.first_row) * self.width + x) as usize].triangle != EMPTY
+    }
+
+    /// [`SurfaceBuffer::texels_x8`] for eight pixels of row `y` of this band.
+    pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+        let row = ((y - self.first_row) * self.width) as usize;
+        texels_x8(
+            gather_triangles(&self.visibility[row..], self.triangles, x, y),
+            x,
+            y,
+        )
     }
 
     /// The fragment covering pixel `(x, y)` (`y` an image row inside this band), or `None`.

@@ -11,7 +11,7 @@ use refract_trace::Environment;
 
 use crate::buffers::{BackFaces, PreparedRefractor, front_faces_into};
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
-use crate::shade::ShadeContext;
+use crate::shade::{BandRow, BufferRow, ShadeContext};
 
 /// Parameters of one method run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,13 +162,11 @@ pub fn shade_into(
         .enumerate()
         .for_each(|(y, (colors, aovs))| {
             let y = y as u32;
-            let row = (y * width) as usize;
-            context.row(
+            let front = BufferRow {
+                buffer: &buffers.front,
                 y,
-                |x| buffers.front.texel(row + x as usize),
-                colors,
-                Some(aovs),
-            );
+            };
+            context.row(y, &front, colors, Some(aovs));
         });
     Ok(())
 }
@@ -195,7 +193,7 @@ fn shade_band(
         let aovs = aovs
             .as_deref_mut()
             .map(|aovs| &mut aovs[row * width..][..width]);
-        context.row(y, |x| band.texel(x, y), colors, aovs);
+        context.row(y, &BandRow { band, y }, colors, aovs);
     }
 }
 

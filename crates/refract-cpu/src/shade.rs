@@ -11,7 +11,7 @@ use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_trace::Environment;
 
 use crate::buffers::BackFaces;
-use crate::raster::Texel;
+use crate::raster::{Band, SurfaceBuffer, Texel};
 use crate::render::MethodAov;
 
 /// What the per-pixel work of a frame reads.
@@ -24,36 +24,31 @@ pub(crate) struct ShadeContext<'a> {
 }
 
 /// Up to eight pixels of one row waiting for the lane kernels.
-struct Group<T> {
+struct Group {
     x: [u32; LANES],
-    items: [T; LANES],
     len: usize,
 }
 
-impl<T: Copy> Group<T> {
-    fn new(filler: T) -> Self {
+impl Group {
+    fn new() -> Self {
         Self {
             x: [0; LANES],
-            items: [filler; LANES],
             len: 0,
         }
     }
 
-    /// Adds a pixel; true when the group is full.
+    /// Adds pixel `x`; true when the group is full.
     #[inline]
-    fn push(&mut self, x: u32, item: T) -> bool {
+    fn push(&mut self, x: u32) -> bool {
         self.x[self.len] = x;
-        self.items[self.len] = item;
         self.len += 1;
         self.len == LANES
     }
 
     /// Pads the unused lanes with copies of lane 0 (their results are dropped).
     fn pad(&mut self) {
-        for i in self.len..LANES {
-            self.x[i] = self.x[0];
-            self.items[i] = self.items[0];
-        }
+        let first = self.x[0];
+        self.x[self.len..].fill(first);
     }
 }
 
@@ -73,48 +68,75 @@ impl RowOut<'_> {
     }
 }
 
+/// One row of a front-face buffer, read by the per-pixel work: which pixels are covered, and
+/// the surfaces of eight covered pixels at once.
+pub(crate) trait FrontRow {
+    /// Whether pixel `x` of the row sees the refractor.
+    fn is_covered(&self, x: u32) -> bool;
+    /// The front surfaces of eight covered pixels.
+    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES];
+}
+
+/// Row `y` of a band just rasterised.
+pub(crate) struct BandRow<'b, 'a> {
+    pub band: &'b Band<'a>,
+    pub y: u32,
+}
+
+impl FrontRow for BandRow<'_, '_> {
+    #[inline]
+    fn is_covered(&self, x: u32) -> bool {
+        self.band.is_covered(x, self.y)
+    }
+    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
+        self.band.texels_x8(x, self.y)
+    }
+}
+
+/// Row `y` of a whole front-face buffer.
+pub(crate) struct BufferRow<'b> {
+    pub buffer: &'b SurfaceBuffer,
+    pub y: u32,
+}
+
+impl FrontRow for BufferRow<'_> {
+    #[inline]
+    fn is_covered(&self, x: u32) -> bool {
+        self.buffer
+            .is_covered((self.y * self.buffer.width + x) as usize)
+    }
+    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
+        self.buffer.texels_x8(x, self.y)
+    }
+}
+
 impl ShadeContext<'_> {
-    /// Shades row `y`: `front(x)` is the front surface seen at pixel `x` (or none); colours go to
-    /// `colors` and, when given, AOVs to `aovs` (both one row long).
+    /// Shades row `y` of `front`: colours go to `colors` and, when given, AOVs to `aovs` (both
+    /// one row long).
     pub fn row(
         &self,
         y: u32,
-        front: impl Fn(u32) -> Option<Texel>,
+        front: &impl FrontRow,
         colors: &mut [Vec3],
         aovs: Option<&mut [MethodAov]>,
     ) {
-        let filler = FrontSurface {
-            p1_ws: Vec3::ZERO,
-            n1_ws: Vec3::Z,
-            d_n: 0.0,
-        };
         let mut out = RowOut { colors, aovs };
-        let mut covered = Group::new(filler);
-        let mut background = Group::new(());
+        let mut covered = Group::new();
+        let mut background = Group::new();
         for x in 0..out.colors.len() as u32 {
-            match front(x) {
-                Some(texel) => {
-                    let surface = FrontSurface {
-                        p1_ws: texel.p_ws,
-                        n1_ws: texel.n_ws,
-                        d_n: texel.scalar,
-                    };
-                    if covered.push(x, surface) {
-                        self.covered(&covered, y, &mut out);
-                        covered.len = 0;
-                    }
+            if front.is_covered(x) {
+                if covered.push(x) {
+                    self.covered(front, &covered, y, &mut out);
+                    covered.len = 0;
                 }
-                None => {
-                    if background.push(x, ()) {
-                        self.background(&background, y, &mut out);
-                        background.len = 0;
-                    }
-                }
+            } else if background.push(x) {
+                self.background(&background, y, &mut out);
+                background.len = 0;
             }
         }
         if covered.len > 0 {
             covered.pad();
-            self.covered(&covered, y, &mut out);
+            self.covered(front, &covered, y, &mut out);
         }
         if background.len > 0 {
             background.pad();
@@ -123,9 +145,8 @@ impl ShadeContext<'_> {
     }
 
     /// Eight pixels that see the environment directly.
-    fn background(&self, group: &Group<()>, y: u32, out: &mut RowOut<'_>) {
-        let uv = group.x.map(|x| Camera::pixel_center(x, y));
-        let dirs = self.camera.pixel_ray_dir_x8(Vec2x8::from_lanes(&uv));
+    fn background(&self, group: &Group, y: u32, out: &mut RowOut<'_>) {
+        let dirs = self.camera.pixel_ray_dir_x8(pixel_centers(&group.x, y));
         let colors = self.environment.radiance_x8(dirs).to_lanes();
         for (&x, &color) in group.x.iter().zip(&colors).take(group.len) {
             out.write(x, color, || MethodAov::BACKGROUND);
@@ -135,18 +156,37 @@ impl ShadeContext<'_> {
     /// Eight pixels that see the refractor: the kernel, then the environment along `T2` (or
     /// `T1` for `single`); black where the kernel reports a degenerate input or the TIR policy
     /// absorbs the ray.
-    fn covered(&self, group: &Group<FrontSurface>, y: u32, out: &mut RowOut<'_>) {
+    fn covered(&self, front: &impl FrontRow, group: &Group, y: u32, out: &mut RowOut<'_>) {
+        let texels = front.texels(&group.x);
+        let mut surfaces = [FrontSurface {
+            p1_ws: Vec3::ZERO,
+            n1_ws: Vec3::ZERO,
+            d_n: 0.0,
+        }; LANES];
+        for (surface, t) in surfaces.iter_mut().zip(&texels) {
+            *surface = FrontSurface {
+                p1_ws: t.p_ws,
+                n1_ws: t.n_ws,
+                d_n: t.scalar,
+            };
+        }
         const COVERED: MethodAov = MethodAov {
             covered: true,
             ..MethodAov::BACKGROUND
         };
-        // Lanes that look nothing up (degenerate input, absorbed ray) are black.
-        let lookup = |direction: Option<Vec3>| direction.unwrap_or(Vec3::Y);
+        // Lanes that look nothing up (degenerate input, absorbed ray) are black; they look up
+        // an arbitrary direction with the others.
+        let mut directions = [Vec3::Y; LANES];
+        let mut lit = [false; LANES];
         match self.back {
             None => {
-                let paths = one_interface_x8(self.camera, &group.items, self.kernel);
-                let directions = paths.each_ref().map(|p| p.as_ref().ok().map(|p| p.t1));
-                let radiance = self.radiance(directions.map(lookup));
+                let paths = one_interface_x8(self.camera, &surfaces, self.kernel);
+                for (i, path) in paths.iter().enumerate() {
+                    if let Ok(path) = path {
+                        (directions[i], lit[i]) = (path.t1, true);
+                    }
+                }
+                let radiance = self.radiance(&directions);
                 for (i, path) in paths.iter().enumerate().take(group.len) {
                     match path {
                         Ok(path) => out.write(group.x[i], radiance[i], || MethodAov {
@@ -159,18 +199,21 @@ impl ShadeContext<'_> {
                 }
             }
             Some(back) => {
-                let uv: [Vec2; LANES] = group.x.map(|x| Camera::pixel_center(x, y));
-                let paths = two_interface_x8(self.camera, &uv, &group.items, back, self.kernel);
-                let directions = paths
-                    .each_ref()
-                    .map(|p| p.as_ref().ok().map(|p| p.t2).filter(|t2| *t2 != Vec3::ZERO));
-                let radiance = self.radiance(directions.map(lookup));
+                let mut uv = [Vec2::ZERO; LANES];
+                for (uv, &x) in uv.iter_mut().zip(&group.x) {
+                    *uv = Camera::pixel_center(x, y);
+                }
+                let paths = two_interface_x8(self.camera, &uv, &surfaces, back, self.kernel);
+                for (i, path) in paths.iter().enumerate() {
+                    if let Ok(path) = path
+                        && path.t2 != Vec3::ZERO
+                    {
+                        (directions[i], lit[i]) = (path.t2, true);
+                    }
+                }
+                let radiance = self.radiance(&directions);
                 for (i, path) in paths.iter().enumerate().take(group.len) {
-                    let color = if directions[i].is_some() {
-                        radiance[i]
-                    } else {
-                        Vec3::ZERO
-                    };
+                    let color = if lit[i] { radiance[i] } else { Vec3::ZERO };
                     match path {
                         Ok(path) => out.write(group.x[i], color, || MethodAov {
                             p2: path.p2,
@@ -188,9 +231,19 @@ impl ShadeContext<'_> {
     }
 
     #[inline]
-    fn radiance(&self, directions: [Vec3; LANES]) -> [Vec3; LANES] {
+    fn radiance(&self, directions: &[Vec3; LANES]) -> [Vec3; LANES] {
         self.environment
-            .radiance_x8(Vec3x8::from_lanes(&directions))
+            .radiance_x8(Vec3x8::from_lanes(directions))
             .to_lanes()
     }
+}
+
+/// The centres of pixels `x` of row `y`, as lanes.
+#[inline]
+fn pixel_centers(x: &[u32; LANES], y: u32) -> Vec2x8 {
+    let mut uv = [Vec2::ZERO; LANES];
+    for (uv, &x) in uv.iter_mut().zip(x) {
+        *uv = Camera::pixel_center(x, y);
+    }
+    Vec2x8::from_lanes(&uv)
 }
