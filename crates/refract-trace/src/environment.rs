@@ -127,30 +127,50 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
 /// [`procedural_radiance`] for eight directions at once: both branches evaluated and selected
 /// per lane, with the same operations, so each lane has the scalar function's bits.
 pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
-    let splat = F32x8::splat;
-    let lerp = |a: Vec3x8, b: Vec3x8, s: F32x8| a * (F32x8::ONE - s) + b * s;
-    let (horizon, zenith) = (Vec3x8::splat(HORIZON), Vec3x8::splat(ZENITH));
+    // Neighbouring pixels mostly see the same half: only the halves some lane needs are
+    // evaluated.
+    let up = dir.y.simd_ge(F32x8::ZERO);
+    match (up.any(), up.all()) {
+        (true, true) => sky_x8(dir),
+        (false, _) => ground_x8(dir),
+        (true, false) => Vec3x8::select(up, sky_x8(dir), ground_x8(dir)),
+    }
+}
 
-    let s = dir.y.sqrt();
-    let mut sky = lerp(horizon, zenith, s);
+fn lerp_x8(a: Vec3x8, b: Vec3x8, s: F32x8) -> Vec3x8 {
+    a * (F32x8::ONE - s) + b * s
+}
+
+/// The sky half of [`procedural_radiance_x8`] (`d.y ≥ 0`).
+#[inline]
+fn sky_x8(dir: Vec3x8) -> Vec3x8 {
+    let splat = F32x8::splat;
+    let mut sky = lerp_x8(Vec3x8::splat(HORIZON), Vec3x8::splat(ZENITH), dir.y.sqrt());
     let signed = atan2_x8(dir.x, -dir.z) * splat(6.0 / core::f32::consts::PI);
     let stripe = signed
         .simd_lt(F32x8::ZERO)
         .select(signed + splat(12.0), signed);
     let nearest = (stripe + splat(0.5)).floor();
     let on_stripe = (stripe - nearest).abs().simd_lt(splat(0.06)) & dir.y.simd_lt(splat(0.85));
-    // `nearest as usize % 4` for the integers 0..=12, exactly.
-    let hue = nearest - splat(4.0) * (nearest * splat(0.25)).floor();
-    for (k, colour) in STRIPE_HUES.iter().enumerate() {
-        let this = on_stripe & hue.simd_eq(splat(k as f32));
-        sky = Vec3x8::select(this, Vec3x8::splat(*colour), sky);
+    if on_stripe.any() {
+        // `nearest as usize % 4` for the integers 0..=12, exactly.
+        let hue = nearest - splat(4.0) * (nearest * splat(0.25)).floor();
+        for (k, colour) in STRIPE_HUES.iter().enumerate() {
+            let this = on_stripe & hue.simd_eq(splat(k as f32));
+            sky = Vec3x8::select(this, Vec3x8::splat(*colour), sky);
+        }
     }
-    sky = Vec3x8::select(
+    Vec3x8::select(
         dir.dot(Vec3x8::splat(SUN)).simd_gt(splat(0.995)),
         Vec3x8::splat(SUN_RADIANCE),
         sky,
-    );
+    )
+}
 
+/// The ground half of [`procedural_radiance_x8`] (`d.y < 0`).
+#[inline]
+fn ground_x8(dir: Vec3x8) -> Vec3x8 {
+    let splat = F32x8::splat;
     let p = dir * (F32x8::ONE / -dir.y); // not `recip`: wide's is the 12-bit estimate
     let cells = (p.x * splat(2.0)).floor() + (p.z * splat(2.0)).floor();
     let check = cells - splat(2.0) * (cells * splat(0.5)).floor();
@@ -161,8 +181,7 @@ pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
         y: tile,
         z: tile,
     };
-    let ground = lerp(horizon, tile, fade);
-    Vec3x8::select(dir.y.simd_ge(F32x8::ZERO), sky, ground)
+    lerp_x8(Vec3x8::splat(HORIZON), tile, fade)
 }
 
 /// Loads a lat-long `.exr` (half or float, RGB or RGBA) or Radiance `.hdr` map. Negative and
@@ -297,6 +316,18 @@ mod tests {
         while !dirs.len().is_multiple_of(8) {
             dirs.push(Vec3::Y);
         }
+        // Also groups mixing sky and ground lanes: the front and back of the list interleaved.
+        let n = dirs.len();
+        let mixed: Vec<Vec3> = (0..n)
+            .map(|i| {
+                if i % 2 == 0 {
+                    dirs[i / 2]
+                } else {
+                    dirs[n - 1 - i / 2]
+                }
+            })
+            .collect();
+        dirs.extend(mixed);
         let environment = Environment::Procedural;
         for chunk in dirs.chunks_exact(8) {
             let lanes: [Vec3; 8] = chunk.try_into().expect("eight");
