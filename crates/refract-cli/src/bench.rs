@@ -245,7 +245,7 @@ fn table(records: &[BenchRecord], reference: &[(String, f64)], res: u32, frames:
     let _ = writeln!(
         md,
         "# Wyman 2005a Table 1, reproduced\n\n{res}², median of {frames} frames after 3 warm-up frames; a frame is every \
-         per-frame pass (buffers + kernel; GPU: timestamp queries, queue waited). Reference: exact tracer, \
+         per-frame pass writing the colour only, as displayed (buffers + kernel; GPU: timestamp queries, queue waited). Reference: exact tracer, \
          transmission, 1 spp, depth 8. Paper: GeForce 6800 + 3.0 GHz Pentium 4.\n"
     );
     if res != 1024 {

@@ -295,26 +295,54 @@ fn clip_near(v: [ClipVertex; 3], out: &mut Vec<ClipVertex>) {
     }
 }
 
-fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTriangle> {
-    let (w, h) = (camera.width() as f32, camera.height() as f32);
-    let mut xy = [[0i64; 2]; 3];
-    let mut depth = [0.0f32; 3];
-    let mut inv_w = [0.0f32; 3];
-    for k in 0..3 {
-        let c = v[k].clip;
-        let ndc = c.xyz() / c.w;
-        let px = 0.5 * (ndc.x + 1.0) * w;
-        let py = 0.5 * (1.0 - ndc.y) * h;
-        if !(px.is_finite() && py.is_finite()) {
-            return None;
-        }
-        xy[k] = [
+/// A vertex projected to the screen: what triangle set-up needs of it.
+#[derive(Clone, Copy, Debug, Default)]
+struct Projected {
+    /// Fixed-point pixel coordinates (`y` down).
+    xy: [i64; 2],
+    /// Window depth.
+    depth: f32,
+    /// `1/w`.
+    inv_w: f32,
+    /// The pixel coordinates are finite.
+    finite: bool,
+    /// In front of the near plane (`z_clip ≥ 0`): triangles with all three vertices in front
+    /// need no clipping.
+    in_front: bool,
+}
+
+/// The viewport transform of one clip-space vertex, snapped to the sub-pixel grid.
+#[inline]
+fn project(c: Vec4, width: f32, height: f32) -> Projected {
+    let ndc = c.xyz() / c.w;
+    let px = 0.5 * (ndc.x + 1.0) * width;
+    let py = 0.5 * (1.0 - ndc.y) * height;
+    Projected {
+        xy: [
             (f64::from(px) * SUBPIXEL as f64).round() as i64,
             (f64::from(py) * SUBPIXEL as f64).round() as i64,
-        ];
-        depth[k] = ndc.z;
-        inv_w[k] = 1.0 / c.w;
+        ],
+        depth: ndc.z,
+        inv_w: 1.0 / c.w,
+        finite: px.is_finite() && py.is_finite(),
+        in_front: c.z >= 0.0,
     }
+}
+
+/// Sets up a triangle from its projected corners: culls it by facing, orients it clockwise on
+/// screen and bounds it; `attributes` is only read for the triangles kept.
+fn setup(
+    v: [Projected; 3],
+    attributes: impl FnOnce() -> [Attributes; 3],
+    camera: &Camera,
+    faces: Faces,
+) -> Option<ScreenTriangle> {
+    if !(v[0].finite && v[1].finite && v[2].finite) {
+        return None;
+    }
+    let mut xy = [v[0].xy, v[1].xy, v[2].xy];
+    let mut depth = [v[0].depth, v[1].depth, v[2].depth];
+    let mut inv_w = [v[0].inv_w, v[1].inv_w, v[2].inv_w];
     // In pixel coordinates (y down) a positive edge function means clockwise on screen; a
     // triangle wound counter-clockwise seen from outside appears counter-clockwise on screen
     // (negative) when it faces the camera.
@@ -323,16 +351,17 @@ fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTria
     if area == 0 || front != (faces == Faces::Front) {
         return None;
     }
-    let (mut vertices, mut area) = (v, area);
+    let mut area = area;
+    let mut attributes = attributes();
     if area < 0 {
         xy.swap(1, 2);
         depth.swap(1, 2);
         inv_w.swap(1, 2);
-        vertices.swap(1, 2);
+        attributes.swap(1, 2);
         area = -area;
     }
-    let lo = |k: usize| xy.iter().map(|p| p[k]).min().unwrap_or(0);
-    let hi = |k: usize| xy.iter().map(|p| p[k]).max().unwrap_or(0);
+    let lo = |k: usize| xy[0][k].min(xy[1][k]).min(xy[2][k]);
+    let hi = |k: usize| xy[0][k].max(xy[1][k]).max(xy[2][k]);
     let size = [camera.width() as i64, camera.height() as i64];
     // Pixels whose centre (x + ½) can lie inside [lo, hi].
     let first = |k: usize| {
@@ -349,11 +378,7 @@ fn setup(v: [ClipVertex; 3], camera: &Camera, faces: Faces) -> Option<ScreenTria
         inv_area: 1.0 / area as f64,
         depth,
         inv_w,
-        attributes: vertices.map(|v| Attributes {
-            p_ws: v.p_ws,
-            n_ws: v.n_ws,
-            scalar: v.scalar,
-        }),
+        attributes,
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
     })
@@ -373,7 +398,15 @@ impl TriangleStore {
     }
 
     /// Projects, clips and sets up every triangle of `mesh`, in parallel, keeping index order.
-    fn set_up(&mut self, mesh: &RasterMesh<'_>, clip: &[Vec4], camera: &Camera, faces: Faces) {
+    fn set_up(
+        &mut self,
+        mesh: &RasterMesh<'_>,
+        clip: &[Vec4],
+        projected: &[Projected],
+        camera: &Camera,
+        faces: Faces,
+    ) {
+        let (width, height) = (camera.width() as f32, camera.height() as f32);
         let chunks = mesh.triangles.len().div_ceil(CHUNK_TRIANGLES);
         self.chunks.resize_with(chunks, Vec::new);
         self.chunks
@@ -383,23 +416,37 @@ impl TriangleStore {
                 out.clear();
                 let mut polygon = Vec::with_capacity(4);
                 for tri in chunk {
+                    let corners = tri.map(|i| projected[i as usize]);
+                    if corners.iter().all(|v| v.in_front) {
+                        let attributes = || {
+                            tri.map(|i| Attributes {
+                                p_ws: mesh.positions[i as usize],
+                                n_ws: mesh.normals[i as usize],
+                                scalar: mesh.scalars[i as usize],
+                            })
+                        };
+                        out.extend(setup(corners, attributes, camera, faces));
+                        continue;
+                    }
+                    // Crossing the near plane: clip, then set up the pieces.
                     let v = tri.map(|i| ClipVertex {
                         clip: clip[i as usize],
                         p_ws: mesh.positions[i as usize],
                         n_ws: mesh.normals[i as usize],
                         scalar: mesh.scalars[i as usize],
                     });
-                    if v.iter().all(|v| v.clip.z >= 0.0) {
-                        out.extend(setup(v, camera, faces));
-                    } else {
-                        clip_near(v, &mut polygon);
-                        for k in 1..polygon.len().saturating_sub(1) {
-                            out.extend(setup(
-                                [polygon[0], polygon[k], polygon[k + 1]],
-                                camera,
-                                faces,
-                            ));
-                        }
+                    clip_near(v, &mut polygon);
+                    for k in 1..polygon.len().saturating_sub(1) {
+                        let piece = [polygon[0], polygon[k], polygon[k + 1]];
+                        let attributes = || {
+                            piece.map(|v| Attributes {
+                                p_ws: v.p_ws,
+                                n_ws: v.n_ws,
+                                scalar: v.scalar,
+                            })
+                        };
+                        let corners = piece.map(|v| project(v.clip, width, height));
+                        out.extend(setup(corners, attributes, camera, faces));
                     }
                 }
             });
@@ -429,8 +476,9 @@ pub struct SurfaceBuffer {
     pub height: u32,
     visibility: Vec<Visibility>,
     triangles: TriangleStore,
-    /// Scratch: clip-space vertex positions and the per-band triangle lists.
+    /// Scratch: clip-space and projected vertex positions, and the per-band triangle lists.
     clip: Vec<Vec4>,
+    projected: Vec<Projected>,
     bins: Vec<Vec<u32>>,
 }
 
@@ -587,6 +635,7 @@ pub fn rasterize_bands<O, F>(
         visibility,
         triangles,
         clip,
+        projected,
         bins,
     } = buffer;
     *buffer_width = width;
@@ -594,10 +643,16 @@ pub fn rasterize_bands<O, F>(
 
     let world_to_clip = camera.world_to_clip();
     clip.resize(mesh.positions.len(), Vec4::ZERO);
+    let (w, h) = (width as f32, height as f32);
+    projected.resize(mesh.positions.len(), Projected::default());
     clip.par_iter_mut()
+        .zip(projected.par_iter_mut())
         .zip(mesh.positions.par_iter())
-        .for_each(|(c, p)| *c = world_to_clip * p.extend(1.0));
-    triangles.set_up(mesh, clip, camera, faces);
+        .for_each(|((c, v), p)| {
+            *c = world_to_clip * p.extend(1.0);
+            *v = project(*c, w, h);
+        });
+    triangles.set_up(mesh, clip, projected, camera, faces);
 
     // Bin into bands of rows, preserving triangle order within each band.
     bins.resize_with(bands, Vec::new);
