@@ -126,15 +126,31 @@ pub fn one_interface_x8(
     paths
 }
 
-/// [`two_interface`] for eight pixels: lane `i` is
-/// `two_interface(camera, uv_px[i], &front[i], back, params)`, bit for bit.
-pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
+/// Every value of eight two-interface paths, as lanes; `scalar` marks the lanes the scalar
+/// kernel must redo (their other values are meaningless).
+struct TwoInterfaceSoa {
+    view: Vec3x8,
+    n1: Vec3x8,
+    t1: Vec3x8,
+    d_v: [Option<f32>; LANES],
+    d_tilde: F32x8,
+    p2: Vec3x8,
+    n2: Vec3x8,
+    n2_from_back_face: [bool; LANES],
+    t2: Vec3x8,
+    tir_exit: Mask,
+    scalar: [bool; LANES],
+}
+
+/// The lane computation shared by [`two_interface_x8`] and [`two_interface_lanes`].
+#[inline]
+fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     camera: &Camera,
     uv_px: &[Vec2; LANES],
     front: &[FrontSurface; LANES],
     back: &S,
     params: &ImageSpaceParams,
-) -> [Result<TwoInterfacePath, DegenerateInput>; LANES] {
+) -> TwoInterfaceSoa {
     let (p1, n1, d_n) = front_lanes(front);
     let eta = F32x8::splat(params.eta_in());
     let e = entry(camera, p1, n1, eta);
@@ -208,13 +224,37 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     let t2 = Vec3x8::select(tir_exit, tir_t2, normalized);
 
     let finite = p2.is_finite() & d_tilde.is_finite() & t2.is_finite();
-    let scalar = mask_lanes(e.scalar | !d_n_ok | !(finite & (t2_ok | tir_exit)));
-    let (view, n1, t1) = (e.view.to_lanes(), e.n1.to_lanes(), e.t1.to_lanes());
-    let (p2, n2, t2) = (p2.to_lanes(), n2.to_lanes(), t2.to_lanes());
-    let (d_tilde, tir_exit) = (d_tilde.to_array(), mask_lanes(tir_exit));
+    TwoInterfaceSoa {
+        view: e.view,
+        n1: e.n1,
+        t1: e.t1,
+        d_v,
+        d_tilde,
+        p2,
+        n2,
+        n2_from_back_face: sampled,
+        t2,
+        tir_exit,
+        scalar: mask_lanes(e.scalar | !d_n_ok | !(finite & (t2_ok | tir_exit))),
+    }
+}
+
+/// [`two_interface`] for eight pixels: lane `i` is
+/// `two_interface(camera, uv_px[i], &front[i], back, params)`, bit for bit.
+pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
+    camera: &Camera,
+    uv_px: &[Vec2; LANES],
+    front: &[FrontSurface; LANES],
+    back: &S,
+    params: &ImageSpaceParams,
+) -> [Result<TwoInterfacePath, DegenerateInput>; LANES] {
+    let soa = two_interface_soa(camera, uv_px, front, back, params);
+    let (view, n1, t1) = (soa.view.to_lanes(), soa.n1.to_lanes(), soa.t1.to_lanes());
+    let (p2, n2, t2) = (soa.p2.to_lanes(), soa.n2.to_lanes(), soa.t2.to_lanes());
+    let (d_tilde, tir_exit) = (soa.d_tilde.to_array(), mask_lanes(soa.tir_exit));
     let mut paths = [Err(DegenerateInput::NonFiniteResult); LANES];
     for (i, path) in paths.iter_mut().enumerate() {
-        if scalar[i] {
+        if soa.scalar[i] {
             *path = two_interface(camera, uv_px[i], &front[i], back, params);
             continue;
         }
@@ -225,11 +265,11 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
                 t1: t1[i],
                 tir_entry: false,
             },
-            d_v: d_v[i],
+            d_v: soa.d_v[i],
             d_tilde: d_tilde[i],
             p2: p2[i],
             n2: n2[i],
-            n2_source: if sampled[i] {
+            n2_source: if soa.n2_from_back_face[i] {
                 ExitNormalSource::BackFace
             } else {
                 ExitNormalSource::SilhouetteFallback
@@ -239,6 +279,70 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
         });
     }
     paths
+}
+
+/// What a renderer needs of eight two-interface paths, as lanes: [`two_interface_x8`] without
+/// the per-lane structs (the CPU backend's per-pixel path). Lane `i` holds the values of
+/// `two_interface(camera, uv_px[i], &front[i], back, params)`, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TwoInterfaceLanes {
+    /// The lanes with a path (`Ok`); the others reported a [`DegenerateInput`] and their
+    /// vectors are zero.
+    pub ok: [bool; LANES],
+    /// `T2` (zero where the TIR policy absorbed the ray).
+    pub t2: Vec3x8,
+    /// `P~2`.
+    pub p2: Vec3x8,
+    /// `N2`.
+    pub n2: Vec3x8,
+    /// `N2` came from the back faces (else the silhouette fallback).
+    pub n2_from_back_face: [bool; LANES],
+    /// Total internal reflection at the entry or the exit.
+    pub tir: [bool; LANES],
+}
+
+/// [`two_interface_x8`] as [`TwoInterfaceLanes`].
+pub fn two_interface_lanes<S: BackFaceSampler + ?Sized>(
+    camera: &Camera,
+    uv_px: &[Vec2; LANES],
+    front: &[FrontSurface; LANES],
+    back: &S,
+    params: &ImageSpaceParams,
+) -> TwoInterfaceLanes {
+    let soa = two_interface_soa(camera, uv_px, front, back, params);
+    let mut lanes = TwoInterfaceLanes {
+        ok: [true; LANES],
+        t2: soa.t2,
+        p2: soa.p2,
+        n2: soa.n2,
+        n2_from_back_face: soa.n2_from_back_face,
+        tir: mask_lanes(soa.tir_exit),
+    };
+    if soa.scalar.iter().any(|s| *s) {
+        // The rare lanes, from the scalar kernel.
+        let (mut t2, mut p2, mut n2) = (soa.t2.to_lanes(), soa.p2.to_lanes(), soa.n2.to_lanes());
+        for i in (0..LANES).filter(|i| soa.scalar[*i]) {
+            match two_interface(camera, uv_px[i], &front[i], back, params) {
+                Ok(path) => {
+                    (t2[i], p2[i], n2[i]) = (path.t2, path.p2, path.n2);
+                    lanes.n2_from_back_face[i] = path.n2_source == ExitNormalSource::BackFace;
+                    lanes.tir[i] = path.tir_exit || path.entry.tir_entry;
+                }
+                Err(_) => {
+                    (t2[i], p2[i], n2[i]) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+                    lanes.ok[i] = false;
+                    lanes.n2_from_back_face[i] = false;
+                    lanes.tir[i] = false;
+                }
+            }
+        }
+        (lanes.t2, lanes.p2, lanes.n2) = (
+            Vec3x8::from_lanes(&t2),
+            Vec3x8::from_lanes(&p2),
+            Vec3x8::from_lanes(&n2),
+        );
+    }
+    lanes
 }
 
 /// [`Camera::world_to_pixel`]'s `(u_px, v_px)` and the lanes in front of the eye (`w > 0`).
@@ -347,9 +451,23 @@ mod tests {
                     }
                 });
                 let lanes = two_interface_x8(&camera, &uv, &front, &Field, &params);
+                let lean = two_interface_lanes(&camera, &uv, &front, &Field, &params);
+                let (t2, p2, n2) = (lean.t2.to_lanes(), lean.p2.to_lanes(), lean.n2.to_lanes());
                 let single = one_interface_x8(&camera, &front, &params);
                 for i in 0..LANES {
                     let scalar = two_interface(&camera, uv[i], &front[i], &Field, &params);
+                    assert_eq!(lean.ok[i], scalar.is_ok());
+                    if let Ok(path) = &scalar {
+                        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                        assert_eq!(bits(t2[i]), bits(path.t2));
+                        assert_eq!(bits(p2[i]), bits(path.p2));
+                        assert_eq!(bits(n2[i]), bits(path.n2));
+                        assert_eq!(
+                            lean.n2_from_back_face[i],
+                            path.n2_source == ExitNormalSource::BackFace
+                        );
+                        assert_eq!(lean.tir[i], path.tir_exit || path.entry.tir_entry);
+                    }
                     assert_eq!(
                         format!("{:?}", lanes[i]),
                         format!("{scalar:?}"),

@@ -5,9 +5,10 @@
 
 use glam::{Vec2, Vec3};
 use refract_core::Camera;
+use refract_core::exit::ExitNormalSource;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams};
-use refract_core::kernel_x8::{one_interface_x8, two_interface_x8};
-use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
+use refract_core::kernel_x8::{one_interface_x8, two_interface_lanes};
+use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_trace::Environment;
 
 use crate::buffers::BackFaces;
@@ -203,28 +204,41 @@ impl ShadeContext<'_> {
                 for (uv, &x) in uv.iter_mut().zip(&group.x) {
                     *uv = Camera::pixel_center(x, y);
                 }
-                let paths = two_interface_x8(self.camera, &uv, &surfaces, back, self.kernel);
-                for (i, path) in paths.iter().enumerate() {
-                    if let Ok(path) = path
-                        && path.t2 != Vec3::ZERO
-                    {
-                        (directions[i], lit[i]) = (path.t2, true);
+                let paths = two_interface_lanes(self.camera, &uv, &surfaces, back, self.kernel);
+                // Absorbed (T2 = 0) and degenerate lanes are black.
+                let lit = mask_from_lanes(paths.ok) & !paths.t2.is_zero();
+                let lookup = Vec3x8::select(lit, paths.t2, Vec3x8::splat(Vec3::Y));
+                let radiance = self.environment.radiance_x8(lookup);
+                let colors = Vec3x8::select(lit, radiance, Vec3x8::ZERO).to_lanes();
+                if out.aovs.is_none() {
+                    for (&x, &color) in group.x.iter().zip(&colors).take(group.len) {
+                        out.colors[x as usize] = color;
                     }
+                    return;
                 }
-                let radiance = self.radiance(&directions);
-                for (i, path) in paths.iter().enumerate().take(group.len) {
-                    let color = if lit[i] { radiance[i] } else { Vec3::ZERO };
-                    match path {
-                        Ok(path) => out.write(group.x[i], color, || MethodAov {
-                            p2: path.p2,
-                            t2: path.t2,
-                            n2: path.n2,
-                            n2_source: Some(path.n2_source),
-                            tir: path.tir_exit || path.entry.tir_entry,
+                let (p2, t2, n2) = (
+                    paths.p2.to_lanes(),
+                    paths.t2.to_lanes(),
+                    paths.n2.to_lanes(),
+                );
+                for i in 0..group.len {
+                    out.write(group.x[i], colors[i], || {
+                        if !paths.ok[i] {
+                            return COVERED;
+                        }
+                        MethodAov {
+                            p2: p2[i],
+                            t2: t2[i],
+                            n2: n2[i],
+                            n2_source: Some(if paths.n2_from_back_face[i] {
+                                ExitNormalSource::BackFace
+                            } else {
+                                ExitNormalSource::SilhouetteFallback
+                            }),
+                            tir: paths.tir[i],
                             ..COVERED
-                        }),
-                        Err(_) => out.write(group.x[i], color, || COVERED),
-                    }
+                        }
+                    });
                 }
             }
         }
