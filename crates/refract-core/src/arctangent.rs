@@ -15,6 +15,7 @@
 //! the two within their 1e-5 relative tolerance.
 
 use core::f32::consts::{FRAC_PI_2, PI};
+use core::ops::{Add, Mul};
 
 /// Coefficients of `P(s)`, constant term first.
 pub(crate) const ATAN_POLYNOMIAL: [f32; 9] = [
@@ -29,22 +30,26 @@ pub(crate) const ATAN_POLYNOMIAL: [f32; 9] = [
     -0.002_447_031_2,
 ];
 
-/// `atan(a)` for `a ∈ [0, 1]`, `P` evaluated with Estrin's scheme (four dependent
-/// multiply-adds instead of Horner's eight: the latency, not the arithmetic, bounds a pixel).
+/// `atan(a)` for `a ∈ [0, 1]`: `a + a·s·P(s)`, `P` (coefficients `p`, [`ATAN_POLYNOMIAL`])
+/// evaluated with Estrin's scheme (four dependent multiply-adds instead of Horner's eight: the
+/// latency, not the arithmetic, bounds a pixel). Generic so that `f32` and the eight-lane type
+/// of [`crate::lanes`] run exactly the same operations.
 #[inline]
-fn atan_unit(a: f32) -> f32 {
+pub(crate) fn atan_unit<T>(a: T, p: &[T; 9]) -> T
+where
+    T: Copy + Add<Output = T> + Mul<Output = T>,
+{
     let s = a * a;
     let s2 = s * s;
     let s4 = s2 * s2;
-    const P: [f32; 9] = ATAN_POLYNOMIAL;
-    let p01 = P[0] + P[1] * s;
-    let p23 = P[2] + P[3] * s;
-    let p45 = P[4] + P[5] * s;
-    let p67 = P[6] + P[7] * s;
+    let p01 = p[0] + p[1] * s;
+    let p23 = p[2] + p[3] * s;
+    let p45 = p[4] + p[5] * s;
+    let p67 = p[6] + p[7] * s;
     let p03 = p01 + p23 * s2;
     let p47 = p45 + p67 * s2;
-    let p = p03 + (p47 + P[8] * s4) * s4;
-    a + a * s * p
+    let poly = p03 + (p47 + p[8] * s4) * s4;
+    a + a * s * poly
 }
 
 /// The angle of the point `(x, y)` from the positive `x` axis, in `[−π, π]`, like
@@ -56,7 +61,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     let (lo, hi) = (ax.min(ay), ax.max(ay));
     // hi = 0 only at the origin, where the angle is that of the signed zeros.
     let a = if hi > 0.0 { lo / hi } else { 0.0 };
-    let mut r = atan_unit(a);
+    let mut r = atan_unit(a, &ATAN_POLYNOMIAL);
     if ay > ax {
         r = FRAC_PI_2 - r;
     }

@@ -13,7 +13,18 @@ use core::ops::{Add, Mul, Neg, Sub};
 use glam::{Mat4, Vec2, Vec3};
 use wide::f32x8;
 
-use crate::arctangent::ATAN_POLYNOMIAL;
+use crate::arctangent::{ATAN_POLYNOMIAL, atan_unit};
+
+/// [`ATAN_POLYNOMIAL`] in every lane.
+const ATAN_POLYNOMIAL_X8: [F32x8; 9] = {
+    let mut lanes = [F32x8::ZERO; 9];
+    let mut i = 0;
+    while i < 9 {
+        lanes[i] = F32x8::splat(ATAN_POLYNOMIAL[i]);
+        i += 1;
+    }
+    lanes
+};
 
 /// The number of lanes.
 pub const LANES: usize = 8;
@@ -226,18 +237,7 @@ pub fn atan2(y: F32x8, x: F32x8) -> F32x8 {
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
     let a = hi.simd_gt(F32x8::ZERO).select(lo / hi, F32x8::ZERO);
-    let p = ATAN_POLYNOMIAL.map(F32x8::splat);
-    let s = a * a;
-    let s2 = s * s;
-    let s4 = s2 * s2;
-    let p01 = p[0] + p[1] * s;
-    let p23 = p[2] + p[3] * s;
-    let p45 = p[4] + p[5] * s;
-    let p67 = p[6] + p[7] * s;
-    let p03 = p01 + p23 * s2;
-    let p47 = p45 + p67 * s2;
-    let poly = p03 + (p47 + p[8] * s4) * s4;
-    let mut r = a + a * s * poly;
+    let mut r = atan_unit(a, &ATAN_POLYNOMIAL_X8);
     r = ay
         .simd_gt(ax)
         .select(F32x8::splat(core::f32::consts::FRAC_PI_2) - r, r);

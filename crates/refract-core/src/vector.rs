@@ -40,7 +40,7 @@ fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {
 }
 
 /// The angle between two unit vectors, `θ = atan2(‖a × b‖, a · b)` in `[0, π]` (with
-/// [`atan2`](crate::arctangent::atan2): relative precision kept for small angles).
+/// [`atan2`]: relative precision kept for small angles).
 ///
 /// Well conditioned everywhere, unlike `acos(a · b)`, which loses most of its digits near 0 and
 /// π. Wyman 2005a §3.1 needs `θt/θi` near normal incidence, where `acos` would be useless.

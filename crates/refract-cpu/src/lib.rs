@@ -1,9 +1,11 @@
 //! # refract-cpu
 //!
 //! The CPU backend: it produces the same image-space buffers a GPU rasteriser produces
-//! ([`raster`]: pixel centres, top-left rule, perspective-correct interpolation, near-plane
-//! clipping, parallel deterministic bands of rows), then runs refract-core's kernels per pixel
-//! ([`render`]) for the methods `single`, `wyman`, `wyman-dv` and `wyman-dn` (Wyman 2005a).
+//! ([`raster`]: a visibility-buffer rasteriser with pixel centres, the top-left rule,
+//! perspective-correct interpolation, near-plane clipping, parallel deterministic bands of
+//! rows), then runs refract-core's kernels for the methods `single`, `wyman`, `wyman-dv` and
+//! `wyman-dn` (Wyman 2005a) eight pixels at a time with their bit-identical lane twins
+//! ([`render`]: [`CpuRenderer`] shades each band of rows right after rasterising it).
 
 pub mod buffers;
 pub mod raster;
