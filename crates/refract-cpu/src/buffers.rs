@@ -4,10 +4,10 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{BackFaceSample, BackFaceSampler};
-use refract_core::lanes::LANES;
 use refract_core::{BackSurface, Camera};
 use refract_geometry::Mesh;
 
+use crate::pixel_group::PixelGroup;
 use crate::raster::{
     Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize, rasterize_bands,
     rasterize_into,
@@ -117,39 +117,26 @@ impl BackFaces {
 /// Resolves row `y` of a band of back faces into normals and distances from `eye`; covered
 /// pixels are resolved eight at a time.
 fn resolve_row(band: &Band<'_>, y: u32, eye: Vec3, resolved: &mut [BackTexel]) {
-    fn flush(
-        band: &Band<'_>,
-        y: u32,
-        eye: Vec3,
-        group: &mut [u32; LANES],
-        len: usize,
-        resolved: &mut [BackTexel],
-    ) {
-        let first = group[0];
-        group[len..].fill(first);
-        let texels = band.texels_x8(group, y);
-        for (&x, t) in group.iter().zip(&texels).take(len) {
+    resolved.fill(BackTexel::EMPTY);
+    let mut resolve = |group: &PixelGroup| {
+        let texels = band.texels_x8(&group.x, y);
+        for (&x, t) in group.x.iter().zip(&texels).take(group.len) {
             resolved[x as usize] = BackTexel {
                 n_ws: t.n_ws,
                 distance: (t.p_ws - eye).length(),
             };
         }
-    }
-    let (mut group, mut len) = ([0u32; LANES], 0);
-    for x in 0..resolved.len() as u32 {
-        if band.is_covered(x, y) {
-            group[len] = x;
-            len += 1;
-            if len == LANES {
-                flush(band, y, eye, &mut group, len, resolved);
-                len = 0;
-            }
-        } else {
-            resolved[x as usize] = BackTexel::EMPTY;
+    };
+    let mut group = PixelGroup::new();
+    for x in (0..band.width()).filter(|&x| band.is_covered(x, y)) {
+        if group.push(x) {
+            resolve(&group);
+            group.len = 0;
         }
     }
-    if len > 0 {
-        flush(band, y, eye, &mut group, len, resolved);
+    if group.len > 0 {
+        group.pad();
+        resolve(&group);
     }
 }
 

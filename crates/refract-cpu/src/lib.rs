@@ -8,6 +8,7 @@
 //! ([`render`]: [`CpuRenderer`] shades each band of rows right after rasterising it).
 
 pub mod buffers;
+mod pixel_group;
 pub mod raster;
 pub mod render;
 mod shade;

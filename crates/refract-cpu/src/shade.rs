@@ -12,6 +12,7 @@ use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_trace::Environment;
 
 use crate::buffers::BackFaces;
+use crate::pixel_group::PixelGroup;
 use crate::raster::{Band, SurfaceBuffer, Texel};
 use crate::render::MethodAov;
 
@@ -22,35 +23,6 @@ pub(crate) struct ShadeContext<'a> {
     pub environment: &'a Environment,
     pub camera: &'a Camera,
     pub kernel: &'a ImageSpaceParams,
-}
-
-/// Up to eight pixels of one row waiting for the lane kernels.
-struct Group {
-    x: [u32; LANES],
-    len: usize,
-}
-
-impl Group {
-    fn new() -> Self {
-        Self {
-            x: [0; LANES],
-            len: 0,
-        }
-    }
-
-    /// Adds pixel `x`; true when the group is full.
-    #[inline]
-    fn push(&mut self, x: u32) -> bool {
-        self.x[self.len] = x;
-        self.len += 1;
-        self.len == LANES
-    }
-
-    /// Pads the unused lanes with copies of lane 0 (their results are dropped).
-    fn pad(&mut self) {
-        let first = self.x[0];
-        self.x[self.len..].fill(first);
-    }
 }
 
 /// Where a row's results go.
@@ -122,8 +94,8 @@ impl ShadeContext<'_> {
         aovs: Option<&mut [MethodAov]>,
     ) {
         let mut out = RowOut { colors, aovs };
-        let mut covered = Group::new();
-        let mut background = Group::new();
+        let mut covered = PixelGroup::new();
+        let mut background = PixelGroup::new();
         for x in 0..out.colors.len() as u32 {
             if front.is_covered(x) {
                 if covered.push(x) {
@@ -146,7 +118,7 @@ impl ShadeContext<'_> {
     }
 
     /// Eight pixels that see the environment directly.
-    fn background(&self, group: &Group, y: u32, out: &mut RowOut<'_>) {
+    fn background(&self, group: &PixelGroup, y: u32, out: &mut RowOut<'_>) {
         let dirs = self.camera.pixel_ray_dir_x8(pixel_centers(&group.x, y));
         let colors = self.environment.radiance_x8(dirs).to_lanes();
         for (&x, &color) in group.x.iter().zip(&colors).take(group.len) {
@@ -157,7 +129,7 @@ impl ShadeContext<'_> {
     /// Eight pixels that see the refractor: the kernel, then the environment along `T2` (or
     /// `T1` for `single`); black where the kernel reports a degenerate input or the TIR policy
     /// absorbs the ray.
-    fn covered(&self, front: &impl FrontRow, group: &Group, y: u32, out: &mut RowOut<'_>) {
+    fn covered(&self, front: &impl FrontRow, group: &PixelGroup, y: u32, out: &mut RowOut<'_>) {
         let texels = front.texels(&group.x);
         let mut surfaces = [FrontSurface {
             p1_ws: Vec3::ZERO,

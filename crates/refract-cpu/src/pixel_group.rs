@@ -1,0 +1,36 @@
+//! Up to eight pixels of one row, gathered for the eight-lane kernels and resolves.
+
+use refract_core::lanes::LANES;
+
+/// The `x` coordinates of up to [`LANES`] pixels of a row. Unused lanes are padded with copies
+/// of lane 0 before the group is processed, and their results are dropped.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PixelGroup {
+    /// The pixels' `x`; lanes `len..` are padding once [`Self::pad`] has run.
+    pub x: [u32; LANES],
+    /// How many lanes hold pixels.
+    pub len: usize,
+}
+
+impl PixelGroup {
+    pub fn new() -> Self {
+        Self {
+            x: [0; LANES],
+            len: 0,
+        }
+    }
+
+    /// Adds pixel `x`; true when the group is full.
+    #[inline]
+    pub fn push(&mut self, x: u32) -> bool {
+        self.x[self.len] = x;
+        self.len += 1;
+        self.len == LANES
+    }
+
+    /// Pads the unused lanes with copies of lane 0.
+    pub fn pad(&mut self) {
+        let first = self.x[0];
+        self.x[self.len..].fill(first);
+    }
+}
