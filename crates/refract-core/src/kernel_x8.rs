@@ -44,6 +44,11 @@ fn normalize_common(v: Vec3x8) -> (Vec3x8, Mask) {
     let unit = (length_squared - F32x8::ONE)
         .abs()
         .simd_le(F32x8::splat(UNIT_TOLERANCE));
+    // Most groups are all unit already (normals from the rasteriser, Snell's `T`): the square
+    // root and division are only spent when some lane needs them.
+    if unit.all() {
+        return (v, unit);
+    }
     let in_range = le(F32x8::splat(1e-30), length_squared) & le(length_squared, F32x8::MAX);
     let scaled = v * (F32x8::ONE / length_squared.sqrt());
     (Vec3x8::select(unit, v, scaled), unit | in_range)
@@ -53,10 +58,14 @@ fn normalize_common(v: Vec3x8) -> (Vec3x8, Mask) {
 #[inline]
 fn face_forward(normal: Vec3x8, incident: Vec3x8) -> Vec3x8 {
     let n_dot_i = normal.dot(incident);
+    let facing = lt(n_dot_i, F32x8::ZERO);
+    if facing.all() {
+        return normal; // the common case: no lane needs turning
+    }
     let (turned, ok) =
         (normal - (n_dot_i + F32x8::splat(FACE_FORWARD_EPSILON)) * incident).try_normalize();
     let turned = Vec3x8::select(ok, turned, -incident);
-    Vec3x8::select(lt(n_dot_i, F32x8::ZERO), normal, turned)
+    Vec3x8::select(facing, normal, turned)
 }
 
 /// [`crate::optics::refract`]: the zero vector where `k < 0`.
@@ -203,25 +212,33 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     }
     let sampled_mask = crate::lanes::mask_from_lanes(sampled);
     let sampled_n2 = Vec3x8::from_lanes(&sampled_n2);
-    let look = Vec3x8::splat(camera.look_dir());
-    let (fallback, fallback_ok) = (e.t1 - look.dot(e.t1) * look).try_normalize();
-    let fallback = Vec3x8::select(fallback_ok, fallback, e.t1);
-    let n2 = Vec3x8::select(sampled_mask, sampled_n2, fallback);
+    let n2 = if sampled.iter().all(|s| *s) {
+        sampled_n2
+    } else {
+        let look = Vec3x8::splat(camera.look_dir());
+        let (fallback, fallback_ok) = (e.t1 - look.dot(e.t1) * look).try_normalize();
+        let fallback = Vec3x8::select(fallback_ok, fallback, e.t1);
+        Vec3x8::select(sampled_mask, sampled_n2, fallback)
+    };
 
     // T2 = refract(T1, −N2, n) with the TIR policy (§3.3), as `refract_exit`.
     let inward = face_forward(-n2, e.t1);
     let refracted = refract(e.t1, inward, F32x8::splat(params.ior()));
     let tir_exit = refracted.is_zero();
     let (normalized, t2_ok) = normalize_common(refracted);
-    let tir_t2 = match params.tir_policy {
-        TirPolicy::ClampToCritical => {
-            let (tangent, ok) = (e.t1 - e.t1.dot(inward) * inward).try_normalize();
-            Vec3x8::select(ok, tangent, e.t1)
-        }
-        TirPolicy::ReflectOnce => e.t1 - (F32x8::splat(2.0) * inward.dot(e.t1)) * inward,
-        TirPolicy::Black => Vec3x8::ZERO,
+    let t2 = if tir_exit.any() {
+        let tir_t2 = match params.tir_policy {
+            TirPolicy::ClampToCritical => {
+                let (tangent, ok) = (e.t1 - e.t1.dot(inward) * inward).try_normalize();
+                Vec3x8::select(ok, tangent, e.t1)
+            }
+            TirPolicy::ReflectOnce => e.t1 - (F32x8::splat(2.0) * inward.dot(e.t1)) * inward,
+            TirPolicy::Black => Vec3x8::ZERO,
+        };
+        Vec3x8::select(tir_exit, tir_t2, normalized)
+    } else {
+        normalized
     };
-    let t2 = Vec3x8::select(tir_exit, tir_t2, normalized);
 
     let finite = p2.is_finite() & d_tilde.is_finite() & t2.is_finite();
     TwoInterfaceSoa {
