@@ -25,6 +25,12 @@ pub(crate) struct ShadeContext<'a> {
     pub kernel: &'a ImageSpaceParams,
 }
 
+/// The AOVs of a covered pixel without a path (a degenerate input).
+const COVERED: MethodAov = MethodAov {
+    covered: true,
+    ..MethodAov::BACKGROUND
+};
+
 /// Where a row's results go.
 struct RowOut<'o> {
     colors: &'o mut [Vec3],
@@ -143,84 +149,92 @@ impl ShadeContext<'_> {
                 d_n: t.scalar,
             };
         }
-        const COVERED: MethodAov = MethodAov {
-            covered: true,
-            ..MethodAov::BACKGROUND
-        };
-        // Lanes that look nothing up (degenerate input, absorbed ray) are black; they look up
-        // an arbitrary direction with the others.
-        let mut directions = [Vec3::Y; LANES];
-        let mut lit = [false; LANES];
         match self.back {
-            None => {
-                let paths = one_interface_x8(self.camera, &surfaces, self.kernel);
-                for (i, path) in paths.iter().enumerate() {
-                    if let Ok(path) = path {
-                        (directions[i], lit[i]) = (path.t1, true);
-                    }
-                }
-                let radiance = self.radiance(&directions);
-                for (i, path) in paths.iter().enumerate().take(group.len) {
-                    match path {
-                        Ok(path) => out.write(group.x[i], radiance[i], || MethodAov {
-                            t2: path.t1,
-                            tir: path.tir_entry,
-                            ..COVERED
-                        }),
-                        Err(_) => out.write(group.x[i], Vec3::ZERO, || COVERED),
-                    }
-                }
+            None => self.one_interface(&surfaces, group, out),
+            Some(back) => self.two_interface(&surfaces, back, group, y, out),
+        }
+    }
+
+    /// `single` on a group: the environment along `T1`.
+    fn one_interface(
+        &self,
+        surfaces: &[FrontSurface; LANES],
+        group: &PixelGroup,
+        out: &mut RowOut<'_>,
+    ) {
+        let paths = one_interface_x8(self.camera, surfaces, self.kernel);
+        // Degenerate lanes look up an arbitrary direction with the others, and are black.
+        let mut directions = [Vec3::Y; LANES];
+        for (direction, path) in directions.iter_mut().zip(&paths) {
+            if let Ok(path) = path {
+                *direction = path.t1;
             }
-            Some(back) => {
-                let mut uv = [Vec2::ZERO; LANES];
-                for (uv, &x) in uv.iter_mut().zip(&group.x) {
-                    *uv = Camera::pixel_center(x, y);
-                }
-                let paths = two_interface_lanes(self.camera, &uv, &surfaces, back, self.kernel);
-                // Absorbed (T2 = 0) and degenerate lanes are black.
-                let lit = mask_from_lanes(paths.ok) & !paths.t2.is_zero();
-                let lookup = Vec3x8::select(lit, paths.t2, Vec3x8::splat(Vec3::Y));
-                let radiance = self.environment.radiance_x8(lookup);
-                let colors = Vec3x8::select(lit, radiance, Vec3x8::ZERO).to_lanes();
-                if out.aovs.is_none() {
-                    for (&x, &color) in group.x.iter().zip(&colors).take(group.len) {
-                        out.colors[x as usize] = color;
-                    }
-                    return;
-                }
-                let (p2, t2, n2) = (
-                    paths.p2.to_lanes(),
-                    paths.t2.to_lanes(),
-                    paths.n2.to_lanes(),
-                );
-                for i in 0..group.len {
-                    out.write(group.x[i], colors[i], || {
-                        if !paths.ok[i] {
-                            return COVERED;
-                        }
-                        MethodAov {
-                            p2: p2[i],
-                            t2: t2[i],
-                            n2: n2[i],
-                            n2_source: Some(if paths.n2_from_back_face[i] {
-                                ExitNormalSource::BackFace
-                            } else {
-                                ExitNormalSource::SilhouetteFallback
-                            }),
-                            tir: paths.tir[i],
-                            ..COVERED
-                        }
-                    });
-                }
+        }
+        let radiance = self
+            .environment
+            .radiance_x8(Vec3x8::from_lanes(&directions))
+            .to_lanes();
+        for (i, path) in paths.iter().enumerate().take(group.len) {
+            match path {
+                Ok(path) => out.write(group.x[i], radiance[i], || MethodAov {
+                    t2: path.t1,
+                    tir: path.tir_entry,
+                    ..COVERED
+                }),
+                Err(_) => out.write(group.x[i], Vec3::ZERO, || COVERED),
             }
         }
     }
 
-    #[inline]
-    fn radiance(&self, directions: &[Vec3; LANES]) -> [Vec3; LANES] {
-        self.environment
-            .radiance_x8(Vec3x8::from_lanes(directions))
-            .to_lanes()
+    /// `wyman` and its ablations on a group: the environment along `T2`.
+    fn two_interface(
+        &self,
+        surfaces: &[FrontSurface; LANES],
+        back: &BackFaces,
+        group: &PixelGroup,
+        y: u32,
+        out: &mut RowOut<'_>,
+    ) {
+        let mut uv = [Vec2::ZERO; LANES];
+        for (uv, &x) in uv.iter_mut().zip(&group.x) {
+            *uv = Camera::pixel_center(x, y);
+        }
+        let paths = two_interface_lanes(self.camera, &uv, surfaces, back, self.kernel);
+        // Absorbed (T2 = 0) and degenerate lanes look up an arbitrary direction, and are black.
+        let lit = mask_from_lanes(paths.ok) & !paths.t2.is_zero();
+        let lookup = Vec3x8::select(lit, paths.t2, Vec3x8::splat(Vec3::Y));
+        let radiance = self.environment.radiance_x8(lookup);
+        let colors = Vec3x8::select(lit, radiance, Vec3x8::ZERO).to_lanes();
+        if out.aovs.is_none() {
+            for (&x, &color) in group.x.iter().zip(&colors).take(group.len) {
+                out.colors[x as usize] = color;
+            }
+            return;
+        }
+        let (p2, t2, n2) = (
+            paths.p2.to_lanes(),
+            paths.t2.to_lanes(),
+            paths.n2.to_lanes(),
+        );
+        for i in 0..group.len {
+            out.write(group.x[i], colors[i], || {
+                if !paths.ok[i] {
+                    return COVERED;
+                }
+                MethodAov {
+                    p2: p2[i],
+                    t2: t2[i],
+                    n2: n2[i],
+                    n2_source: Some(if paths.n2_from_back_face[i] {
+                        ExitNormalSource::BackFace
+                    } else {
+                        ExitNormalSource::SilhouetteFallback
+                    }),
+                    tir: paths.tir[i],
+                    ..COVERED
+                }
+            });
+        }
     }
 }
 
