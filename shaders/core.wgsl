@@ -1,5 +1,6 @@
 // refract-core's twin in WGSL. Every function mirrors the Rust function of the same name in
-// crates/refract-core (same formulas, same branches); tests/gpu_conformance.rs holds them to it.
+// crates/refract-core (same formulas, same branches); crates/refract-gpu/tests/conformance.rs
+// holds them to it.
 // Constants (FACE_FORWARD_EPSILON, NORMAL_INCIDENCE_ANGLE, UNIT_TOLERANCE, policy and mode
 // codes) come from the header that crates/refract-gpu generates from Rust.
 

@@ -13,12 +13,11 @@ struct FrameUniforms {
     aspect: f32,
     ior: f32,
     tir_policy: u32,
-    distance_mode: u32,
-    method_kind: u32,
     environment_kind: u32,
     environment_width: u32,
     environment_height: u32,
     environment_intensity: f32,
+    _padding: vec2<u32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;

@@ -2,25 +2,14 @@
 //! built-in sphere and the real meshes (Wyman 2005a Table 1 models).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use refract_core::exit::TirPolicy;
-use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{
-    CpuRenderer, FrameBuffers, FrameOutputs, MethodFrame, MethodParams, PreparedRefractor,
-    render_buffers_into, render_method, shade_into,
-};
-use refract_geometry::{Mesh, MeshBvh, builtin, normal_distances};
-use refract_trace::Environment;
+use refract_cpu::{CpuRenderer, FrameBuffers, kernel_params, render_buffers_into, shade_into};
+use refract_geometry::{Mesh, builtin};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
 const RES: u32 = 1024;
 
 fn cpu_methods(c: &mut Criterion) {
-    let camera = Camera::new(CameraDesc {
-        width: RES,
-        height: RES,
-        ..CameraDesc::default()
-    })
-    .expect("camera");
-    let environment = Environment::Procedural;
+    let camera = refract_benches::bench_camera(RES);
     let mut meshes: Vec<(&str, Mesh)> = vec![("sphere", builtin::mesh("sphere").expect("builtin"))];
     for (label, file) in [("cow", "cow.obj"), ("teapot", "teapot.obj")]
         .into_iter()
@@ -30,50 +19,55 @@ fn cpu_methods(c: &mut Criterion) {
             meshes.push((label, mesh));
         }
     }
-    for (label, mesh) in &meshes {
-        let d_n = normal_distances(mesh, &MeshBvh::build(mesh)).values;
-        let refractor = PreparedRefractor { mesh, d_n: &d_n };
+    for (label, mesh) in meshes {
+        let scene = refract_benches::bench_scene(label, mesh, 1.5);
         let mut group = c.benchmark_group(format!("cpu/{label}"));
         group.sample_size(10);
         group.throughput(Throughput::Elements(u64::from(RES * RES)));
-        for method in Method::ALL {
-            let params = MethodParams {
-                method,
-                ior: 1.5,
-                tir_policy: TirPolicy::ClampToCritical,
-            };
+        let mut renderer = CpuRenderer::new();
+        renderer.prepare(&scene).expect("prepare");
+        let mut frame = Frame::default();
+        for id in MethodId::approximations() {
+            let params = MethodParams::defaults(id);
             // Correctness before timing: the refractor covers pixels and colours are finite.
-            let frame = render_method(&refractor, &environment, &camera, &params).expect("frame");
-            assert!(
-                frame.aov.iter().any(|a| a.covered) && frame.color.iter().all(|c| c.is_finite())
-            );
-            let mut renderer = CpuRenderer::default();
-            group.bench_function(format!("{method}/frame"), |b| {
-                b.iter(|| {
-                    renderer
-                        .render(&refractor, &environment, &camera, &params)
-                        .expect("frame");
-                })
-            });
-            let mut colour_only = CpuRenderer::new(FrameOutputs::Color);
-            group.bench_function(format!("{method}/frame-colour-only"), |b| {
-                b.iter(|| {
-                    colour_only
-                        .render(&refractor, &environment, &camera, &params)
-                        .expect("frame");
-                })
-            });
+            renderer
+                .render(&camera, &params, FrameOutputs::ColorAndAovs, &mut frame)
+                .expect("frame");
+            let covered = frame.flag(Aov::Covered).expect("covered");
+            assert!(covered.iter().any(|c| *c) && frame.color.iter().all(|c| c.is_finite()));
+            for (name, outputs) in [
+                ("frame", FrameOutputs::ColorAndAovs),
+                ("frame-colour-only", FrameOutputs::Color),
+            ] {
+                group.bench_function(format!("{id}/{name}"), |b| {
+                    b.iter(|| {
+                        renderer
+                            .render(&camera, &params, outputs, &mut frame)
+                            .expect("frame")
+                    })
+                });
+            }
             // The two-step path, stage by stage (memory reused as in a frame).
+            let (back, distance, tir) = match params {
+                MethodParams::TwoInterface(p) => (Some(p.back), p.distance, p.tir),
+                _ => (None, Default::default(), Default::default()),
+            };
+            let kernel = kernel_params(scene.refractor.ior(), distance, tir).expect("kernel");
             let mut buffers = FrameBuffers::default();
-            group.bench_function(format!("{method}/buffers"), |b| {
-                b.iter(|| {
-                    render_buffers_into(&refractor, &camera, method, &mut buffers).expect("buffers")
-                })
+            group.bench_function(format!("{id}/buffers"), |b| {
+                b.iter(|| render_buffers_into(&scene.refractor, &camera, back, &mut buffers))
             });
-            let mut frame = MethodFrame::default();
-            group.bench_function(format!("{method}/kernel"), |b| {
+            group.bench_function(format!("{id}/kernel"), |b| {
                 b.iter(|| {
-                    shade_into(&buffers, &environment, &camera, &params, &mut frame).expect("shade")
+                    shade_into(
+                        &buffers,
+                        &scene.environment,
+                        &camera,
+                        &kernel,
+                        id,
+                        FrameOutputs::Color,
+                        &mut frame,
+                    )
                 })
             });
         }

@@ -1,59 +1,43 @@
 //! The GPU backend per method at 512² and 1024²: every per-frame pass (back faces, front faces,
-//! kernel), submitted and waited for. Skips with a notice when no adapter exists.
+//! kernel), submitted and waited for, colour read back. Skips with a notice when no adapter
+//! exists.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use refract_core::exit::TirPolicy;
-use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::MethodParams;
-use refract_geometry::{Mesh, MeshBvh, builtin, normal_distances};
-use refract_gpu::{GpuContext, GpuFrame, GpuRenderer, GpuScene};
-use refract_trace::Environment;
+use refract_geometry::{Mesh, builtin};
+use refract_gpu::GpuRenderer;
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
 fn gpu_methods(c: &mut Criterion) {
-    let Ok(context) = GpuContext::new() else {
+    let Ok(mut renderer) = GpuRenderer::new() else {
         eprintln!("skipped: no GPU adapter");
         return;
     };
-    let renderer = GpuRenderer::new(&context).expect("pipelines");
-    let environment = Environment::Procedural;
     let mut meshes: Vec<(&str, Mesh)> = vec![("sphere", builtin::mesh("sphere").expect("builtin"))];
     if let Some(cow) = refract_benches::load_shared_mesh("cow.obj") {
         meshes.push(("cow", cow));
     }
-    for (label, mesh) in &meshes {
-        let d_n = normal_distances(mesh, &MeshBvh::build(mesh)).values;
-        let scene = GpuScene::new(&context, mesh, &d_n, &environment);
+    let mut frame = Frame::default();
+    for (label, mesh) in meshes {
+        let scene = refract_benches::bench_scene(label, mesh, 1.5);
+        renderer.prepare(&scene).expect("prepare");
         for res in [512u32, 1024] {
-            let camera = Camera::new(CameraDesc {
-                width: res,
-                height: res,
-                ..CameraDesc::default()
-            })
-            .expect("camera");
+            let camera = refract_benches::bench_camera(res);
             let mut group = c.benchmark_group(format!("gpu/{label}/{res}"));
             group.sample_size(10);
             group.throughput(Throughput::Elements(u64::from(res * res)));
-            for method in Method::ALL {
-                let params = MethodParams {
-                    method,
-                    ior: 1.5,
-                    tir_policy: TirPolicy::ClampToCritical,
-                };
-                let frame =
-                    GpuFrame::new(&context, &renderer, &scene, &camera, &params).expect("frame");
+            for id in MethodId::approximations() {
+                let params = MethodParams::defaults(id);
                 // Correctness before timing: the refractor is covered and colours are finite.
-                frame
-                    .execute(&context, &renderer, &scene, true)
-                    .expect("execute");
-                let out = frame.read(&context).expect("read");
-                assert!(
-                    out.aov.iter().any(|a| a.covered) && out.color.iter().all(|c| c.is_finite())
-                );
-                group.bench_function(method.id(), |b| {
+                renderer
+                    .render(&camera, &params, FrameOutputs::ColorAndAovs, &mut frame)
+                    .expect("frame");
+                let covered = frame.flag(Aov::Covered).expect("covered");
+                assert!(covered.iter().any(|c| *c) && frame.color.iter().all(|c| c.is_finite()));
+                group.bench_function(id.name(), |b| {
                     b.iter(|| {
-                        frame
-                            .execute(&context, &renderer, &scene, false)
-                            .expect("execute")
+                        renderer
+                            .render(&camera, &params, FrameOutputs::Color, &mut frame)
+                            .expect("frame")
                     })
                 });
             }

@@ -23,3 +23,23 @@ pub fn load_shared_mesh(file: &str) -> Option<Mesh> {
         }
     }
 }
+
+/// The scene of a bench mesh at `ior` in the procedural environment, seen by the default camera.
+pub fn bench_scene(label: &str, mesh: Mesh, ior: f32) -> std::sync::Arc<refract_scene::Scene> {
+    let refractor = refract_scene::Refractor::new(mesh, ior).expect("valid ior");
+    std::sync::Arc::new(refract_scene::Scene::new(
+        label,
+        refractor,
+        refract_scene::Environment::Procedural,
+    ))
+}
+
+/// The camera of the benches: the default camera at `res`².
+pub fn bench_camera(res: u32) -> refract_core::Camera {
+    refract_core::Camera::new(refract_core::CameraDesc {
+        width: res,
+        height: res,
+        ..refract_core::CameraDesc::default()
+    })
+    .expect("camera")
+}

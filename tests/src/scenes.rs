@@ -1,51 +1,35 @@
-//! Small scenes shared by the cross-crate tests: a refractor with its BVH and d_N, ready for
-//! the CPU backend and the reference tracer.
+//! Small scenes and one-call renders shared by the cross-crate tests, all through
+//! refract-scene's [`Scene`] and [`Renderer`] (no test assembles its own scene).
+
+use std::sync::Arc;
 
 use refract_core::{Camera, CameraDesc};
-use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
-use refract_trace::{Environment, Refractor, Scene};
+use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
+use refract_scene::{
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
+};
 
-/// A refractor with everything the backends and the reference need.
-pub struct TestScene {
-    /// The reference's scene (mesh, BVH, IOR, environment).
-    pub scene: Scene,
-    /// Per-vertex d_N.
-    pub d_n: Vec<f32>,
+/// The scene of `mesh` at `ior` in `environment`, seen by the default camera.
+pub fn with_mesh(mesh: Mesh, ior: f32, environment: Environment) -> Arc<Scene> {
+    let refractor = Refractor::new(mesh, ior).expect("valid ior");
+    Arc::new(Scene::new("test", refractor, environment))
 }
 
-impl TestScene {
-    /// Builds the scene of `mesh` at `ior` in `environment`.
-    pub fn new(mesh: Mesh, ior: f32, environment: Environment) -> Self {
-        let bvh = MeshBvh::build(&mesh);
-        let d_n = normal_distances(&mesh, &bvh).values;
-        let scene = Scene::new(Refractor::new(mesh, ior).expect("valid ior"), environment);
-        Self { scene, d_n }
-    }
+/// A built-in shape in the procedural environment.
+pub fn builtin(name: &str, ior: f32) -> Arc<Scene> {
+    with_mesh(
+        builtin::mesh(name).expect("builtin"),
+        ior,
+        Environment::Procedural,
+    )
+}
 
-    /// A built-in shape.
-    pub fn builtin(name: &str, ior: f32) -> Self {
-        Self::new(
-            builtin::mesh(name).expect("builtin"),
-            ior,
-            Environment::Procedural,
-        )
-    }
-
-    /// A mesh of `../shared/data/meshes`, normalised.
-    pub fn shared(data: &std::path::Path, file: &str, ior: f32) -> Self {
-        let mesh = load_mesh(&data.join("meshes").join(file), &LoadOptions::default())
-            .expect(file)
-            .mesh;
-        Self::new(mesh, ior, Environment::Procedural)
-    }
-
-    /// The CPU backend's view of the refractor.
-    pub fn prepared(&self) -> refract_cpu::PreparedRefractor<'_> {
-        refract_cpu::PreparedRefractor {
-            mesh: &self.scene.refractor.mesh,
-            d_n: &self.d_n,
-        }
-    }
+/// A mesh of `../shared/data/meshes`, normalised, in the procedural environment.
+pub fn shared(data: &std::path::Path, file: &str, ior: f32) -> Arc<Scene> {
+    let mesh = load_mesh(&data.join("meshes").join(file), &LoadOptions::default())
+        .expect(file)
+        .mesh;
+    with_mesh(mesh, ior, Environment::Procedural)
 }
 
 /// The default camera (eye at z = 3, 40°) at `res`².
@@ -56,4 +40,24 @@ pub fn camera(res: u32) -> Camera {
         ..CameraDesc::default()
     })
     .expect("camera")
+}
+
+/// The default parameters of `id`.
+pub fn method(id: MethodId) -> MethodParams {
+    MethodParams::defaults(id)
+}
+
+/// Prepares `scene` and renders one frame with colour and AOVs.
+pub fn render(
+    renderer: &mut dyn Renderer,
+    scene: &Arc<Scene>,
+    camera: &Camera,
+    method: &MethodParams,
+) -> Frame {
+    renderer.prepare(scene).expect("prepare");
+    let mut frame = Frame::default();
+    renderer
+        .render(camera, method, FrameOutputs::ColorAndAovs, &mut frame)
+        .expect("render");
+    frame
 }

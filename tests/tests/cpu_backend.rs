@@ -1,22 +1,32 @@
 //! The CPU backend: its rasterised buffers against the reference tracer's hits, and its methods
 //! against the reference (Wyman 2005a).
 
-use glam::Vec3;
-use refract_core::exit::TirPolicy;
-use refract_core::vector::angle_between;
-use refract_core::{BackSurface, Camera, Method, Ray};
-use refract_cpu::{MethodParams, front_faces, render_buffers, render_method};
-use refract_geometry::{Hit, shapes};
-use refract_tests::scenes::{TestScene, camera};
-use refract_tests::shared_data;
-use refract_trace::{Environment, LatLongMap, TraceSettings, render};
+use std::sync::Arc;
 
-fn params(method: Method, ior: f32) -> MethodParams {
-    MethodParams {
-        method,
-        ior,
-        tir_policy: TirPolicy::ClampToCritical,
-    }
+use glam::Vec3;
+use refract_core::vector::angle_between;
+use refract_core::{BackSurface, Camera, Ray};
+use refract_cpu::{CpuRenderer, front_faces, kernel_params, render_buffers, shade_into};
+use refract_geometry::{Hit, shapes};
+use refract_scene::metrics::{MetricsRecord, evaluate};
+use refract_scene::{
+    Aov, Environment, Frame, FrameOutputs, LatLongMap, MethodId, MethodParams, Renderer, Scene,
+    TwoInterfaceParams,
+};
+use refract_tests::scenes::{builtin, camera, method, render, shared, with_mesh};
+use refract_tests::shared_data;
+use refract_trace::ReferenceRenderer;
+
+/// One CPU frame with colour and AOVs.
+fn cpu_frame(scene: &Arc<Scene>, cam: &Camera, params: &MethodParams) -> Frame {
+    render(&mut CpuRenderer::new(), scene, cam, params)
+}
+
+fn second_surface() -> MethodParams {
+    MethodParams::TwoInterface(TwoInterfaceParams {
+        back: BackSurface::Second,
+        ..TwoInterfaceParams::default()
+    })
 }
 
 /// Compares a rasterised buffer with ray-cast hits at every pixel centre: coverage agrees on
@@ -73,18 +83,16 @@ fn check_buffer_against_rays(
     );
 }
 
-fn check_rasteriser(label: &str, scene: &TestScene) {
+fn check_rasteriser(label: &str, scene: &Scene) {
     let cam = camera(160);
-    let prepared = scene.prepared();
-    let bvh = &scene.scene.refractor.bvh;
-    let front = front_faces(&prepared, &cam);
+    let refractor = &scene.refractor;
+    let bvh = refractor.bvh();
+    let front = front_faces(refractor, &cam);
     check_buffer_against_rays(&format!("{label} front"), &front, &cam, |r| {
         bvh.closest_hit(r, 0.0, f32::INFINITY)
     });
     let mut hits = Vec::new();
-    let method = Method::ALL[1];
-    let furthest = render_buffers(&prepared, &cam, method)
-        .expect("buffers")
+    let furthest = render_buffers(refractor, &cam, Some(BackSurface::Furthest))
         .back
         .expect("back");
     check_buffer_against_rays(&format!("{label} furthest"), furthest.buffer(), &cam, |r| {
@@ -94,14 +102,9 @@ fn check_rasteriser(label: &str, scene: &TestScene) {
             .find(|h| h.geometric_normal.dot(r.dir) > 0.0)
             .copied()
     });
-    let second = render_buffers(
-        &prepared,
-        &cam,
-        method.with_back_surface(BackSurface::Second),
-    )
-    .expect("buffers")
-    .back
-    .expect("back");
+    let second = render_buffers(refractor, &cam, Some(BackSurface::Second))
+        .back
+        .expect("back");
     check_buffer_against_rays(&format!("{label} second"), second.buffer(), &cam, |r| {
         bvh.all_hits(r, 0.0, f32::INFINITY, &mut hits);
         hits.iter()
@@ -112,10 +115,10 @@ fn check_rasteriser(label: &str, scene: &TestScene) {
 
 #[test]
 fn rasterised_buffers_match_ray_cast_hits() {
-    check_rasteriser("sphere", &TestScene::builtin("sphere", 1.5));
-    check_rasteriser("torus", &TestScene::builtin("torus", 1.33));
+    check_rasteriser("sphere", &builtin("sphere", 1.5));
+    check_rasteriser("torus", &builtin("torus", 1.33));
     if let Some(data) = shared_data() {
-        check_rasteriser("cow", &TestScene::shared(&data, "cow.obj", 1.2));
+        check_rasteriser("cow", &shared(&data, "cow.obj", 1.2));
     }
 }
 
@@ -136,30 +139,26 @@ fn index_one_sees_straight_through() {
         },
         intensity: 1.0,
     };
-    let scene = TestScene::new(shapes::torus(0.7, 0.3, 48, 24).expect("torus"), 1.0, smooth);
+    let scene = with_mesh(shapes::torus(0.7, 0.3, 48, 24).expect("torus"), 1.0, smooth);
     let cam = camera(96);
-    for method in Method::ALL {
-        let frame = render_method(
-            &scene.prepared(),
-            &scene.scene.environment,
-            &cam,
-            &params(method, 1.0),
-        )
-        .expect("frame");
+    for id in MethodId::approximations() {
+        let frame = cpu_frame(&scene, &cam, &method(id));
+        let covered_layer = frame.flag(Aov::Covered).expect("covered");
+        let t2 = frame.vec3(Aov::T2).expect("T2");
         let (mut covered, mut same_color) = (0, 0);
-        for (i, aov) in frame.aov.iter().enumerate() {
+        for i in 0..frame.pixel_count() {
             let view = cam
                 .pixel_ray(Camera::pixel_center(i as u32 % 96, i as u32 / 96))
                 .dir;
-            if aov.covered {
+            if covered_layer[i] {
                 covered += 1;
                 assert!(
-                    angle_between(aov.t2, view) < 2e-4,
-                    "{method}: {} vs {view}",
-                    aov.t2
+                    angle_between(t2[i], view) < 2e-4,
+                    "{id}: {} vs {view}",
+                    t2[i]
                 );
                 same_color += usize::from(
-                    (frame.color[i] - scene.scene.environment.radiance(view))
+                    (frame.color[i] - scene.environment.radiance(view))
                         .abs()
                         .max_element()
                         < 1e-3,
@@ -168,7 +167,7 @@ fn index_one_sees_straight_through() {
         }
         // P1 is interpolated, so V = normalize(P1 − eye) differs from the pixel ray by rounding
         // (< 2e-4 rad, far below a texel of this map).
-        assert_eq!(same_color, covered, "{method}");
+        assert_eq!(same_color, covered, "{id}");
         assert!(covered > 1000);
     }
 }
@@ -176,27 +175,26 @@ fn index_one_sees_straight_through() {
 /// A slab facing the camera: front and back faces are parallel, so `wyman` gives T2 = V.
 #[test]
 fn slab_returns_the_view_direction() {
-    let scene = TestScene::new(
+    let scene = with_mesh(
         shapes::cuboid(Vec3::new(1.5, 1.5, 0.2), 1).expect("slab"),
         1.5,
         Environment::Procedural,
     );
     let cam = camera(96);
-    let frame = render_method(
-        &scene.prepared(),
-        &scene.scene.environment,
-        &cam,
-        &params(Method::ALL[1], 1.5),
-    )
-    .expect("frame");
+    let frame = cpu_frame(&scene, &cam, &method(MethodId::Wyman));
+    let (covered, t2) = (
+        frame.flag(Aov::Covered).expect("covered"),
+        frame.vec3(Aov::T2).expect("T2"),
+    );
     let mut checked = 0;
-    for (i, aov) in frame.aov.iter().enumerate() {
+    for i in 0..frame.pixel_count() {
         let (x, y) = (i as u32 % 96, i as u32 / 96);
-        if aov.covered && (20..76).contains(&x) && (20..76).contains(&y) {
+        if covered[i] && (20..76).contains(&x) && (20..76).contains(&y) {
             let view = cam.pixel_ray(Camera::pixel_center(x, y)).dir;
             assert!(
-                angle_between(aov.t2, view) < 1e-4,
-                "pixel ({x}, {y}): {aov:?}"
+                angle_between(t2[i], view) < 1e-4,
+                "pixel ({x}, {y}): {}",
+                t2[i]
             );
             checked += 1;
         }
@@ -204,117 +202,107 @@ fn slab_returns_the_view_direction() {
     assert_eq!(checked, 56 * 56);
 }
 
-struct Errors {
-    t2_deg: f64,
-    p2_rel: f64,
-    pixels: usize,
-}
-
-/// Mean T2 angle error and mean |P~2 − P2| / diameter over the pixels both see, where the
-/// reference has no TIR on its path.
-fn errors_against_reference(scene: &TestScene, method: Method, res: u32) -> Errors {
+/// The metrics of `id` on the CPU against the reference (refract-scene's metrics, as the CLI
+/// reports them).
+fn errors_against_reference(scene: &Arc<Scene>, id: MethodId, res: u32) -> MetricsRecord {
     let cam = camera(res);
-    let ior = scene.scene.refractor.ior();
-    let reference = render(&scene.scene, &cam, &TraceSettings::default());
-    let frame = render_method(
-        &scene.prepared(),
-        &scene.scene.environment,
+    let reference = render(
+        &mut ReferenceRenderer::new(),
+        scene,
         &cam,
-        &params(method, ior),
-    )
-    .expect("frame");
-    let diameter = 2.0 * f64::from(scene.scene.refractor.mesh.bounding_sphere().radius);
-    let (mut t2, mut p2, mut n, mut n_p2) = (0.0, 0.0, 0, 0);
-    for (ours, truth) in frame.aov.iter().zip(&reference.aov) {
-        if !(ours.covered && truth.covers_refractor()) || truth.tir || truth.t2.is_nan() {
-            continue;
-        }
-        t2 += f64::from(angle_between(ours.t2, truth.t2).to_degrees());
-        n += 1;
-        if !ours.p2.is_nan() && !truth.p2.is_nan() {
-            p2 += f64::from((ours.p2 - truth.p2).length()) / diameter;
-            n_p2 += 1;
-        }
-    }
-    Errors {
-        t2_deg: t2 / n as f64,
-        p2_rel: if n_p2 > 0 { p2 / n_p2 as f64 } else { f64::NAN },
-        pixels: n,
-    }
+        &method(MethodId::Reference),
+    );
+    let frame = cpu_frame(scene, &cam, &method(id));
+    evaluate(&reference, &frame, scene.refractor.diameter()).0
 }
 
-fn compare_methods(label: &str, scene: &TestScene, res: u32) -> [Errors; 3] {
-    let single = errors_against_reference(scene, Method::ALL[0], res);
-    let wyman = errors_against_reference(scene, Method::ALL[1], res);
-    let wyman_dv = errors_against_reference(scene, Method::ALL[2], res);
-    let wyman_dn = errors_against_reference(scene, Method::ALL[3], res);
+/// Mean T2 error (degrees) and mean |P~2 − P2| / diameter, without TIR on the reference path.
+fn t2_p2(record: &MetricsRecord) -> (f64, f64) {
+    (
+        record.t2_angle_deg_mean_non_tir.expect("T2 error"),
+        record.p2_error_rel_mean_non_tir.unwrap_or(f64::NAN),
+    )
+}
+
+/// `[single, wyman, wyman-dv, wyman-dn]` as `(T2 error, P2 error)`.
+fn compare_methods(label: &str, scene: &Arc<Scene>, res: u32) -> [(f64, f64); 4] {
+    let [single, wyman, wyman_dv, wyman_dn] = [
+        MethodId::Single,
+        MethodId::Wyman,
+        MethodId::WymanDv,
+        MethodId::WymanDn,
+    ]
+    .map(|id| t2_p2(&errors_against_reference(scene, id, res)));
     println!(
-        "{label} {res}², {} non-TIR px: mean T2 error single {:.2}° wyman {:.2}° wyman-dv {:.2}° wyman-dn {:.2}°; \
+        "{label} {res}², non-TIR px: mean T2 error single {:.2}° wyman {:.2}° wyman-dv {:.2}° wyman-dn {:.2}°; \
          mean |P~2−P2|/diam wyman {:.4} wyman-dv {:.4} wyman-dn {:.4}",
-        wyman.pixels,
-        single.t2_deg,
-        wyman.t2_deg,
-        wyman_dv.t2_deg,
-        wyman_dn.t2_deg,
-        wyman.p2_rel,
-        wyman_dv.p2_rel,
-        wyman_dn.p2_rel
+        single.0, wyman.0, wyman_dv.0, wyman_dn.0, wyman.1, wyman_dv.1, wyman_dn.1
     );
-    [single, wyman, wyman_dv]
+    [single, wyman, wyman_dv, wyman_dn]
 }
 
 /// The papers' claim on the sphere (IOR 1.5): two interfaces beat one, and interpolating d~
-/// beats d_V alone on the exit point. Bounds: the measured values (printed) plus ~25 %.
+/// beats either distance alone on the exit point (Wyman 2005a §3.1). Bounds: the measured values
+/// (printed) plus ~25 %.
 #[test]
 fn wyman_beats_single_and_d_v_on_the_sphere() {
-    let scene = TestScene::builtin("sphere", 1.5);
-    let [single, wyman, wyman_dv] = compare_methods("sphere", &scene, 128);
-    assert!(wyman.t2_deg < single.t2_deg);
-    assert!(wyman.p2_rel < wyman_dv.p2_rel);
-    assert!(
-        wyman.t2_deg < 5.0 && wyman.p2_rel < 0.1,
-        "{} {}",
-        wyman.t2_deg,
-        wyman.p2_rel
-    );
+    let scene = builtin("sphere", 1.5);
+    let [single, wyman, wyman_dv, wyman_dn] = compare_methods("sphere", &scene, 128);
+    assert!(wyman.0 < single.0);
+    assert!(wyman.1 < wyman_dv.1);
+    assert!(wyman.1 < wyman_dn.1, "d~ beats d_N alone on P2");
+    assert!(wyman.0 < wyman_dn.0, "d~ beats d_N alone on T2");
+    assert!(wyman.0 < 5.0 && wyman.1 < 0.1, "{} {}", wyman.0, wyman.1);
 }
 
 /// The same on the cow (IOR 1.2, as in Wyman 2005a's results).
 #[test]
 fn wyman_beats_single_and_d_v_on_the_cow() {
     let Some(data) = shared_data() else { return };
-    let scene = TestScene::shared(&data, "cow.obj", 1.2);
-    let [single, wyman, wyman_dv] = compare_methods("cow", &scene, 128);
-    assert!(wyman.t2_deg < single.t2_deg);
-    assert!(wyman.p2_rel < wyman_dv.p2_rel);
+    let scene = shared(&data, "cow.obj", 1.2);
+    let [single, wyman, wyman_dv, wyman_dn] = compare_methods("cow", &scene, 128);
+    assert!(wyman.0 < single.0);
+    assert!(wyman.1 < wyman_dv.1);
+    assert!(wyman.1 < wyman_dn.1, "d~ beats d_N alone on P2");
 }
 
-/// Bad parameters are errors, not panics.
+/// Bad parameters are errors, not panics: an index of refraction that is not finite and > 0
+/// (rejected by the scene, so no backend ever sees one), a `d_N` shorter than the mesh (rejected
+/// by the scene for every backend alike), the reference asked of the CPU backend, a frame before
+/// a scene, a zero resolution.
 #[test]
 fn bad_parameters_are_errors() {
-    let scene = TestScene::builtin("sphere", 1.5);
-    let cam = camera(16);
+    let mesh = || refract_geometry::builtin::mesh("builtin:sphere").expect("sphere");
     for ior in [0.0, -1.0, f32::NAN, f32::INFINITY] {
-        let result = render_method(
-            &scene.prepared(),
-            &scene.scene.environment,
-            &cam,
-            &params(Method::ALL[1], ior),
-        );
-        assert!(result.is_err(), "ior {ior}");
+        let err = refract_scene::Refractor::new(mesh(), ior).expect_err("bad ior");
+        assert!(err.to_string().contains("ior"), "{err}");
+        let mut scene = builtin("sphere", 1.5);
+        let refractor = &mut Arc::make_mut(&mut scene).refractor;
+        assert!(refractor.set_ior(ior).is_err());
+        assert_eq!(refractor.ior(), 1.5);
     }
-    let short_d_n = refract_cpu::PreparedRefractor {
-        mesh: &scene.scene.refractor.mesh,
-        d_n: &scene.d_n[1..],
-    };
+    let scene = builtin("sphere", 1.5);
+    let mut short = scene.refractor.normal_distances().clone();
+    short.values.pop();
+    let err =
+        refract_scene::Refractor::with_normal_distances(mesh(), short, 1.5).expect_err("short d_N");
+    assert!(err.to_string().contains("d_N"), "{err}");
+
+    let cam = camera(16);
+    let mut cpu = CpuRenderer::new();
+    let mut frame = Frame::default();
+    let colour = FrameOutputs::ColorAndAovs;
+    let err = cpu
+        .render(&cam, &method(MethodId::Wyman), colour, &mut frame)
+        .expect_err("not prepared");
+    assert!(err.to_string().contains("prepare"), "{err}");
+    cpu.prepare(&scene).expect("prepare");
+    let err = cpu
+        .render(&cam, &method(MethodId::Reference), colour, &mut frame)
+        .expect_err("unsupported");
     assert!(
-        render_method(
-            &short_d_n,
-            &scene.scene.environment,
-            &cam,
-            &params(Method::ALL[1], 1.5)
-        )
-        .is_err()
+        err.to_string().contains("reference") && err.to_string().contains("cpu"),
+        "{err}"
     );
     let zero = refract_core::Camera::new(refract_core::CameraDesc {
         width: 0,
@@ -323,27 +311,88 @@ fn bad_parameters_are_errors() {
     assert!(zero.is_err());
 }
 
+/// What each renderer says it supports is what the registry says, and an unsupported method is
+/// an error naming both, never a frame of something else.
+#[test]
+fn renderers_support_exactly_the_registry_rows() {
+    let scene = builtin("sphere", 1.5);
+    let cam = camera(8);
+    let mut renderers: Vec<Box<dyn Renderer>> = vec![
+        Box::new(CpuRenderer::new()),
+        Box::new(ReferenceRenderer::new()),
+    ];
+    for renderer in &mut renderers {
+        renderer.prepare(&scene).expect("prepare");
+        for row in &refract_scene::REGISTRY {
+            let listed = row.backends.contains(&renderer.backend());
+            assert_eq!(
+                renderer.supports(row.id),
+                listed,
+                "{} {}",
+                renderer.backend(),
+                row.name
+            );
+            let mut frame = Frame::default();
+            let result = renderer.render(
+                &cam,
+                &method(row.id),
+                FrameOutputs::ColorAndAovs,
+                &mut frame,
+            );
+            assert_eq!(
+                result.is_ok(),
+                listed,
+                "{} {}",
+                renderer.backend(),
+                row.name
+            );
+        }
+    }
+}
+
+/// A frame's layers are exactly the AOVs of the method's registry row (CPU and reference), and
+/// none in a colour-only frame.
+#[test]
+fn frames_have_the_registry_aovs() {
+    let scene = builtin("torus", 1.33);
+    let cam = camera(24);
+    let mut cpu = CpuRenderer::new();
+    let mut reference = ReferenceRenderer::new();
+    for row in &refract_scene::REGISTRY {
+        let renderer: &mut dyn Renderer = if row.id == MethodId::Reference {
+            &mut reference
+        } else {
+            &mut cpu
+        };
+        let frame = render(renderer, &scene, &cam, &method(row.id));
+        let mut expected = row.aovs.to_vec();
+        expected.sort();
+        assert_eq!(frame.aovs().collect::<Vec<_>>(), expected, "{}", row.name);
+    }
+    let mut frame = Frame::default();
+    cpu.render(
+        &cam,
+        &method(MethodId::Wyman),
+        FrameOutputs::Color,
+        &mut frame,
+    )
+    .expect("colour");
+    assert_eq!(frame.aovs().count(), 0);
+}
+
 /// The frame does not depend on the thread count.
 #[test]
 fn cpu_frames_are_bit_identical_for_any_thread_count() {
-    let scene = TestScene::builtin("torus", 1.33);
+    let scene = builtin("torus", 1.33);
     let cam = camera(80);
-    let run = || {
-        render_method(
-            &scene.prepared(),
-            &scene.scene.environment,
-            &cam,
-            &params(Method::ALL[1], 1.33),
-        )
-        .expect("frame")
-    };
+    let run = || cpu_frame(&scene, &cam, &method(MethodId::Wyman));
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .expect("pool");
     let single = one.install(run);
     let parallel = run();
-    let bits = |f: &refract_cpu::MethodFrame| {
+    let bits = |f: &Frame| {
         f.color
             .iter()
             .flat_map(|c| c.to_array().map(f32::to_bits))
@@ -352,60 +401,80 @@ fn cpu_frames_are_bit_identical_for_any_thread_count() {
     assert_eq!(bits(&single), bits(&parallel));
 }
 
-/// The buffer-reusing renderer gives the same frames as the allocating path, across methods and
+/// The buffer-reusing renderer gives the same frames as a fresh one, across methods and
 /// resolutions (its buffers are cleared and resized between frames).
 #[test]
 fn reusing_renderer_matches_fresh_frames() {
-    let scene = TestScene::builtin("torus", 1.33);
-    let mut renderer = refract_cpu::CpuRenderer::default();
-    for (res, method) in [
-        (64, Method::ALL[1]),
-        (48, Method::ALL[0]),
-        (64, Method::ALL[3]),
-        (80, Method::ALL[1]),
+    let scene = builtin("torus", 1.33);
+    let mut renderer = CpuRenderer::new();
+    renderer.prepare(&scene).expect("prepare");
+    let mut reused = Frame::default();
+    for (res, id) in [
+        (64, MethodId::Wyman),
+        (48, MethodId::Single),
+        (64, MethodId::WymanDn),
+        (80, MethodId::Wyman),
     ] {
         let cam = camera(res);
-        let params = params(method, 1.33);
-        let fresh = render_method(&scene.prepared(), &scene.scene.environment, &cam, &params)
-            .expect("fresh");
-        let reused = renderer
-            .render(&scene.prepared(), &scene.scene.environment, &cam, &params)
+        let fresh = cpu_frame(&scene, &cam, &method(id));
+        renderer
+            .render(&cam, &method(id), FrameOutputs::ColorAndAovs, &mut reused)
             .expect("reused");
         assert_eq!(
             format!("{fresh:?}"),
             format!("{reused:?}"),
-            "{method} at {res}²"
+            "{id} at {res}²"
         );
     }
 }
 
+/// The two-step path: buffers stored whole, then the kernel.
+fn two_step(scene: &Scene, cam: &Camera, params: &MethodParams) -> Frame {
+    let (back, distance, tir) = match params {
+        MethodParams::Single => (None, Default::default(), Default::default()),
+        MethodParams::TwoInterface(p) => (Some(p.back), p.distance, p.tir),
+        MethodParams::Reference(_) => unreachable!("not an image-space method"),
+    };
+    let buffers = render_buffers(&scene.refractor, cam, back);
+    let kernel = kernel_params(scene.refractor.ior(), distance, tir).expect("kernel");
+    let mut frame = Frame::default();
+    shade_into(
+        &buffers,
+        &scene.environment,
+        cam,
+        &kernel,
+        params.id(),
+        FrameOutputs::ColorAndAovs,
+        &mut frame,
+    );
+    frame
+}
+
 /// The renderer shades each band right after rasterising it (front faces never stored whole);
-/// the two-step path (`render_buffers`, then `shade`) stores both buffers first. Same frames,
-/// bit for bit, for every method and both back surfaces; and a colour-only frame has the same
-/// colours and no AOVs.
+/// the two-step path (`render_buffers`, then `shade_into`) stores both buffers first. Same
+/// frames, bit for bit, for every method and both back surfaces; and a colour-only frame has the
+/// same colours and no AOVs.
 #[test]
 fn fused_bands_match_the_two_step_path_and_colour_only_frames() {
-    let scene = TestScene::builtin("torus", 1.33);
+    let scene = builtin("torus", 1.33);
     let cam = camera(72);
-    let mut renderer = refract_cpu::CpuRenderer::default();
-    let mut colour_only = refract_cpu::CpuRenderer::new(refract_cpu::FrameOutputs::Color);
-    let methods = Method::ALL
-        .into_iter()
-        .chain([Method::ALL[1].with_back_surface(BackSurface::Second)]);
-    for method in methods {
-        let params = params(method, 1.33);
-        let prepared = scene.prepared();
-        let buffers = render_buffers(&prepared, &cam, method).expect("buffers");
-        let two_step =
-            refract_cpu::shade(&buffers, &scene.scene.environment, &cam, &params).expect("shade");
-        let fused = renderer
-            .render(&prepared, &scene.scene.environment, &cam, &params)
+    let mut renderer = CpuRenderer::new();
+    renderer.prepare(&scene).expect("prepare");
+    let methods = MethodId::approximations()
+        .map(method)
+        .chain([second_surface()]);
+    for params in methods {
+        let two_step = two_step(&scene, &cam, &params);
+        let mut fused = Frame::default();
+        renderer
+            .render(&cam, &params, FrameOutputs::ColorAndAovs, &mut fused)
             .expect("fused");
-        assert_eq!(format!("{two_step:?}"), format!("{fused:?}"), "{method}");
-        let colour = colour_only
-            .render(&prepared, &scene.scene.environment, &cam, &params)
+        assert_eq!(format!("{two_step:?}"), format!("{fused:?}"), "{params:?}");
+        let mut colour = Frame::default();
+        renderer
+            .render(&cam, &params, FrameOutputs::Color, &mut colour)
             .expect("colour only");
-        assert!(colour.aov.is_empty());
+        assert_eq!(colour.aovs().count(), 0);
         assert_eq!(
             format!("{:?}", colour.color),
             format!("{:?}", two_step.color)
@@ -416,10 +485,9 @@ fn fused_bands_match_the_two_step_path_and_colour_only_frames() {
 /// Eight texels resolved at once equal the scalar resolve bit for bit.
 #[test]
 fn eight_lane_texels_equal_scalar_texels() {
-    let scene = TestScene::builtin("torus", 1.33);
+    let scene = builtin("torus", 1.33);
     let cam = camera(96);
-    let prepared = scene.prepared();
-    let front = front_faces(&prepared, &cam);
+    let front = front_faces(&scene.refractor, &cam);
     let mut checked = 0;
     for y in 0..96u32 {
         let covered: Vec<u32> = (0..96)
@@ -442,8 +510,9 @@ fn eight_lane_texels_equal_scalar_texels() {
 /// agree between the fused renderer and the two-step path.
 #[test]
 fn odd_frame_sizes_render_consistently() {
-    let scene = TestScene::builtin("sphere", 1.5);
-    let mut renderer = refract_cpu::CpuRenderer::default();
+    let scene = builtin("sphere", 1.5);
+    let mut renderer = CpuRenderer::new();
+    renderer.prepare(&scene).expect("prepare");
     for (width, height) in [(1, 1), (3, 5), (17, 9), (9, 33), (40, 17)] {
         let cam = refract_core::Camera::new(refract_core::CameraDesc {
             width,
@@ -451,20 +520,17 @@ fn odd_frame_sizes_render_consistently() {
             ..Default::default()
         })
         .expect("camera");
-        for method in [Method::ALL[0], Method::ALL[1]] {
-            let params = params(method, 1.5);
-            let prepared = scene.prepared();
-            let buffers = render_buffers(&prepared, &cam, method).expect("buffers");
-            let two_step = refract_cpu::shade(&buffers, &scene.scene.environment, &cam, &params)
-                .expect("shade");
-            let fused = renderer
-                .render(&prepared, &scene.scene.environment, &cam, &params)
+        for id in [MethodId::Single, MethodId::Wyman] {
+            let two_step = two_step(&scene, &cam, &method(id));
+            let mut fused = Frame::default();
+            renderer
+                .render(&cam, &method(id), FrameOutputs::ColorAndAovs, &mut fused)
                 .expect("fused");
             assert_eq!(fused.color.len(), (width * height) as usize);
             assert_eq!(
                 format!("{two_step:?}"),
                 format!("{fused:?}"),
-                "{method} {width}×{height}"
+                "{id} {width}×{height}"
             );
         }
     }

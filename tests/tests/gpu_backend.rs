@@ -4,14 +4,19 @@
 //! and by transcendental-function ulps, which matter where the result is discontinuous:
 //! silhouettes, TIR boundaries, texel edges of the back-face lookup.
 
+use std::sync::Arc;
+
+use refract_core::BackSurface;
 use refract_core::exit::TirPolicy;
 use refract_core::vector::angle_between;
-use refract_core::{BackSurface, Method};
-use refract_cpu::{MethodFrame, MethodParams, render_method};
-use refract_gpu::{GpuContext, GpuRenderer, GpuScene};
-use refract_tests::scenes::{TestScene, camera};
+use refract_cpu::CpuRenderer;
+use refract_gpu::GpuRenderer;
+use refract_scene::tonemap::to_srgb8;
+use refract_scene::{
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TwoInterfaceParams,
+};
+use refract_tests::scenes::{builtin, camera, method, render, shared};
 use refract_tests::shared_data;
-use refract_trace::tonemap::to_srgb8;
 
 struct Agreement {
     coverage: f64,
@@ -19,18 +24,21 @@ struct Agreement {
     color_differs: f64,
 }
 
-fn agreement(cpu: &MethodFrame, gpu: &MethodFrame) -> Agreement {
+fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
     let (mut union, mut same_coverage, mut both, mut t2_differs, mut color_differs) =
         (0, 0, 0, 0, 0);
-    for i in 0..cpu.aov.len() {
-        let (c, g) = (&cpu.aov[i], &gpu.aov[i]);
-        if c.covered || g.covered {
+    let covered = |f: &Frame| f.flag(Aov::Covered).expect("covered").to_vec();
+    let t2 = |f: &Frame| f.vec3(Aov::T2).expect("T2").to_vec();
+    let (cpu_covered, gpu_covered, cpu_t2, gpu_t2) = (covered(cpu), covered(gpu), t2(cpu), t2(gpu));
+    for i in 0..cpu.pixel_count() {
+        let (c, g) = (cpu_covered[i], gpu_covered[i]);
+        if c || g {
             union += 1;
-            same_coverage += usize::from(c.covered == g.covered);
+            same_coverage += usize::from(c == g);
         }
-        if c.covered && g.covered {
+        if c && g {
             both += 1;
-            let angle = angle_between(c.t2, g.t2);
+            let angle = angle_between(cpu_t2[i], gpu_t2[i]);
             t2_differs += usize::from(angle.is_nan() || angle > 1e-3);
             let (a, b) = (to_srgb8(cpu.color[i]), to_srgb8(gpu.color[i]));
             color_differs += usize::from(a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1));
@@ -47,54 +55,45 @@ fn agreement(cpu: &MethodFrame, gpu: &MethodFrame) -> Agreement {
 /// cow's refractor pixels, colours on at most 0.7 %), with margin: coverage agrees on ≥ 99.5 %
 /// of the refractor pixels; T2 differs by more than 1e-3 rad on at most 2 % and colours by more
 /// than 1/255 (after the tonemap) on at most 2 % of them.
-fn check(label: &str, scene: &TestScene, context: &GpuContext, renderer: &GpuRenderer) {
+fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
     let cam = camera(256);
-    let gpu_scene = GpuScene::new(
-        context,
-        &scene.scene.refractor.mesh,
-        &scene.d_n,
-        &scene.scene.environment,
-    );
-    let ior = scene.scene.refractor.ior();
-    let mut methods = Method::ALL.to_vec();
-    methods.push(Method::ALL[1].with_back_surface(BackSurface::Second));
-    for method in methods {
+    let mut cpu = CpuRenderer::new();
+    cpu.prepare(scene).expect("prepare");
+    gpu.prepare(scene).expect("prepare");
+    let mut methods: Vec<MethodParams> = MethodId::approximations().map(method).collect();
+    methods.push(MethodParams::TwoInterface(TwoInterfaceParams {
+        back: BackSurface::Second,
+        ..TwoInterfaceParams::default()
+    }));
+    let (mut cpu_frame, mut gpu_frame) = (Frame::default(), Frame::default());
+    for params in methods {
         for tir_policy in [TirPolicy::ClampToCritical, TirPolicy::Black] {
-            let params = MethodParams {
-                method,
-                ior,
-                tir_policy,
-            };
-            let cpu = render_method(&scene.prepared(), &scene.scene.environment, &cam, &params)
+            let params = params.with_tir_policy(tir_policy);
+            cpu.render(&cam, &params, FrameOutputs::ColorAndAovs, &mut cpu_frame)
                 .expect("cpu");
-            let (gpu, timing) =
-                refract_gpu::render_method(context, renderer, &gpu_scene, &cam, &params)
-                    .expect("gpu");
-            let a = agreement(&cpu, &gpu);
-            let back = match method {
-                Method::TwoInterface { back, .. } => Some(back),
-                Method::Single => None,
-            };
+            let timing = gpu
+                .render(&cam, &params, FrameOutputs::ColorAndAovs, &mut gpu_frame)
+                .expect("gpu");
+            assert_eq!(
+                gpu_frame.aovs().collect::<Vec<_>>(),
+                cpu_frame.aovs().collect::<Vec<_>>(),
+                "the same layers"
+            );
+            let a = agreement(&cpu_frame, &gpu_frame);
+            let id = params.id();
             println!(
-                "{label} {method} ({back:?}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} % ({:.2} ms GPU)",
+                "{label} {id} ({}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} % ({:.2} ms GPU)",
+                params.describe(),
                 a.coverage,
                 100.0 * a.t2_differs,
                 100.0 * a.color_differs,
                 timing.ms
             );
-            assert!(
-                a.coverage >= 0.995,
-                "{label} {method}: coverage {}",
-                a.coverage
-            );
-            assert!(
-                a.t2_differs <= 0.02,
-                "{label} {method}: T2 {}",
-                a.t2_differs
-            );
+            assert!(a.coverage >= 0.995, "{label} {id}: coverage {}", a.coverage);
+            assert!(a.t2_differs <= 0.02, "{label} {id}: T2 {}", a.t2_differs);
             assert!(
                 a.color_differs <= 0.02,
-                "{label} {method}: colour {}",
+                "{label} {id}: colour {}",
                 a.color_differs
             );
         }
@@ -103,104 +102,87 @@ fn check(label: &str, scene: &TestScene, context: &GpuContext, renderer: &GpuRen
 
 #[test]
 fn gpu_frames_agree_with_cpu_frames() {
-    let Some(context) = GpuContext::for_tests() else {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
         return;
     };
-    let renderer = GpuRenderer::new(&context).expect("pipelines");
+    let info = &gpu.context().info;
     println!(
         "adapter: {} ({:?}), timestamps: {}",
-        context.info.name, context.info.backend, context.timestamps
+        info.name,
+        info.backend,
+        gpu.context().timestamps
     );
-    check(
-        "sphere",
-        &TestScene::builtin("sphere", 1.5),
-        &context,
-        &renderer,
-    );
+    check("sphere", &builtin("sphere", 1.5), &mut gpu);
     if let Some(data) = shared_data() {
-        check(
-            "cow",
-            &TestScene::shared(&data, "cow.obj", 1.2),
-            &context,
-            &renderer,
-        );
+        check("cow", &shared(&data, "cow.obj", 1.2), &mut gpu);
     }
 }
 
-/// Bad parameters and impossible resolutions are errors, not panics.
+/// Impossible resolutions, unsupported methods and frames before a scene are errors, not panics.
 #[test]
 fn gpu_errors_are_reported() {
-    let Some(context) = GpuContext::for_tests() else {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
         return;
     };
-    let renderer = GpuRenderer::new(&context).expect("pipelines");
-    let scene = TestScene::builtin("sphere", 1.5);
-    let gpu_scene = GpuScene::new(
-        &context,
-        &scene.scene.refractor.mesh,
-        &scene.d_n,
-        &scene.scene.environment,
-    );
-    let params = MethodParams {
-        method: Method::ALL[1],
-        ior: f32::NAN,
-        tir_policy: TirPolicy::ClampToCritical,
-    };
-    assert!(
-        refract_gpu::render_method(&context, &renderer, &gpu_scene, &camera(16), &params).is_err()
-    );
-    let params = MethodParams { ior: 1.5, ..params };
+    let mut frame = Frame::default();
+    let all = FrameOutputs::ColorAndAovs;
+    let err = gpu
+        .render(&camera(16), &method(MethodId::Wyman), all, &mut frame)
+        .expect_err("not prepared");
+    assert!(err.to_string().contains("prepare"), "{err}");
+    gpu.prepare(&builtin("sphere", 1.5)).expect("prepare");
+    let err = gpu
+        .render(&camera(16), &method(MethodId::Reference), all, &mut frame)
+        .expect_err("unsupported");
+    assert!(err.to_string().contains("gpu"), "{err}");
     let huge = refract_core::Camera::new(refract_core::CameraDesc {
         width: 100_000,
         height: 4,
         ..Default::default()
     })
     .expect("camera");
-    let err = refract_gpu::render_method(&context, &renderer, &gpu_scene, &huge, &params)
+    let err = gpu
+        .render(&huge, &method(MethodId::Wyman), all, &mut frame)
         .expect_err("too large");
     assert!(err.to_string().contains("100000x4"), "{err}");
+    // The renderer still works after an error.
+    gpu.render(&camera(16), &method(MethodId::Wyman), all, &mut frame)
+        .expect("after an error");
+    assert_eq!(frame.pixel_count(), 256);
 }
 
-/// A colour-only frame (`WRITE_AOVS = false`) has the colours of the full frame and no AOVs.
+/// A colour-only frame (`WRITE_AOVS = false`) has the colours of the full frame and no AOVs; the
+/// GPU says what it supports as the registry does.
 #[test]
 fn gpu_colour_only_frames_have_the_same_colours() {
-    let Some(context) = GpuContext::for_tests() else {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
         return;
     };
-    let renderer = GpuRenderer::new(&context).expect("pipelines");
-    let scene = TestScene::builtin("torus", 1.33);
+    for row in &refract_scene::REGISTRY {
+        assert_eq!(
+            gpu.supports(row.id),
+            row.backends.contains(&gpu.backend()),
+            "{}",
+            row.name
+        );
+    }
+    let scene = builtin("torus", 1.33);
     let cam = camera(64);
-    let gpu_scene = GpuScene::new(
-        &context,
-        &scene.scene.refractor.mesh,
-        &scene.d_n,
-        &scene.scene.environment,
-    );
-    for method in Method::ALL {
-        let params = MethodParams {
-            method,
-            ior: 1.33,
-            tir_policy: TirPolicy::ClampToCritical,
-        };
-        let frame = |outputs| {
-            let frame = refract_gpu::GpuFrame::with_outputs(
-                &context, &renderer, &gpu_scene, &cam, &params, outputs,
-            )
-            .expect("frame");
-            frame
-                .execute(&context, &renderer, &gpu_scene, true)
-                .expect("execute");
-            frame.read(&context).expect("read")
-        };
-        let full = frame(refract_cpu::FrameOutputs::ColorAndAovs);
-        let colour = frame(refract_cpu::FrameOutputs::Color);
-        assert!(colour.aov.is_empty() && full.aov.len() == 64 * 64);
+    for id in MethodId::approximations() {
+        let full = render(&mut gpu, &scene, &cam, &method(id));
+        let mut expected = id.info().aovs.to_vec();
+        expected.sort();
+        assert_eq!(full.aovs().collect::<Vec<_>>(), expected, "{id}");
+        let mut colour = Frame::default();
+        gpu.render(&cam, &method(id), FrameOutputs::Color, &mut colour)
+            .expect("colour");
+        assert!(colour.aovs().count() == 0 && full.pixel_count() == 64 * 64);
         let worst = full
             .color
             .iter()
             .zip(&colour.color)
             .map(|(a, b)| (*a - *b).abs().max_element())
             .fold(0.0f32, f32::max);
-        assert!(worst <= 1e-5, "{method}: colours differ by {worst}");
+        assert!(worst <= 1e-5, "{id}: colours differ by {worst}");
     }
 }

@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 use refract_core::environment::latlong_to_direction;
+use refract_scene::{Environment, load_latlong};
 use refract_tests::shared_data;
-use refract_trace::{Environment, load_latlong};
 
 const EXR_MAPS: [&str; 7] = [
     "venice.exr",

@@ -4,18 +4,20 @@
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
 use refract_core::exit::TirPolicy;
-use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{CpuRenderer, FrameOutputs, MethodParams, PreparedRefractor};
-use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
-use refract_trace::{Environment, Refractor, Scene, TraceSettings, render};
+use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
+use refract_scene::atomic_write::write_text_atomically;
+use refract_scene::{
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Scene, TraceSettings,
+};
 use serde::Serialize;
 
-use crate::compare::Backend;
-use crate::timing::{FrameTimes, time_frames, wall_ms};
+use crate::backends::{self, GpuPolicy};
+use crate::timing::{FrameTimes, time_frames};
 
 /// Arguments of `refract bench`.
 #[derive(Debug, clap::Args)]
@@ -29,7 +31,7 @@ pub struct BenchArgs {
     pub scenes: Vec<String>,
     /// Comma-separated methods (Table 1 has wyman = 2-sided and single = 1-sided).
     #[arg(long, value_delimiter = ',', default_value = "wyman,single")]
-    pub methods: Vec<Method>,
+    pub methods: Vec<MethodId>,
     /// Comma-separated backends: cpu, gpu (gpu is skipped with a notice without an adapter).
     #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
     pub backends: Vec<String>,
@@ -116,85 +118,52 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
-    let backends = Backend::parse_list(&args.backends)?;
-    let gpu = if backends.contains(&Backend::Gpu) {
-        match refract_gpu::GpuContext::new() {
-            Ok(context) => {
-                let renderer = refract_gpu::GpuRenderer::new(&context)?;
-                Some((context, renderer))
-            }
-            Err(err) => {
-                eprintln!("note: {err}; benchmarking the CPU only");
-                None
-            }
-        }
-    } else {
-        None
-    };
-    let camera = Camera::new(CameraDesc {
-        width: res,
-        height: res,
-        ..CameraDesc::default()
-    })?;
+    anyhow::ensure!(
+        !args.methods.contains(&MethodId::Reference),
+        "--methods: the reference is always timed; list the methods to benchmark"
+    );
+    let methods: Vec<MethodParams> = args
+        .methods
+        .iter()
+        .map(|&id| MethodParams::defaults(id).with_tir_policy(TirPolicy::ClampToCritical))
+        .collect();
+    let backend_ids = backends::parse_backends(&args.backends)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    backends::check_supported(&renderers, &methods)?;
     let mut records = Vec::new();
     let mut reference_seconds = Vec::new();
+    let mut frame = Frame::default();
     for name in &scenes {
         let Some((mesh, ior)) = load_model(name, &args.data)? else {
             continue;
         };
         let triangles = mesh.triangles.len();
-        let d_n = normal_distances(&mesh, &MeshBvh::build(&mesh)).values;
-        let environment = Environment::Procedural;
-        let scene = Scene::new(Refractor::new(mesh, ior)?, environment);
+        let scene = Arc::new(Scene::new(
+            name.as_str(),
+            Refractor::new(mesh, ior)?,
+            Environment::Procedural,
+        ));
+        let camera = scene.camera(res, res)?;
         let start = Instant::now();
-        render(&scene, &camera, &TraceSettings::default());
+        refract_trace::render(&scene, &camera, &TraceSettings::default());
         reference_seconds.push((name.clone(), start.elapsed().as_secs_f64()));
-        let prepared = PreparedRefractor {
-            mesh: &scene.refractor.mesh,
-            d_n: &d_n,
-        };
-        let gpu_scene = gpu.as_ref().map(|(context, _)| {
-            refract_gpu::GpuScene::new(context, &scene.refractor.mesh, &d_n, &scene.environment)
-        });
-        for &method in &args.methods {
-            let params = MethodParams {
-                method,
-                ior,
-                tir_policy: TirPolicy::ClampToCritical,
-            };
-            for &backend in &backends {
-                let times = match (backend, &gpu, &gpu_scene) {
-                    (Backend::Cpu, _, _) => {
-                        // Colour only, as displayed: the AOVs are for comparisons.
-                        let mut renderer = CpuRenderer::new(FrameOutputs::Color);
-                        time_frames(3, frames, || {
-                            wall_ms(|| {
-                                renderer.render(&prepared, &scene.environment, &camera, &params)?;
-                                Ok(())
-                            })
-                        })?
-                    }
-                    (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
-                        let run = refract_gpu::GpuFrame::with_outputs(
-                            context,
-                            renderer,
-                            gpu_scene,
-                            &camera,
-                            &params,
-                            FrameOutputs::Color,
-                        )?;
-                        time_frames(3, frames, || {
-                            Ok(run.execute(context, renderer, gpu_scene, false)?.ms)
-                        })?
-                    }
-                    _ => continue,
-                };
+        for renderer in &mut renderers {
+            renderer.prepare(&scene)?;
+        }
+        for method in &methods {
+            for renderer in &mut renderers {
+                // Colour only, as displayed: the AOVs are for comparisons.
+                let times = time_frames(3, frames, || {
+                    Ok(renderer
+                        .render(&camera, method, FrameOutputs::Color, &mut frame)?
+                        .ms)
+                })?;
                 let FrameTimes { median, min, max } = times;
                 let record = BenchRecord {
                     scene: name.clone(),
                     triangles,
-                    method: method.id().to_owned(),
-                    backend: backend.id().to_owned(),
+                    method: method.id().name().to_owned(),
+                    backend: renderer.backend().id().to_owned(),
                     width: res,
                     height: res,
                     ms_median: median,
@@ -220,11 +189,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 fn write(path: &std::path::Path, text: &str) -> anyhow::Result<()> {
-    let temporary = path.with_extension("partial");
-    std::fs::write(&temporary, text)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&temporary, path)
-        .with_context(|| format!("{}: cannot move into place", path.display()))
+    Ok(write_text_atomically(path, text)?)
 }
 
 /// The Table 1 layout: per model, 2-sided and 1-sided fps per backend, the reference time, and

@@ -2,73 +2,31 @@
 //! with images, error maps, `metrics.json`, `report.md` and `index.html`.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::Arc;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use refract_core::exit::TirPolicy;
-use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{CpuRenderer, MethodParams, PreparedRefractor, render_method};
-use refract_trace::{TraceSettings, render};
+use refract_scene::metrics::{MetricsRecord, evaluate, reference_record};
+use refract_scene::{
+    Aov, BackendId, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings, load_scene,
+};
+use refract_trace::ReferenceRenderer;
 
+use crate::backends::{self, GpuPolicy};
 use crate::images::{write_color, write_error_map, write_mask};
-use crate::metrics::{MetricsRecord, evaluate, reference_record};
-use crate::report::{SceneImages, write_reports};
-use crate::scene_file::load_scene;
-use crate::timing::{time_frames, wall_ms};
-
-/// Which backends run the methods.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// refract-cpu.
-    Cpu,
-    /// refract-gpu (wgpu).
-    Gpu,
-}
-
-impl Backend {
-    /// Parses a `--backends` list (`cpu`, `gpu`).
-    pub fn parse_list(names: &[String]) -> anyhow::Result<Vec<Self>> {
-        names
-            .iter()
-            .map(|name| match name.as_str() {
-                "cpu" => Ok(Backend::Cpu),
-                "gpu" => Ok(Backend::Gpu),
-                other => {
-                    anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu")
-                }
-            })
-            .collect()
-    }
-
-    /// The id in file names and metrics.
-    pub fn id(self) -> &'static str {
-        match self {
-            Backend::Cpu => "cpu",
-            Backend::Gpu => "gpu",
-        }
-    }
-}
-
-/// What to do when no GPU adapter exists.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GpuPolicy {
-    /// The user asked for the GPU: no adapter is an error.
-    Required,
-    /// The default job: compare on the CPU with a one-line notice.
-    IfAvailable,
-}
+use crate::report::{MethodImages, SceneImages, write_reports};
+use crate::timing::time_frames;
 
 /// What to compare.
 pub struct CompareOptions {
     /// Backends.
-    pub backends: Vec<Backend>,
+    pub backends: Vec<BackendId>,
     /// What a missing adapter means.
     pub gpu_policy: GpuPolicy,
     /// Scene names or files.
     pub scenes: Vec<String>,
-    /// Methods.
-    pub methods: Vec<Method>,
+    /// Methods with their parameters.
+    pub methods: Vec<MethodParams>,
     /// Square resolution.
     pub res: u32,
     /// Reference samples per pixel.
@@ -77,8 +35,6 @@ pub struct CompareOptions {
     pub frames: u32,
     /// Output directory.
     pub out: PathBuf,
-    /// Second-interface TIR policy.
-    pub tir_policy: TirPolicy,
 }
 
 /// Error-map scales (the top of each colour bar).
@@ -105,135 +61,79 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
     })?;
     let mut scenes = Vec::new();
     for spec in &options.scenes {
-        let scene = load_scene(spec)?;
-        for warning in &scene.warnings {
+        let loaded = load_scene(spec)?;
+        for warning in &loaded.warnings {
             eprintln!("warning: {warning}");
         }
-        scenes.push(scene);
+        scenes.push(Arc::new(loaded.scene));
     }
-    let gpu = if options.backends.contains(&Backend::Gpu) {
-        match refract_gpu::GpuContext::new() {
-            Ok(context) => {
-                let renderer = refract_gpu::GpuRenderer::new(&context)?;
-                eprintln!("GPU: {} ({:?})", context.info.name, context.info.backend);
-                Some((context, renderer))
-            }
-            Err(err) if options.gpu_policy == GpuPolicy::IfAvailable => {
-                eprintln!("note: {err}; comparing on the CPU only");
-                None
-            }
-            Err(err) => return Err(err.into()),
-        }
-    } else {
-        None
-    };
-    let backends: Vec<Backend> = options
-        .backends
-        .iter()
-        .copied()
-        .filter(|b| *b == Backend::Cpu || gpu.is_some())
-        .collect();
+    let mut renderers = backends::open(&options.backends, options.gpu_policy)?;
+    backends::check_supported(&renderers, &options.methods)?;
+    let mut reference = ReferenceRenderer::new();
+    let settings = MethodParams::Reference(TraceSettings {
+        spp: options.spp,
+        ..TraceSettings::default()
+    });
 
     let references = bar(scenes.len() as u64, "reference");
-    let methods = bar(
-        (scenes.len() * options.methods.len() * backends.len()) as u64,
+    let progress = bar(
+        (scenes.len() * options.methods.len() * renderers.len()) as u64,
         "methods",
     );
     let mut records = Vec::new();
     let mut scene_images = Vec::new();
-    for loaded in &scenes {
-        let camera = Camera::new(CameraDesc {
-            width: options.res,
-            height: options.res,
-            ..loaded.camera
-        })
-        .with_context(|| format!("scene {}: camera", loaded.name))?;
-        let dir = options.out.join(&loaded.name);
+    let (w, h) = (options.res, options.res);
+    for scene in &scenes {
+        let camera = scene.camera(w, h)?;
+        let dir = options.out.join(&scene.name);
         std::fs::create_dir_all(&dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
 
-        let settings = TraceSettings {
-            spp: options.spp,
-            ..TraceSettings::default()
-        };
-        let start = Instant::now();
-        let reference = render(&loaded.scene, &camera, &settings);
-        let reference_ms = start.elapsed().as_secs_f64() * 1e3;
+        reference.prepare(scene)?;
+        let mut truth = Frame::default();
+        let timing =
+            reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
         references.inc(1);
-        write_color(
-            &dir.join("reference.png"),
-            options.res,
-            options.res,
-            &reference.radiance,
-        )?;
-        reference.write_exr(&dir.join("reference.exr"))?;
-        let tir: Vec<bool> = reference.aov.iter().map(|a| a.tir).collect();
+        write_color(&dir.join("reference.png"), w, h, &truth.color)?;
+        truth.write_exr(&dir.join("reference.exr"))?;
         write_mask(
             &dir.join("tir-reference.png"),
-            options.res,
-            options.res,
-            &tir,
-            &reference.radiance,
+            w,
+            h,
+            &tir_mask(&truth),
+            &truth.color,
         )?;
-        let mut row = reference_record(&reference, reference_ms);
-        row.scene.clone_from(&loaded.name);
+        let mut row = reference_record(&truth, timing.ms);
+        row.scene.clone_from(&scene.name);
+        row.params = settings.describe();
         records.push(row);
 
-        let diameter = 2.0 * loaded.scene.refractor.mesh.bounding_sphere().radius;
-        let prepared = PreparedRefractor {
-            mesh: &loaded.scene.refractor.mesh,
-            d_n: &loaded.d_n,
-        };
-        let mut method_ids = Vec::new();
-        let gpu_scene = gpu.as_ref().map(|(context, _)| {
-            refract_gpu::GpuScene::new(
-                context,
-                &loaded.scene.refractor.mesh,
-                &loaded.d_n,
-                &loaded.scene.environment,
-            )
-        });
-        for &method in &options.methods {
-            let params = MethodParams {
-                method,
-                ior: loaded.scene.refractor.ior(),
-                tir_policy: options.tir_policy,
-            };
-            let environment = &loaded.scene.environment;
-            for &backend in &backends {
-                let (frame, ms) = match (backend, &gpu, &gpu_scene) {
-                    (Backend::Gpu, Some((context, renderer)), Some(gpu_scene)) => {
-                        let run = refract_gpu::GpuFrame::new(
-                            context, renderer, gpu_scene, &camera, &params,
-                        )?;
-                        run.execute(context, renderer, gpu_scene, true)?;
-                        let frame = run.read(context)?;
-                        let times = time_frames(2, options.frames, || {
-                            Ok(run.execute(context, renderer, gpu_scene, false)?.ms)
-                        })?;
-                        (frame, times.median)
-                    }
-                    _ => {
-                        let frame = render_method(&prepared, environment, &camera, &params)?;
-                        let mut renderer = CpuRenderer::default();
-                        let times = time_frames(2, options.frames, || {
-                            wall_ms(|| {
-                                renderer.render(&prepared, environment, &camera, &params)?;
-                                Ok(())
-                            })
-                        })?;
-                        (frame, times.median)
-                    }
-                };
-                let (mut record, maps) = evaluate(&reference, &frame, diameter);
-                record.scene.clone_from(&loaded.name);
-                record.method = method.id().to_owned();
+        let diameter = scene.refractor.diameter();
+        let mut images = Vec::new();
+        for renderer in &mut renderers {
+            renderer.prepare(scene)?;
+        }
+        for method in &options.methods {
+            for renderer in &mut renderers {
+                let mut frame = Frame::default();
+                renderer.render(&camera, method, FrameOutputs::ColorAndAovs, &mut frame)?;
+                // Timed frames write the colour only, as a real-time renderer displays it.
+                let mut scratch = Frame::default();
+                let times = time_frames(2, options.frames, || {
+                    Ok(renderer
+                        .render(&camera, method, FrameOutputs::Color, &mut scratch)?
+                        .ms)
+                })?;
+                let (mut record, maps) = evaluate(&truth, &frame, diameter);
+                let (id, backend) = (method.id(), renderer.backend());
+                record.scene.clone_from(&scene.name);
+                record.method = id.name().to_owned();
                 record.backend = backend.id().to_owned();
-                record.ms_per_frame = Some(ms);
+                record.params = method.describe();
+                record.ms_per_frame = Some(times.median);
                 records.push(record);
 
-                let stem = format!("{}-{}", method.id(), backend.id());
-                let (w, h) = (options.res, options.res);
+                let stem = format!("{id}-{backend}");
                 write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
                 write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
                 write_error_map(
@@ -243,7 +143,8 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                     &maps.t2_deg,
                     T2_SCALE_DEG,
                 )?;
-                if method != Method::Single {
+                let has_p2 = id.info().aovs.contains(&Aov::P2);
+                if has_p2 {
                     write_error_map(
                         &dir.join(format!("p2err-{stem}.png")),
                         w,
@@ -252,27 +153,33 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         P2_SCALE,
                     )?;
                 }
-                let tir: Vec<bool> = frame.aov.iter().map(|a| a.tir).collect();
                 write_mask(
                     &dir.join(format!("tir-{stem}.png")),
                     w,
                     h,
-                    &tir,
+                    &tir_mask(&frame),
                     &frame.color,
                 )?;
-                method_ids.push(stem);
-                methods.inc(1);
+                images.push(MethodImages { stem, has_p2 });
+                progress.inc(1);
             }
         }
         scene_images.push(SceneImages {
-            scene: loaded.name.clone(),
-            methods: method_ids,
+            scene: scene.name.clone(),
+            methods: images,
         });
     }
     references.finish_and_clear();
-    methods.finish_and_clear();
+    progress.finish_and_clear();
     write_reports(&options.out, &records, &scene_images, options)?;
     Ok(records)
+}
+
+/// The frame's TIR flags (all false when it has no `tir` layer).
+fn tir_mask(frame: &Frame) -> Vec<bool> {
+    frame
+        .flag(Aov::Tir)
+        .map_or_else(|| vec![false; frame.pixel_count()], <[bool]>::to_vec)
 }
 
 /// The summary table printed at the end.

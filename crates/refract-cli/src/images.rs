@@ -1,32 +1,16 @@
 //! PNG output of the comparison: tonemapped colour images, false-colour error maps with a
-//! colour bar, and TIR masks. Every file is written to a temporary name and renamed.
+//! colour bar, and TIR masks. Every file is written atomically (refract-scene's one writer).
 
 use std::path::Path;
 
-use anyhow::Context;
 use glam::Vec3;
-use refract_trace::tonemap::to_srgb8;
-
-/// Writes RGB8 pixels as a PNG through a temporary file.
-pub fn write_rgb8(path: &Path, width: u32, height: u32, pixels: &[u8]) -> anyhow::Result<()> {
-    let temporary = path.with_extension("png.partial");
-    image::save_buffer_with_format(
-        &temporary,
-        pixels,
-        width,
-        height,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .with_context(|| format!("{}: cannot write the PNG", path.display()))?;
-    std::fs::rename(&temporary, path)
-        .with_context(|| format!("{}: cannot move the PNG into place", path.display()))
-}
+use refract_scene::atomic_write::write_png_rgb8;
+use refract_scene::tonemap::to_srgb8;
 
 /// Linear radiance, tonemapped to sRGB.
 pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> anyhow::Result<()> {
     let pixels: Vec<u8> = color.iter().flat_map(|&c| to_srgb8(c)).collect();
-    write_rgb8(path, width, height, &pixels)
+    Ok(write_png_rgb8(path, width, height, &pixels)?)
 }
 
 /// The magma colour map at `t ∈ [0, 1]` (from FLIP's own lookup table).
@@ -68,10 +52,10 @@ pub fn write_error_map(
             });
         }
     }
-    write_rgb8(path, out_width, height, &pixels)
+    Ok(write_png_rgb8(path, out_width, height, &pixels)?)
 }
 
-/// A mask: white where `mask`, the tonemapped image dimmed elsewhere.
+/// A mask: magenta where `mask`, the tonemapped image dimmed elsewhere.
 pub fn write_mask(
     path: &Path,
     width: u32,
@@ -90,5 +74,5 @@ pub fn write_mask(
             }
         })
         .collect();
-    write_rgb8(path, width, height, &pixels)
+    Ok(write_png_rgb8(path, width, height, &pixels)?)
 }

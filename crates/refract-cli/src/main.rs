@@ -5,23 +5,22 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use refract_core::Method;
 use refract_core::exit::TirPolicy;
+use refract_scene::registry::ParamKind;
+use refract_scene::{BUILTIN_SCENES, MethodId, MethodParams, REGISTRY};
 
+mod backends;
 mod bench;
 mod compare;
 mod images;
 mod info;
-mod metrics;
 mod render;
 mod report;
-mod scene_file;
 mod timing;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
-/// With no command, compares every implemented method (single, wyman, wyman-dv, wyman-dn) on the
-/// CPU backend and the GPU backend (when an adapter exists) against the exact reference ray
+/// With no command, compares every method of the registry (`refract methods`) on the CPU backend and the GPU backend (when an adapter exists) against the exact reference ray
 /// tracer on the built-in scenes (sphere, torus, lens) at 512², writes images, error maps,
 /// metrics.json, report.md and index.html to out/, and prints a summary table.
 #[derive(Debug, Parser)]
@@ -41,6 +40,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// List the built-in scenes.
     Scenes,
+    /// List the methods: id, paper and section, parameters (defaults, ranges), AOVs, backends.
+    Methods,
     /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
     Info(info::InfoArgs),
 }
@@ -71,13 +72,9 @@ struct CompareArgs {
     /// Built-in scene names (see `refract scenes`) or .toml scene files.
     #[arg(required = true)]
     scenes: Vec<String>,
-    /// Comma-separated methods: single, wyman, wyman-dv, wyman-dn.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "single,wyman,wyman-dv,wyman-dn"
-    )]
-    methods: Vec<Method>,
+    /// Comma-separated method ids (`refract methods`); default: every method but the reference.
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<MethodId>>,
     /// Comma-separated backends: cpu, gpu. With gpu and no adapter, the command fails.
     #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
     backends: Vec<String>,
@@ -90,53 +87,121 @@ struct CompareArgs {
     /// Timed frames per method (median reported, after 2 warm-up frames).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
     frames: u32,
-    /// Second-interface TIR policy.
+    /// Second-interface TIR policy (two-interface methods).
     #[arg(long, value_enum, default_value = "clamp")]
     tir: TirArg,
+    /// A method parameter, `NAME=VALUE`, for every selected method that has it (repeatable;
+    /// `refract methods` lists them).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    params: Vec<String>,
     /// Output directory.
     #[arg(long, default_value = "out")]
     out: PathBuf,
 }
 
+/// Splits `NAME=VALUE`.
+pub fn parse_param(assignment: &str) -> anyhow::Result<(&str, &str)> {
+    assignment
+        .split_once('=')
+        .filter(|(name, _)| !name.is_empty())
+        .ok_or_else(|| anyhow::anyhow!("--param {assignment}: expected NAME=VALUE"))
+}
+
+/// The parameters of `ids` with `tir` and every `--param` applied to the methods that have it;
+/// a parameter no selected method has is an error.
+fn method_params(
+    ids: &[MethodId],
+    tir: TirPolicy,
+    assignments: &[String],
+) -> anyhow::Result<Vec<MethodParams>> {
+    let mut methods: Vec<MethodParams> = ids
+        .iter()
+        .map(|&id| MethodParams::defaults(id).with_tir_policy(tir))
+        .collect();
+    for assignment in assignments {
+        let (name, value) = parse_param(assignment)?;
+        let mut used = false;
+        for method in &mut methods {
+            if method.get(name).is_some() {
+                method.set(name, value, "--param")?;
+                used = true;
+            }
+        }
+        anyhow::ensure!(
+            used,
+            "--param {assignment}: none of the selected methods has a parameter `{name}` (see `refract methods`)"
+        );
+    }
+    Ok(methods)
+}
+
 fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions> {
-    let backends = compare::Backend::parse_list(&args.backends)?;
+    let backends = backends::parse_backends(&args.backends)?;
     // The default list tolerates a missing adapter (with a notice); an explicit list does not.
     let explicit = args.backends != ["cpu", "gpu"];
+    let ids = args
+        .methods
+        .unwrap_or_else(|| MethodId::approximations().collect());
+    anyhow::ensure!(
+        !ids.contains(&MethodId::Reference),
+        "--methods: the reference is always rendered; list the methods to compare with it"
+    );
     Ok(compare::CompareOptions {
         backends,
         gpu_policy: if explicit {
-            compare::GpuPolicy::Required
+            backends::GpuPolicy::Required
         } else {
-            compare::GpuPolicy::IfAvailable
+            backends::GpuPolicy::IfAvailable
         },
         scenes: args.scenes,
-        methods: args.methods,
+        methods: method_params(&ids, args.tir.into(), &args.params)?,
         res: args.res,
         spp: args.spp,
         frames: args.frames,
         out: args.out,
-        tir_policy: args.tir.into(),
     })
 }
 
 fn default_job() -> anyhow::Result<()> {
+    let ids: Vec<MethodId> = MethodId::approximations().collect();
     let options = compare::CompareOptions {
-        backends: vec![compare::Backend::Cpu, compare::Backend::Gpu],
-        gpu_policy: compare::GpuPolicy::IfAvailable,
-        scenes: scene_file::BUILTIN_SCENES
-            .iter()
-            .map(|s| s.0.to_owned())
-            .collect(),
-        methods: Method::ALL.to_vec(),
+        backends: vec![refract_scene::BackendId::Cpu, refract_scene::BackendId::Gpu],
+        gpu_policy: backends::GpuPolicy::IfAvailable,
+        scenes: BUILTIN_SCENES.iter().map(|s| s.0.to_owned()).collect(),
+        methods: method_params(&ids, TirPolicy::ClampToCritical, &[])?,
         res: 512,
         spp: 1,
         frames: 20,
         out: PathBuf::from("out"),
-        tir_policy: TirPolicy::ClampToCritical,
     };
     let records = compare::run(&options)?;
     compare::print_summary(&records, &options.out);
     Ok(())
+}
+
+/// `refract methods`: the registry.
+fn print_methods() {
+    for m in &REGISTRY {
+        let backends: Vec<&str> = m.backends.iter().map(|b| b.id()).collect();
+        let aovs: Vec<&str> = m.aovs.iter().map(|a| a.name()).collect();
+        println!("{:<10} {} {}: {}", m.name, m.paper, m.section, m.summary);
+        println!(
+            "{:<10} backends: {}; AOVs: {}",
+            "",
+            backends.join(", "),
+            aovs.join(" ")
+        );
+        for p in m.params {
+            let range = match p.kind {
+                ParamKind::Choice(values) => values.join(" | "),
+                ParamKind::Integer { min, max } => format!("{min}..={max}"),
+            };
+            println!(
+                "{:<10}   --param {}=<{range}> (default {}): {}",
+                "", p.name, p.default, p.doc
+            );
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -151,10 +216,14 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render::run(&args),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Scenes) => {
-            for (name, line, _) in scene_file::BUILTIN_SCENES {
+            for (name, line, _) in BUILTIN_SCENES {
                 println!("{name:<8} {line}");
             }
             println!("\nOr pass a .toml scene file; see docs/scenes.md.");
+            Ok(())
+        }
+        Some(Command::Methods) => {
+            print_methods();
             Ok(())
         }
         Some(Command::Info(args)) => info::run(&args),

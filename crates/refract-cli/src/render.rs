@@ -1,15 +1,16 @@
 //! `refract render`: one scene, one method (or the reference), to `.png` or `.exr`.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use glam::Vec3;
-use refract_core::{Camera, CameraDesc, Method};
-use refract_cpu::{MethodParams, PreparedRefractor, render_method};
-use refract_trace::{Frame, PixelAov, Refractor, TraceMode, TraceSettings, render};
+use refract_scene::{
+    BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceMode, load_scene,
+};
+use refract_trace::ReferenceRenderer;
 
-use crate::TirArg;
+use crate::{TirArg, backends};
 
 /// The reference tracer's mode.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -19,14 +20,13 @@ pub enum TraceArg {
     /// Fresnel-split reflected and refracted branches.
     Full,
 }
-use crate::scene_file::load_scene;
 
 /// Arguments of `refract render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
     /// A built-in scene (see `refract scenes`) or a .toml scene file.
     pub scene: String,
-    /// `reference`, `single`, `wyman`, `wyman-dv` or `wyman-dn`.
+    /// A method of the registry (`refract methods`), or `reference`.
     #[arg(long, default_value = "wyman")]
     pub method: String,
     /// Backend: `cpu` or `gpu` (wgpu; fails with a clear error when no adapter exists).
@@ -48,9 +48,12 @@ pub struct RenderArgs {
     /// Override the scene's index of refraction.
     #[arg(long, allow_negative_numbers = true)]
     pub ior: Option<f32>,
-    /// Second-interface TIR policy.
+    /// Second-interface TIR policy (two-interface methods).
     #[arg(long, value_enum, default_value = "clamp")]
     pub tir: TirArg,
+    /// A method parameter, `NAME=VALUE` (repeatable; `refract methods` lists them).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
     /// Output file: `.png` (sRGB, tonemapped) or `.exr` (linear, with AOV channels).
     #[arg(long)]
     pub out: PathBuf,
@@ -70,6 +73,33 @@ fn parse_res(res: &str) -> anyhow::Result<(u32, u32)> {
     parsed.with_context(|| format!("--res {res}: expected WxH or N with sizes from 1 to 16384"))
 }
 
+/// The method of `--method`, with `--tir`, `--spp`, `--trace`, `--depth` and every `--param`
+/// applied.
+fn method_params(args: &RenderArgs) -> anyhow::Result<MethodParams> {
+    let id: MethodId = args
+        .method
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--method: {e}"))?;
+    let mut params = MethodParams::defaults(id);
+    match &mut params {
+        MethodParams::Reference(settings) => {
+            settings.mode = match args.trace {
+                TraceArg::Transmission => TraceMode::Transmission,
+                TraceArg::Full => TraceMode::Full,
+            };
+            settings.max_depth = args.depth;
+            settings.spp = args.spp;
+        }
+        MethodParams::TwoInterface(p) => p.tir = args.tir.into(),
+        MethodParams::Single => {}
+    }
+    for assignment in &args.params {
+        let (name, value) = crate::parse_param(assignment)?;
+        params.set(name, value, "--param")?;
+    }
+    Ok(params)
+}
+
 /// Runs `refract render`.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let extension = args
@@ -80,81 +110,35 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !matches!(extension.as_deref(), Some("png" | "exr")) {
         bail!("--out {}: expected a .png or .exr file", args.out.display());
     }
-    if !matches!(args.backend.as_str(), "cpu" | "gpu") {
-        bail!("--backend {}: expected cpu or gpu", args.backend);
-    }
+    let backend = match args.backend.as_str() {
+        "cpu" => BackendId::Cpu,
+        "gpu" => BackendId::Gpu,
+        other => bail!("--backend {other}: expected cpu or gpu"),
+    };
     let (width, height) = parse_res(&args.res)?;
-    let mut loaded = load_scene(&args.scene)?;
+    let method = method_params(args)?;
+    let loaded = load_scene(&args.scene)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
+    let mut scene = loaded.scene;
     if let Some(ior) = args.ior {
-        let mesh = loaded.scene.refractor.mesh.clone();
-        loaded.scene.refractor = Refractor::new(mesh, ior).context("--ior")?;
+        scene.refractor.set_ior(ior).context("--ior")?;
     }
-    let camera = Camera::new(CameraDesc {
-        width,
-        height,
-        ..loaded.camera
-    })?;
-    let start = Instant::now();
-    let frame = if args.method == "reference" {
-        render(
-            &loaded.scene,
-            &camera,
-            &TraceSettings {
-                mode: match args.trace {
-                    TraceArg::Transmission => TraceMode::Transmission,
-                    TraceArg::Full => TraceMode::Full,
-                },
-                max_depth: args.depth,
-                spp: args.spp,
-                ..TraceSettings::default()
-            },
-        )
+    let camera = scene.camera(width, height)?;
+    let scene = Arc::new(scene);
+    let mut renderer: Box<dyn Renderer> = if method.id() == MethodId::Reference {
+        Box::new(ReferenceRenderer::new())
     } else {
-        let method: Method = args
-            .method
-            .parse()
-            .map_err(|e| anyhow::anyhow!("--method: {e} (or reference)"))?;
-        let params = MethodParams {
-            method,
-            ior: loaded.scene.refractor.ior(),
-            tir_policy: args.tir.into(),
-        };
-        let result = if args.backend == "gpu" {
-            let context = refract_gpu::GpuContext::new()?;
-            let renderer = refract_gpu::GpuRenderer::new(&context)?;
-            let mesh = &loaded.scene.refractor.mesh;
-            let scene =
-                refract_gpu::GpuScene::new(&context, mesh, &loaded.d_n, &loaded.scene.environment);
-            refract_gpu::render_method(&context, &renderer, &scene, &camera, &params)?.0
-        } else {
-            let prepared = PreparedRefractor {
-                mesh: &loaded.scene.refractor.mesh,
-                d_n: &loaded.d_n,
-            };
-            render_method(&prepared, &loaded.scene.environment, &camera, &params)?
-        };
-        let aov = result
-            .aov
-            .iter()
-            .map(|a| PixelAov {
-                p2: a.p2,
-                n2: a.n2,
-                t2: if a.covered { a.t2 } else { Vec3::NAN },
-                tir: a.tir,
-                ..PixelAov::EMPTY
-            })
-            .collect();
-        Frame {
-            width,
-            height,
-            radiance: result.color,
-            aov,
-            rays: 0,
-        }
+        backends::open(&[backend], backends::GpuPolicy::Required)?
+            .pop()
+            .context("no renderer")?
     };
+    backends::check_supported(std::slice::from_ref(&renderer), &[method])?;
+    let start = Instant::now();
+    renderer.prepare(&scene)?;
+    let mut frame = Frame::default();
+    renderer.render(&camera, &method, FrameOutputs::ColorAndAovs, &mut frame)?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
     match extension.as_deref() {
         Some("exr") => frame.write_exr(&args.out)?,
@@ -162,7 +146,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     println!(
         "{} {} {width}x{height} in {ms:.1} ms -> {}",
-        loaded.name,
+        scene.name,
         args.method,
         args.out.display()
     );

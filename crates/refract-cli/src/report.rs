@@ -4,24 +4,29 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Context;
+use refract_scene::atomic_write::write_text_atomically;
+use refract_scene::metrics::MetricsRecord;
 
 use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
-use crate::metrics::MetricsRecord;
+
+/// The images of one method on one backend.
+pub struct MethodImages {
+    /// `method-backend`.
+    pub stem: String,
+    /// Whether a `|P~2 − P2|` map was written.
+    pub has_p2: bool,
+}
 
 /// The images written for one scene.
 pub struct SceneImages {
     /// Scene name (its subdirectory).
     pub scene: String,
-    /// `method-backend` stems.
-    pub methods: Vec<String>,
+    /// Its methods.
+    pub methods: Vec<MethodImages>,
 }
 
 fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
-    let temporary = path.with_extension("partial");
-    std::fs::write(&temporary, text)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&temporary, path)
-        .with_context(|| format!("{}: cannot move into place", path.display()))
+    Ok(write_text_atomically(path, text)?)
 }
 
 fn cell(v: Option<f64>, digits: usize) -> String {
@@ -76,7 +81,7 @@ pub fn write_reports(
     let _ = writeln!(md, "# refract comparison\n");
     let _ = writeln!(
         md,
-        "{}², reference: exact tracer, `transmission` mode, {} spp, depth 8. Times: median of {} frames \
+        "{}², reference: exact tracer, `transmission` mode, {} spp, depth 8. Times: median of {} colour-only frames \
          after 2 warm-up frames (buffers + kernel; GPU: timestamp queries around all passes), this machine.\n",
         options.res, options.spp, options.frames
     );
@@ -92,7 +97,7 @@ pub fn write_reports(
             "| reference | method | FLIP | T2 error (0–{T2_SCALE_DEG}°) |\n|---|---|---|---|"
         );
         for m in &scene.methods {
-            let s = &scene.scene;
+            let (s, m) = (&scene.scene, &m.stem);
             let _ = writeln!(
                 md,
                 "| ![]({s}/reference.png) | ![]({s}/{m}.png) `{m}` | ![]({s}/flip-{m}.png) | ![]({s}/t2err-{m}.png) |"
@@ -112,7 +117,7 @@ td:nth-child(-n+3),th:nth-child(-n+3){{text-align:left}}th{{background:#eee}}\
 img{{width:220px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:227px}}\
 figcaption{{font-size:12px;color:#555}}h2{{margin-top:32px}}</style></head><body>\
 <h1>refract comparison</h1><p>{res}&sup2; pixels. Reference: exact ray tracer, transmission mode, {spp} spp, depth 8. \
-Times: median of {frames} frames after 2 warm-up frames, buffers + kernel (GPU: timestamp queries around all passes, queue waited).</p><table><tr>",
+Times: median of {frames} colour-only frames after 2 warm-up frames, buffers + kernel (GPU: timestamp queries around all passes, queue waited).</p><table><tr>",
         res = options.res,
         spp = options.spp,
         frames = options.frames
@@ -137,7 +142,8 @@ quantity does not exist. TIR masks show TIR pixels in magenta.</p>"
     for scene in scenes {
         let s = &scene.scene;
         let _ = write!(html, "<h2>{s}</h2>");
-        for m in &scene.methods {
+        for images in &scene.methods {
+            let m = &images.stem;
             let _ = write!(
                 html,
                 "<div class=\"row\"><figure><img src=\"{s}/reference.png\"><figcaption>reference</figcaption></figure>\
@@ -145,7 +151,7 @@ quantity does not exist. TIR masks show TIR pixels in magenta.</p>"
 <figure><img class=\"map\" src=\"{s}/flip-{m}.png\"><figcaption>FLIP (0–1)</figcaption></figure>\
 <figure><img class=\"map\" src=\"{s}/t2err-{m}.png\"><figcaption>T2 error (0–{T2_SCALE_DEG}°)</figcaption></figure>"
             );
-            if !m.starts_with("single") {
+            if images.has_p2 {
                 let _ = write!(
                     html,
                     "<figure><img class=\"map\" src=\"{s}/p2err-{m}.png\"><figcaption>|P~2−P2| (0–{P2_SCALE} diam)</figcaption></figure>"

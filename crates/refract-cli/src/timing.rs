@@ -1,7 +1,5 @@
 //! Frame timing shared by `compare` and `bench`: warm-up frames, then timed frames, summarised.
 
-use std::time::Instant;
-
 /// Median, minimum and maximum of the timed frames, in milliseconds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameTimes {
@@ -14,7 +12,7 @@ pub struct FrameTimes {
 }
 
 /// Runs `frame` `warm_up` times untimed, then `frames` times (at least once); `frame` returns
-/// its own duration in milliseconds (GPU timestamps, or [`wall_ms`]).
+/// its own duration in milliseconds (the renderer's [`refract_scene::FrameTiming`]).
 pub fn time_frames(
     warm_up: u32,
     frames: u32,
@@ -32,13 +30,6 @@ pub fn time_frames(
         min: times[0],
         max: times[times.len() - 1],
     })
-}
-
-/// Wall-clock milliseconds of one call of `work`.
-pub fn wall_ms(work: impl FnOnce() -> anyhow::Result<()>) -> anyhow::Result<f64> {
-    let start = Instant::now();
-    work()?;
-    Ok(start.elapsed().as_secs_f64() * 1e3)
 }
 
 #[cfg(test)]

@@ -53,6 +53,7 @@ fn compare_writes_metrics_images_and_reports() {
         "scene",
         "method",
         "backend",
+        "params",
         "width",
         "height",
         "rmse",

@@ -49,6 +49,10 @@ pub struct CameraDesc {
     pub width: u32,
     /// Image height in pixels, `≥ 1`.
     pub height: u32,
+    /// Mirror the image horizontally (NDC `x → −x`): what a cube-map face needs (see
+    /// [`Camera::cube_face`]). A mirrored camera sees counter-clockwise triangles clockwise on
+    /// screen, so rasterisers flip their facing test ([`Camera::is_mirrored`]).
+    pub mirror_x: bool,
 }
 
 impl Default for CameraDesc {
@@ -64,7 +68,92 @@ impl Default for CameraDesc {
             far: 100.0,
             width: 512,
             height: 512,
+            mirror_x: false,
         }
+    }
+}
+
+/// The six faces of a cube map, in the layer order of wgpu/WebGPU (and D3D, Vulkan):
+/// `+X, −X, +Y, −Y, +Z, −Z`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CubeFace {
+    /// Layer 0, `+X`.
+    PosX,
+    /// Layer 1, `−X`.
+    NegX,
+    /// Layer 2, `+Y`.
+    PosY,
+    /// Layer 3, `−Y`.
+    NegY,
+    /// Layer 4, `+Z`.
+    PosZ,
+    /// Layer 5, `−Z`.
+    NegZ,
+}
+
+impl CubeFace {
+    /// Every face, in layer order.
+    pub const ALL: [CubeFace; 6] = [
+        CubeFace::PosX,
+        CubeFace::NegX,
+        CubeFace::PosY,
+        CubeFace::NegY,
+        CubeFace::PosZ,
+        CubeFace::NegZ,
+    ];
+
+    /// The face's view direction.
+    pub const fn forward(self) -> Vec3 {
+        match self {
+            CubeFace::PosX => Vec3::X,
+            CubeFace::NegX => Vec3::NEG_X,
+            CubeFace::PosY => Vec3::Y,
+            CubeFace::NegY => Vec3::NEG_Y,
+            CubeFace::PosZ => Vec3::Z,
+            CubeFace::NegZ => Vec3::NEG_Z,
+        }
+    }
+
+    /// The face's up direction (texel rows run against it): `+Y` for the side faces, `−Z` for
+    /// `+Y` and `+Z` for `−Y`, so that with a mirrored right-handed view (a left-handed one)
+    /// texel `(s, t)` of a face is the direction [`CubeFace::of_direction`] maps to it.
+    pub const fn up(self) -> Vec3 {
+        match self {
+            CubeFace::PosY => Vec3::NEG_Z,
+            CubeFace::NegY => Vec3::Z,
+            _ => Vec3::Y,
+        }
+    }
+
+    /// WebGPU's (D3D's, Vulkan's) cube-face selection: the face of the major axis of `dir`
+    /// (ties go to `x`, then `y`) and the face coordinates `(s, t) ∈ [0, 1]²`,
+    /// `s = (sc / |ma| + 1) / 2`, `t = (tc / |ma| + 1) / 2`, with `(sc, tc, ma)` =
+    /// `(−z, −y, x)`, `(z, −y, x)`, `(x, z, y)`, `(x, −z, y)`, `(x, −y, z)`, `(−x, −y, z)` for
+    /// `+X … −Z`. Texel column `s·N`, row `t·N` of an `N × N` face. `None` for a zero or
+    /// non-finite direction.
+    pub fn of_direction(dir: Vec3) -> Option<(CubeFace, Vec2)> {
+        let a = dir.abs();
+        if !(dir.is_finite() && a.max_element() > 0.0) {
+            return None;
+        }
+        let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
+            if dir.x >= 0.0 {
+                (CubeFace::PosX, -dir.z, -dir.y, a.x)
+            } else {
+                (CubeFace::NegX, dir.z, -dir.y, a.x)
+            }
+        } else if a.y >= a.z {
+            if dir.y >= 0.0 {
+                (CubeFace::PosY, dir.x, dir.z, a.y)
+            } else {
+                (CubeFace::NegY, dir.x, -dir.z, a.y)
+            }
+        } else if dir.z >= 0.0 {
+            (CubeFace::PosZ, dir.x, -dir.y, a.z)
+        } else {
+            (CubeFace::NegZ, -dir.x, -dir.y, a.z)
+        };
+        Some((face, Vec2::new(sc / ma + 1.0, tc / ma + 1.0) * 0.5))
     }
 }
 
@@ -167,7 +256,9 @@ impl Camera {
         }
         let aspect = desc.width as f32 / desc.height as f32;
         let world_to_view = look_at_mat4(desc.eye, desc.target, up);
-        let view_to_clip = perspective(desc.fov_y, aspect, desc.near, desc.far);
+        let mirror = if desc.mirror_x { -1.0 } else { 1.0 };
+        let view_to_clip = Mat4::from_scale(Vec3::new(mirror, 1.0, 1.0))
+            * perspective(desc.fov_y, aspect, desc.near, desc.far);
         let world_to_clip = view_to_clip * world_to_view;
         let tan_half_fov_y = (0.5 * desc.fov_y).tan();
         Ok(Self {
@@ -181,12 +272,43 @@ impl Camera {
             tan_half_fov_y,
             aspect,
             // x_vs = (2u/W − 1)·aspect·tan(fov/2), y_vs = (1 − 2v/H)·tan(fov/2).
+            // Mirrored: x_vs = −(2u/W − 1)·aspect·tan(fov/2).
             ray_scale: Vec2::new(
-                2.0 * aspect * tan_half_fov_y / desc.width as f32,
+                mirror * 2.0 * aspect * tan_half_fov_y / desc.width as f32,
                 -2.0 * tan_half_fov_y / desc.height as f32,
             ),
-            ray_offset: Vec2::new(-aspect * tan_half_fov_y, tan_half_fov_y),
+            ray_offset: Vec2::new(-mirror * aspect * tan_half_fov_y, tan_half_fov_y),
         })
+    }
+
+    /// The camera of one face of a cube map of `size × size` texels around `center`: 90° field
+    /// of view, aspect 1, looking along [`CubeFace::forward`] with [`CubeFace::up`], mirrored, so
+    /// that pixel `(s·size, t·size)` sees the direction that [`CubeFace::of_direction`] (and a
+    /// wgpu `texture_cube` lookup) maps to `(face, s, t)`.
+    pub fn cube_face(
+        center: Vec3,
+        face: CubeFace,
+        size: u32,
+        near: f32,
+        far: f32,
+    ) -> Result<Self, CameraError> {
+        Self::new(CameraDesc {
+            eye: center,
+            target: center + face.forward(),
+            up: face.up(),
+            fov_y: core::f32::consts::FRAC_PI_2,
+            near,
+            far,
+            width: size,
+            height: size,
+            mirror_x: true,
+        })
+    }
+
+    /// Whether the image is mirrored ([`CameraDesc::mirror_x`]): counter-clockwise triangles
+    /// appear clockwise on screen.
+    pub fn is_mirrored(&self) -> bool {
+        self.desc.mirror_x
     }
 
     /// The description this camera was built from.
@@ -324,6 +446,36 @@ mod tests {
             ..CameraDesc::default()
         })
         .expect("valid camera")
+    }
+
+    /// Direction → face → texel round trip: a cube-face camera's pixel of a direction is where
+    /// WebGPU's face selection puts it, and its pixel ray points back along the direction.
+    #[test]
+    fn cube_face_cameras_match_webgpu_face_selection() {
+        let size = 64;
+        let center = Vec3::new(0.3, -0.2, 0.5);
+        let cameras =
+            CubeFace::ALL.map(|f| Camera::cube_face(center, f, size, 0.01, 10.0).expect("face"));
+        let mut checked = 0;
+        for i in 0..2000u32 {
+            // A deterministic spread of directions (golden-angle spiral).
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 2000.0;
+            let phi = i as f32 * 2.399_963;
+            let r = (1.0 - z * z).sqrt();
+            let dir = Vec3::new(r * phi.cos(), z, r * phi.sin());
+            let (face, st) = CubeFace::of_direction(dir).expect("direction");
+            let camera = &cameras[face as usize];
+            let px = camera.world_to_pixel(center + dir).expect("in front");
+            assert!(
+                (px.truncate() - st * size as f32).abs().max_element() < 1e-3,
+                "{dir}: {face:?} {st} vs {px}"
+            );
+            let back = camera.pixel_ray(px.truncate()).dir;
+            assert!((back - dir.normalize()).length() < 1e-5, "{dir} vs {back}");
+            checked += 1;
+        }
+        assert_eq!(checked, 2000);
+        assert!(cameras.iter().all(Camera::is_mirrored));
     }
 
     #[test]

@@ -1,23 +1,54 @@
 //! Lat-long (equirectangular) environment mapping, as Mitsuba 3 looks maps up (design.md), so
 //! a scene can be checked against it.
+//!
+//! Every lookup is generic over how `atan2` is evaluated ([`Atan2`]): the backends use the
+//! inlined polynomial of [`crate::arctangent`] ([`Polynomial`], the twin of WGSL's built-in),
+//! the exact reference uses libm's `atan2f` ([`Exact`]), so no approximation of a backend leaks
+//! into the ground truth.
 
 use core::f32::consts::{PI, TAU};
 
 use glam::{Vec2, Vec3};
 
-use crate::arctangent::atan2;
+/// How an environment lookup evaluates `atan2(y, x)`.
+pub trait Atan2 {
+    /// The angle of `(x, y)` from the positive `x` axis, in `[−π, π]`.
+    fn atan2(y: f32, x: f32) -> f32;
+}
+
+/// The backends' `atan2`: [`crate::arctangent::atan2`] (≤ 8e-8 + 1 ulp from exact).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Polynomial;
+
+impl Atan2 for Polynomial {
+    #[inline]
+    fn atan2(y: f32, x: f32) -> f32 {
+        crate::arctangent::atan2(y, x)
+    }
+}
+
+/// The reference's `atan2`: libm's `atan2f` through [`f32::atan2`] (within one ulp).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Exact;
+
+impl Atan2 for Exact {
+    #[inline]
+    fn atan2(y: f32, x: f32) -> f32 {
+        y.atan2(x)
+    }
+}
 
 /// Texture coordinates of a unit world direction:
 /// `u = atan2(d.x, −d.z) / 2π` wrapped to `[0, 1)`, `v = acos(d.y) / π` (`v = 0` straight up),
 /// with `acos(d.y)` evaluated as `atan2(√(d.x² + d.z²), d.y)`, which keeps its digits at the
 /// poles.
 #[inline]
-pub fn direction_to_latlong(dir: Vec3) -> Vec2 {
-    let u = atan2(dir.x, -dir.z) / TAU;
+pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
+    let u = A::atan2(dir.x, -dir.z) / TAU;
     let u = if u < 0.0 { u + 1.0 } else { u };
     // `u + 1` can round to exactly 1 for tiny negative u.
     let u = if u >= 1.0 { 0.0 } else { u };
-    let theta = atan2((dir.x * dir.x + dir.z * dir.z).sqrt(), dir.y);
+    let theta = A::atan2((dir.x * dir.x + dir.z * dir.z).sqrt(), dir.y);
     Vec2::new(u, theta / PI)
 }
 
@@ -30,12 +61,17 @@ pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
     Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
 }
 
-/// Bilinear lookup in a `width × height` lat-long image of linear RGB texels (row 0 at
+/// Bilinear lookup (Wyman and Mitsuba: `L(d) = bilerp(map, x(u), y(v))`) in a `width × height` lat-long image of linear RGB texels (row 0 at
 /// `v = 0`), texel centres at half-integers: `x = u·W − ½`, `y = v·H − ½`; wraps in `u`,
 /// clamps in `v`.
 #[inline]
-pub fn sample_latlong_bilinear(texels: &[Vec3], width: u32, height: u32, dir: Vec3) -> Vec3 {
-    let uv = direction_to_latlong(dir);
+pub fn sample_latlong_bilinear<A: Atan2>(
+    texels: &[Vec3],
+    width: u32,
+    height: u32,
+    dir: Vec3,
+) -> Vec3 {
+    let uv = direction_to_latlong::<A>(dir);
     let x = uv.x * width as f32 - 0.5;
     let y = (uv.y * height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
     let (x0, y0) = (x.floor(), y.floor());
@@ -58,10 +94,16 @@ mod tests {
     #[test]
     fn mitsuba_axes() {
         // −z is u = 0, +x is u = 1/4, +z is u = 1/2; +y is v = 0.
-        assert!((direction_to_latlong(Vec3::NEG_Z) - Vec2::new(0.0, 0.5)).length() < 1e-6);
-        assert!((direction_to_latlong(Vec3::X) - Vec2::new(0.25, 0.5)).length() < 1e-6);
-        assert!((direction_to_latlong(Vec3::Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
-        assert!(direction_to_latlong(Vec3::Y).y.abs() < 1e-6);
+        assert!(
+            (direction_to_latlong::<Polynomial>(Vec3::NEG_Z) - Vec2::new(0.0, 0.5)).length() < 1e-6
+        );
+        assert!(
+            (direction_to_latlong::<Polynomial>(Vec3::X) - Vec2::new(0.25, 0.5)).length() < 1e-6
+        );
+        assert!(
+            (direction_to_latlong::<Polynomial>(Vec3::Z) - Vec2::new(0.5, 0.5)).length() < 1e-6
+        );
+        assert!(direction_to_latlong::<Polynomial>(Vec3::Y).y.abs() < 1e-6);
     }
 
     #[test]
@@ -72,7 +114,7 @@ mod tests {
             Vec3::new(0.0, -1.0, 1e-3),
         ] {
             let d = d.normalize();
-            let back = latlong_to_direction(direction_to_latlong(d));
+            let back = latlong_to_direction(direction_to_latlong::<Exact>(d));
             assert!((back - d).length() < 1e-5, "{d} -> {back}");
         }
     }
@@ -83,10 +125,16 @@ mod tests {
         let texels: Vec<Vec3> = (0..8).map(|i| Vec3::splat(i as f32)).collect();
         let centre = latlong_to_direction(Vec2::new(1.5 / 4.0, 0.5 / 2.0));
         assert!(
-            (sample_latlong_bilinear(&texels, 4, 2, centre) - Vec3::splat(1.0)).length() < 1e-4
+            (sample_latlong_bilinear::<Polynomial>(&texels, 4, 2, centre) - Vec3::splat(1.0))
+                .length()
+                < 1e-4
         );
         // Halfway across the seam between x = 3 and x = 0 on row 0.
         let seam = latlong_to_direction(Vec2::new(0.0, 0.5 / 2.0));
-        assert!((sample_latlong_bilinear(&texels, 4, 2, seam) - Vec3::splat(1.5)).length() < 1e-4);
+        assert!(
+            (sample_latlong_bilinear::<Polynomial>(&texels, 4, 2, seam) - Vec3::splat(1.5))
+                .length()
+                < 1e-4
+        );
     }
 }

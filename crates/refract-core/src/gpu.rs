@@ -1,5 +1,5 @@
 //! The data the WGSL twin shares with Rust: the `#[repr(C)]` uniform block of a frame and the
-//! integer codes of enums, defined once here. `refract-gpu` generates the WGSL constant header
+//! integer codes of enums and per-pixel flags, defined once here. `refract-gpu` generates the WGSL constant header
 //! from [`wgsl_constants`], and its tests compare [`FrameUniforms`]' offsets with the WGSL
 //! struct's (as naga lays it out).
 
@@ -31,16 +31,12 @@ pub struct FrameUniforms {
     pub height: u32,
     /// `tan(fov_y / 2)`.
     pub tan_half_fov_y: f32,
-    /// `width / height`.
+    /// `width / height`, negated for a mirrored camera (the `x` scale of view-space rays).
     pub aspect: f32,
     /// Index of refraction.
     pub ior: f32,
     /// [`tir_policy_code`].
     pub tir_policy: u32,
-    /// [`distance_mode_code`].
-    pub distance_mode: u32,
-    /// [`METHOD_SINGLE`] or [`METHOD_TWO_INTERFACE`].
-    pub method_kind: u32,
     /// [`ENVIRONMENT_PROCEDURAL`], [`ENVIRONMENT_LATLONG`] or [`ENVIRONMENT_CONSTANT`].
     pub environment_kind: u32,
     /// Lat-long map width.
@@ -49,12 +45,10 @@ pub struct FrameUniforms {
     pub environment_height: u32,
     /// Lat-long map intensity.
     pub environment_intensity: f32,
+    /// Padding to a multiple of 16 bytes.
+    pub _padding: [u32; 2],
 }
 
-/// `method_kind` of `single`.
-pub const METHOD_SINGLE: u32 = 0;
-/// `method_kind` of the two-interface methods.
-pub const METHOD_TWO_INTERFACE: u32 = 1;
 /// `environment_kind` of the procedural environment.
 pub const ENVIRONMENT_PROCEDURAL: u32 = 0;
 /// `environment_kind` of a lat-long map.
@@ -87,6 +81,24 @@ pub const fn exit_normal_source_code(source: ExitNormalSource) -> u32 {
         ExitNormalSource::SilhouetteFallback => 2,
     }
 }
+
+/// The [`ExitNormalSource`] of a WGSL code, the inverse of [`exit_normal_source_code`]
+/// (`None` for 0 and unknown codes).
+pub fn exit_normal_source_from_code(code: u32) -> Option<ExitNormalSource> {
+    [
+        ExitNormalSource::BackFace,
+        ExitNormalSource::SilhouetteFallback,
+    ]
+    .into_iter()
+    .find(|s| exit_normal_source_code(*s) == code)
+}
+
+/// Per-pixel coverage codes of the GPU colour output's `w`: the pixel sees the background.
+pub const COVERAGE_BACKGROUND: u32 = 0;
+/// The pixel sees the refractor and the kernel produced a path.
+pub const COVERAGE_PATH: u32 = 1;
+/// The pixel sees the refractor but the kernel reported a degenerate input (black, no path).
+pub const COVERAGE_DEGENERATE: u32 = 2;
 
 /// The WGSL `const` declarations every shader module starts with: the numbers the Rust code
 /// uses, so that neither side hard-codes them.
@@ -126,8 +138,9 @@ pub fn wgsl_constants() -> String {
             "const DISTANCE_NORMAL_ONLY: u32 = {}u;",
             distance_mode_code(DistanceMode::NormalOnly)
         ),
-        format!("const METHOD_SINGLE: u32 = {METHOD_SINGLE}u;"),
-        format!("const METHOD_TWO_INTERFACE: u32 = {METHOD_TWO_INTERFACE}u;"),
+        format!("const COVERAGE_BACKGROUND: u32 = {COVERAGE_BACKGROUND}u;"),
+        format!("const COVERAGE_PATH: u32 = {COVERAGE_PATH}u;"),
+        format!("const COVERAGE_DEGENERATE: u32 = {COVERAGE_DEGENERATE}u;"),
         format!("const ENVIRONMENT_PROCEDURAL: u32 = {ENVIRONMENT_PROCEDURAL}u;"),
         format!("const ENVIRONMENT_LATLONG: u32 = {ENVIRONMENT_LATLONG}u;"),
         format!("const ENVIRONMENT_CONSTANT: u32 = {ENVIRONMENT_CONSTANT}u;"),
@@ -156,7 +169,21 @@ mod tests {
         assert_eq!(core::mem::offset_of!(FrameUniforms, width), 176);
         assert_eq!(
             core::mem::offset_of!(FrameUniforms, environment_intensity),
-            220
+            212
         );
+    }
+
+    #[test]
+    fn exit_normal_codes_round_trip() {
+        for s in [
+            ExitNormalSource::BackFace,
+            ExitNormalSource::SilhouetteFallback,
+        ] {
+            assert_eq!(
+                exit_normal_source_from_code(exit_normal_source_code(s)),
+                Some(s)
+            );
+        }
+        assert_eq!(exit_normal_source_from_code(0), None);
     }
 }

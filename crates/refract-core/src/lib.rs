@@ -10,9 +10,11 @@
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
 //! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
-//! * [`method`]: the method ids (`single`, `wyman`, `wyman-dv`, `wyman-dn`) and back surfaces.
+//! * [`back_surface`]: which back surface the back-face pass keeps (Wyman 2005a §3.2).
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
-//! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear.
+//! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear, generic
+//!   over the `atan2` ([`environment::Polynomial`] for backends, [`environment::Exact`] for the reference).
+//! * [`procedural_sky`]: the built-in procedural environment, scalar and eight lanes.
 //! * [`gpu`]: the `#[repr(C)]` uniform block and enum codes shared with the WGSL twin.
 //! * [`vector`]: robust normalisation and well-conditioned angles.
 //!
@@ -24,6 +26,7 @@
 //! The crate has no I/O, no threads, no GPU and allocates nothing.
 
 pub mod arctangent;
+pub mod back_surface;
 pub mod camera;
 pub mod environment;
 pub mod exit;
@@ -33,15 +36,15 @@ pub mod interpolated_distance;
 pub mod kernel;
 pub mod kernel_x8;
 pub mod lanes;
-pub mod method;
 pub mod optics;
+pub mod procedural_sky;
 pub mod vector;
 
-pub use camera::{Camera, CameraDesc, CameraError, Ray};
+pub use back_surface::BackSurface;
+pub use camera::{Camera, CameraDesc, CameraError, CubeFace, Ray};
 pub use exit::{ExitNormalSource, TirPolicy};
 pub use interpolated_distance::DistanceMode;
 pub use kernel::{
     BackFaceSample, BackFaceSampler, DegenerateInput, FrontSurface, ImageSpaceParams, InvalidIor,
     OneInterfacePath, TwoInterfacePath,
 };
-pub use method::{BackSurface, Method};

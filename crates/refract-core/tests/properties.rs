@@ -362,12 +362,12 @@ proptest! {
     fn pixel_rays_project_back_to_their_pixel(
         eye in (-50.0f32..50.0, -50.0f32..50.0, -50.0f32..50.0).prop_map(Vec3::from),
         dir in unit_vector(), fov_deg in 10.0f32..120.0, w in 1u32..2048, h in 1u32..2048,
-        fx in 0.0f32..1.0, fy in 0.0f32..1.0, t in 0.5f32..20.0,
+        fx in 0.0f32..1.0, fy in 0.0f32..1.0, t in 0.5f32..20.0, mirror_x in proptest::bool::ANY,
     ) {
         prop_assume!(dir.cross(Vec3::Y).length() > 0.05);
         let camera = Camera::new(CameraDesc {
             eye, target: eye + dir, up: Vec3::Y, fov_y: fov_deg.to_radians(),
-            near: 0.1, far: 100.0, width: w, height: h,
+            near: 0.1, far: 100.0, width: w, height: h, mirror_x,
         }).expect("valid camera");
         let uv = Vec2::new(fx * w as f32, fy * h as f32);
         let back = camera.world_to_pixel(camera.pixel_ray(uv).at(t)).expect("in front");

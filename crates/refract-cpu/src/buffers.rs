@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{BackFaceSample, BackFaceSampler};
 use refract_core::{BackSurface, Camera};
-use refract_geometry::Mesh;
+use refract_scene::Refractor;
 
 use crate::pixel_group::PixelGroup;
 use crate::raster::{
@@ -13,29 +13,15 @@ use crate::raster::{
     rasterize_into,
 };
 
-/// A refractor prepared for the CPU backend: its mesh and per-vertex `d_N`.
-pub struct PreparedRefractor<'a> {
-    /// The mesh.
-    pub mesh: &'a Mesh,
-    /// `d_N` per vertex (Wyman 2005a §3.1).
-    pub d_n: &'a [f32],
-}
-
-impl PreparedRefractor<'_> {
-    pub(crate) fn raster_mesh(&self) -> RasterMesh<'_> {
-        RasterMesh {
-            positions: &self.mesh.positions,
-            normals: &self.mesh.normals,
-            scalars: self.d_n,
-            triangles: &self.mesh.triangles,
-        }
-    }
+/// The refractor's mesh with its `d_N` as the interpolated scalar.
+pub(crate) fn raster_mesh(refractor: &Refractor) -> RasterMesh<'_> {
+    RasterMesh::with_scalars(refractor.mesh(), refractor.d_n())
 }
 
 /// The nearest front faces: `P1`, `N1` and interpolated `d_N` per pixel.
-pub fn front_faces(refractor: &PreparedRefractor<'_>, camera: &Camera) -> SurfaceBuffer {
+pub fn front_faces(refractor: &Refractor, camera: &Camera) -> SurfaceBuffer {
     rasterize(
-        &refractor.raster_mesh(),
+        &raster_mesh(refractor),
         camera,
         Faces::Front,
         DepthTest::Nearest,
@@ -66,25 +52,9 @@ impl BackTexel {
 }
 
 impl BackFaces {
-    /// Rasterises the back faces: the furthest (depth Greater) or the second surface (the
-    /// nearest back face, depth Less), Wyman 2005a §3.2.
-    pub fn render(
-        refractor: &PreparedRefractor<'_>,
-        camera: &Camera,
-        surface: BackSurface,
-    ) -> Self {
-        let mut back = Self::default();
-        back.render_into(refractor, camera, surface);
-        back
-    }
-
-    /// [`BackFaces::render`] into this buffer's memory.
-    pub fn render_into(
-        &mut self,
-        refractor: &PreparedRefractor<'_>,
-        camera: &Camera,
-        surface: BackSurface,
-    ) {
+    /// Rasterises the back faces into this buffer's memory: the furthest (depth Greater) or the
+    /// second surface (the nearest back face, depth Less), Wyman 2005a §3.2.
+    pub fn render_into(&mut self, refractor: &Refractor, camera: &Camera, surface: BackSurface) {
         let test = match surface {
             BackSurface::Furthest => DepthTest::Furthest,
             BackSurface::Second => DepthTest::Nearest,
@@ -94,7 +64,7 @@ impl BackFaces {
         self.resolved
             .resize((width * camera.height()) as usize, BackTexel::EMPTY);
         rasterize_bands(
-            &refractor.raster_mesh(),
+            &raster_mesh(refractor),
             camera,
             Faces::Back,
             test,
@@ -157,13 +127,9 @@ impl BackFaceSampler for BackFaces {
 }
 
 /// [`front_faces`] into an existing buffer, reusing its memory.
-pub fn front_faces_into(
-    refractor: &PreparedRefractor<'_>,
-    camera: &Camera,
-    buffer: &mut SurfaceBuffer,
-) {
+pub fn front_faces_into(refractor: &Refractor, camera: &Camera, buffer: &mut SurfaceBuffer) {
     rasterize_into(
-        &refractor.raster_mesh(),
+        &raster_mesh(refractor),
         camera,
         Faces::Front,
         DepthTest::Nearest,

@@ -1,24 +1,34 @@
 //! # refract-cpu
 //!
 //! The CPU backend: it produces the same image-space buffers a GPU rasteriser produces
-//! ([`raster`]: a visibility-buffer rasteriser with pixel centres, the top-left rule,
-//! perspective-correct interpolation, near-plane clipping, parallel deterministic bands of
-//! rows), then runs refract-core's kernels for the methods `single`, `wyman`, `wyman-dv` and
-//! `wyman-dn` (Wyman 2005a) eight pixels at a time with their bit-identical lane twins
-//! ([`render`]: [`CpuRenderer`] shades each band of rows right after rasterising it).
+//! ([`raster`]: a visibility-buffer rasteriser of any mesh from any camera, with pixel centres,
+//! the top-left rule, perspective-correct interpolation, near-plane clipping, parallel
+//! deterministic bands of rows), then runs refract-core's kernels eight pixels at a time with
+//! their bit-identical lane twins. [`CpuRenderer`] is the backend behind
+//! [`refract_scene::Renderer`]; one module per method family:
+//!
+//! * [`image_space`]: Wyman 2005a, `single`, `wyman`, `wyman-dv`, `wyman-dn` (each band of
+//!   rows shaded right after it is rasterised).
+//!
+//! [`surfaces`] rasterises any mesh of the scene from any camera (cube-map faces included) with
+//! its uv and object id.
 
 pub mod buffers;
+pub mod image_space;
 mod pixel_group;
 pub mod raster;
-pub mod render;
+pub mod renderer;
 mod shade;
+pub mod surfaces;
 
-pub use buffers::{BackFaces, PreparedRefractor, front_faces, front_faces_into};
+pub use buffers::{BackFaces, front_faces, front_faces_into};
+pub use image_space::{
+    FrameBuffers, ImageSpaceMethod, ImageSpacePasses, kernel_params, render_buffers,
+    render_buffers_into, shade_into,
+};
 pub use raster::{
-    BAND_ROWS, Band, DepthTest, Faces, SurfaceBuffer, Texel, band_pixels, rasterize,
+    BAND_ROWS, Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, band_pixels, rasterize,
     rasterize_bands, rasterize_into,
 };
-pub use render::{
-    CpuError, CpuRenderer, FrameBuffers, FrameOutputs, MethodAov, MethodFrame, MethodParams,
-    render_buffers, render_buffers_into, render_method, shade, shade_into,
-};
+pub use renderer::CpuRenderer;
+pub use surfaces::rasterize_surface;

@@ -13,6 +13,7 @@ use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::lanes::{F32x8, LANES, Vec3x8};
+use refract_geometry::Mesh;
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
 const SUBPIXEL_BITS: u32 = 8;
@@ -85,20 +86,67 @@ pub struct Texel {
     pub p_ws: Vec3,
     /// Perspective-correct interpolated vertex normal (normalised).
     pub n_ws: Vec3,
-    /// Perspective-correct interpolated per-vertex scalar (`d_N`).
+    /// Perspective-correct interpolated per-vertex scalar (`d_N`; 0 for meshes without one).
     pub scalar: f32,
+    /// The mesh triangle the fragment belongs to: any other per-vertex attribute (uv, albedo)
+    /// is interpolated from it with [`RasterMesh::barycentrics`], and the mesh says which
+    /// object it is.
+    pub triangle: u32,
 }
 
-/// A triangle mesh ready for rasterisation: world positions, normals and one scalar per vertex.
+/// A triangle mesh ready for rasterisation: world positions, normals and, optionally, one
+/// scalar per vertex. Any mesh of a scene (refractor or opaque object) rasterises.
+#[derive(Clone, Copy, Debug)]
 pub struct RasterMesh<'a> {
     /// World positions.
     pub positions: &'a [Vec3],
     /// Vertex normals.
     pub normals: &'a [Vec3],
-    /// One scalar per vertex (`d_N`), interpolated like the normals.
+    /// One scalar per vertex (`d_N`), interpolated like the normals; empty: 0 everywhere.
     pub scalars: &'a [f32],
     /// Triangles (counter-clockwise seen from outside).
     pub triangles: &'a [[u32; 3]],
+}
+
+impl<'a> RasterMesh<'a> {
+    /// A mesh without a per-vertex scalar (an opaque object).
+    pub fn new(mesh: &'a Mesh) -> Self {
+        Self::with_scalars(mesh, &[])
+    }
+
+    /// A mesh with one scalar per vertex (the refractor's `d_N`); `scalars` must be empty or
+    /// have one value per vertex.
+    pub fn with_scalars(mesh: &'a Mesh, scalars: &'a [f32]) -> Self {
+        debug_assert!(scalars.is_empty() || scalars.len() == mesh.positions.len());
+        Self {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            scalars,
+            triangles: &mesh.triangles,
+        }
+    }
+
+    #[inline]
+    fn scalar(&self, vertex: u32) -> f32 {
+        self.scalars.get(vertex as usize).copied().unwrap_or(0.0)
+    }
+
+    /// The barycentric weights `(w0, w1, w2)` of a texel's world position in its triangle (the
+    /// texel lies on it, clipped or not), for interpolating any per-vertex attribute:
+    /// `a = w0·a0 + w1·a1 + w2·a2`. Degenerate triangles give `(1, 0, 0)`.
+    pub fn barycentrics(&self, texel: &Texel) -> Vec3 {
+        let [a, b, c] = self.triangles[texel.triangle as usize].map(|i| self.positions[i as usize]);
+        let (e1, e2, p) = (b - a, c - a, texel.p_ws - a);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (p1, p2) = (p.dot(e1), p.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if det.abs() <= f32::MIN_POSITIVE || det.is_nan() {
+            return Vec3::X;
+        }
+        let w1 = (d22 * p1 - d12 * p2) / det;
+        let w2 = (d11 * p2 - d12 * p1) / det;
+        Vec3::new(1.0 - w1 - w2, w1, w2)
+    }
 }
 
 /// A vertex after projection, with the attributes to interpolate.
@@ -145,6 +193,8 @@ struct ScreenTriangle {
     /// Pixel bounds, inclusive.
     min: [u32; 2],
     max: [u32; 2],
+    /// The mesh triangle it was set up from (clipped pieces share it).
+    source: u32,
 }
 
 fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
@@ -199,6 +249,7 @@ impl ScreenTriangle {
             p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
             n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
             scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
+            triangle: self.source,
         }
     }
 }
@@ -212,7 +263,9 @@ fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [
     let (mut depth, mut inv_w, mut scalar) =
         ([[0.0f32; LANES]; 3], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
     let (mut p, mut n) = ([[Vec3::ZERO; LANES]; 3], [[Vec3::ZERO; LANES]; 3]);
+    let mut source = [0u32; LANES];
     for (i, t) in triangles.iter().enumerate() {
+        source[i] = t.source;
         let q = pixel_center_fixed(x[i], y);
         let [a, b, c] = t.xy;
         let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
@@ -244,6 +297,7 @@ fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [
         p_ws: Vec3::ZERO,
         n_ws: Vec3::ZERO,
         scalar: 0.0,
+        triangle: 0,
     }; LANES];
     for (i, texel) in texels.iter_mut().enumerate() {
         *texel = Texel {
@@ -251,6 +305,7 @@ fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [
             p_ws: p_ws[i],
             n_ws: n_ws[i],
             scalar: scalar[i],
+            triangle: source[i],
         };
     }
     texels
@@ -336,6 +391,7 @@ fn setup(
     attributes: impl FnOnce() -> [Attributes; 3],
     camera: &Camera,
     faces: Faces,
+    source: u32,
 ) -> Option<ScreenTriangle> {
     if !(v[0].finite && v[1].finite && v[2].finite) {
         return None;
@@ -345,9 +401,9 @@ fn setup(
     let mut inv_w = [v[0].inv_w, v[1].inv_w, v[2].inv_w];
     // In pixel coordinates (y down) a positive edge function means clockwise on screen; a
     // triangle wound counter-clockwise seen from outside appears counter-clockwise on screen
-    // (negative) when it faces the camera.
+    // (negative) when it faces the camera, clockwise through a mirrored camera.
     let area = edge(xy[0], xy[1], xy[2]);
-    let front = area < 0;
+    let front = (area < 0) != camera.is_mirrored();
     if area == 0 || front != (faces == Faces::Front) {
         return None;
     }
@@ -381,6 +437,7 @@ fn setup(
         attributes,
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
+        source,
     })
 }
 
@@ -412,20 +469,22 @@ impl TriangleStore {
         self.chunks
             .par_iter_mut()
             .zip(mesh.triangles.par_chunks(CHUNK_TRIANGLES))
-            .for_each(|(out, chunk)| {
+            .enumerate()
+            .for_each(|(c, (out, chunk))| {
                 out.clear();
                 let mut polygon = Vec::with_capacity(4);
-                for tri in chunk {
+                for (k, tri) in chunk.iter().enumerate() {
+                    let source = (c * CHUNK_TRIANGLES + k) as u32;
                     let corners = tri.map(|i| projected[i as usize]);
                     if corners.iter().all(|v| v.in_front) {
                         let attributes = || {
                             tri.map(|i| Attributes {
                                 p_ws: mesh.positions[i as usize],
                                 n_ws: mesh.normals[i as usize],
-                                scalar: mesh.scalars[i as usize],
+                                scalar: mesh.scalar(i),
                             })
                         };
-                        out.extend(setup(corners, attributes, camera, faces));
+                        out.extend(setup(corners, attributes, camera, faces, source));
                         continue;
                     }
                     // Crossing the near plane: clip, then set up the pieces.
@@ -433,7 +492,7 @@ impl TriangleStore {
                         clip: clip[i as usize],
                         p_ws: mesh.positions[i as usize],
                         n_ws: mesh.normals[i as usize],
-                        scalar: mesh.scalars[i as usize],
+                        scalar: mesh.scalar(i),
                     });
                     clip_near(v, &mut polygon);
                     for k in 1..polygon.len().saturating_sub(1) {
@@ -446,7 +505,7 @@ impl TriangleStore {
                             })
                         };
                         let corners = piece.map(|v| project(v.clip, width, height));
-                        out.extend(setup(corners, attributes, camera, faces));
+                        out.extend(setup(corners, attributes, camera, faces, source));
                     }
                 }
             });
@@ -532,11 +591,6 @@ pub struct Band<'a> {
 }
 
 impl Band<'_> {
-    /// The number of rows in this band.
-    pub fn rows(&self) -> u32 {
-        self.visibility.len() as u32 / self.width
-    }
-
     /// The image width in pixels.
     pub fn width(&self) -> u32 {
         self.width
@@ -556,13 +610,6 @@ impl Band<'_> {
             x,
             y,
         )
-    }
-
-    /// The fragment covering pixel `(x, y)` (`y` an image row inside this band), or `None`.
-    #[inline]
-    pub fn texel(&self, x: u32, y: u32) -> Option<Texel> {
-        let v = self.visibility[((y - self.first_row) * self.width + x) as usize];
-        (v.triangle != EMPTY).then(|| self.triangles.get(v.triangle).texel(x, y))
     }
 }
 

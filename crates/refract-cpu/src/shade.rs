@@ -9,12 +9,12 @@ use refract_core::exit::ExitNormalSource;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams};
 use refract_core::kernel_x8::{one_interface_x8, two_interface_lanes};
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
-use refract_trace::Environment;
+use refract_scene::Environment;
 
 use crate::buffers::BackFaces;
+use crate::image_space::MethodAov;
 use crate::pixel_group::PixelGroup;
 use crate::raster::{Band, SurfaceBuffer, Texel};
-use crate::render::MethodAov;
 
 /// What the per-pixel work of a frame reads.
 pub(crate) struct ShadeContext<'a> {

@@ -4,8 +4,8 @@
 use glam::Vec4;
 use wgpu::util::DeviceExt;
 
+use crate::bindings::storage_entry;
 use crate::context::{GpuContext, GpuError};
-use crate::renderer::storage_entry;
 use crate::shaders::module_source;
 
 /// The entry points of the conformance module.

@@ -1,17 +1,30 @@
 //! # refract-gpu
 //!
-//! The wgpu backend of refract: the methods `single`, `wyman`, `wyman-dv` and `wyman-dn` with
-//! the passes of Wyman 2005a §4 (back faces and front faces rasterised into float targets, the
-//! per-pixel kernel as a compute pass), WGSL in `shaders/` held to refract-core by conformance
-//! tests, readback into the CPU backend's [`refract_cpu::MethodFrame`].
+//! The wgpu backend of refract behind [`refract_scene::Renderer`] ([`GpuRenderer`]): the same
+//! passes as the CPU backend with WGSL from `shaders/`, held to refract-core by conformance
+//! tests, results read back into a [`refract_scene::Frame`].
+//!
+//! * [`context`]: adapter and device, headless, with clear errors.
+//! * `scene_buffers`: a scene uploaded once (every mesh, the environment).
+//! * `passes`: rasterising any mesh from any camera (back faces, front faces, surfaces).
+//! * `methods`: one module per method family (`image_space`: Wyman 2005a), one pipeline per
+//!   method.
+//! * [`shaders`]: the WGSL modules, composed after the constants header from Rust.
+//! * [`conformance`]: the harness that evaluates WGSL core functions on rows of inputs.
 //!
 //! Headless; runs on any Vulkan/Metal/DX12/GL adapter, including lavapipe (Mesa's CPU Vulkan
 //! driver). `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` choose the adapter.
 
+mod bindings;
 pub mod conformance;
 pub mod context;
+mod frame_uniforms;
+mod methods;
+mod passes;
 pub mod renderer;
+mod scene_buffers;
 pub mod shaders;
+mod timestamps;
 
 pub use context::{GpuContext, GpuError, list_adapters};
-pub use renderer::{GpuFrame, GpuRenderer, GpuScene, GpuTiming, render_method};
+pub use renderer::GpuRenderer;

@@ -16,7 +16,10 @@ pub const FILES: [(&str, &str); 7] = [
         include_str!("../../../shaders/environment.wgsl"),
     ),
     ("raster.wgsl", include_str!("../../../shaders/raster.wgsl")),
-    ("shade.wgsl", include_str!("../../../shaders/shade.wgsl")),
+    (
+        "image_space.wgsl",
+        include_str!("../../../shaders/image_space.wgsl"),
+    ),
     (
         "conformance.wgsl",
         include_str!("../../../shaders/conformance.wgsl"),
@@ -43,13 +46,13 @@ fn compose(parts: &[&str]) -> String {
 pub const MODULES: [(&str, &[&str]); 3] = [
     ("raster", &["core.wgsl", "frame.wgsl", "raster.wgsl"]),
     (
-        "shade",
+        "image_space",
         &[
             "core.wgsl",
             "procedural_sky.wgsl",
             "frame.wgsl",
             "environment.wgsl",
-            "shade.wgsl",
+            "image_space.wgsl",
         ],
     ),
     (

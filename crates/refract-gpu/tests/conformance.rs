@@ -7,16 +7,16 @@ use std::sync::OnceLock;
 
 use glam::{Vec3, Vec4};
 use proptest::prelude::*;
-use refract_core::environment::direction_to_latlong;
+use refract_core::environment::{Polynomial, direction_to_latlong};
 use refract_core::exit::{TirPolicy, exit_normal_outside_silhouette, refract_exit};
 use refract_core::fresnel::{fresnel_dielectric, schlick_conductor, schlick_dielectric};
 use refract_core::gpu::{distance_mode_code, tir_policy_code};
 use refract_core::interpolated_distance::{DistanceMode, angle_ratio, approximate_distance};
 use refract_core::optics::{critical_angle, face_forward_shading_normal, reflect, refract};
+use refract_core::procedural_sky::procedural_radiance;
 use refract_core::vector::{angle_between, robust_normalize};
 use refract_gpu::GpuContext;
 use refract_gpu::conformance::evaluate;
-use refract_trace::environment::procedural_radiance;
 
 /// One context for the whole file (adapters are slow to open on lavapipe).
 fn context() -> Option<&'static GpuContext> {
@@ -163,11 +163,11 @@ proptest! {
         for (k, (d, s)) in rows.iter().enumerate() {
             let rust = robust_normalize(*d * *s).expect("nonzero");
             prop_assert!(close3(normalized[k], rust, 1e-5) && normalized[k].w == 1.0);
-            let uv = direction_to_latlong(*d);
+            let uv = direction_to_latlong::<Polynomial>(*d);
             // u wraps at the seam: compare on the circle.
             let du = (latlong[k].x - uv.x).abs();
             prop_assert!(du.min(1.0 - du) <= 1e-5 && close(latlong[k].y, uv.y, 1e-5), "{} vs {}", latlong[k], uv);
-            sky_mismatch += usize::from(!close3(sky[k], procedural_radiance(*d), 1e-5));
+            sky_mismatch += usize::from(!close3(sky[k], procedural_radiance::<Polynomial>(*d), 1e-5));
         }
         // The sky has hard edges (checker squares, stripes, sun): a direction within rounding of
         // an edge may land on the other side. Allow one such row per batch.

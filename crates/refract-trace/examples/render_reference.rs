@@ -7,7 +7,8 @@ use std::time::Instant;
 
 use refract_core::{Camera, CameraDesc};
 use refract_geometry::{LoadOptions, builtin, load_mesh};
-use refract_trace::{Environment, Refractor, Scene, TraceSettings, load_latlong, render};
+use refract_scene::{Environment, Refractor, Scene, TraceSettings, load_latlong};
+use refract_trace::render;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         None => Environment::Procedural,
     };
-    let scene = Scene::new(Refractor::new(mesh, ior.parse()?)?, environment);
+    let scene = Scene::new("example", Refractor::new(mesh, ior.parse()?)?, environment);
     let res: u32 = res.parse()?;
     let camera = Camera::new(CameraDesc {
         width: res,

@@ -8,44 +8,55 @@ use refract_core::fresnel::fresnel_dielectric;
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::{Camera, Ray};
 use refract_geometry::Hit;
+use refract_scene::{Aov, Frame, Scene, TraceMode, TraceSettings};
 
-use crate::frame::{Frame, PixelAov};
 use crate::sampling::pixel_sample;
-use crate::scene::Scene;
 
-/// Which light paths the reference follows.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum TraceMode {
-    /// Only the refracted path (total internal reflection reflects): the apples-to-apples
-    /// reference for image-space methods, which ignore Fresnel reflection.
-    #[default]
-    Transmission,
-    /// Every interface splits by the exact Fresnel reflectance into a reflected and a refracted
-    /// branch (deterministic splitting, no random walk).
-    Full,
-}
-
-/// How the reference renders.
+/// Ground truth of one pixel, from the transmission path through its centre. Quantities that do
+/// not exist for a pixel (no refractor there, no exit, no nearby geometry hit) are NaN.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TraceSettings {
-    /// Which paths are followed.
-    pub mode: TraceMode,
-    /// Refractor interactions allowed per path; a path that needs more contributes black.
-    pub max_depth: u32,
-    /// Samples per pixel (1 = the pixel centre).
-    pub spp: u32,
-    /// `Full` mode drops branches whose throughput falls below this.
-    pub throughput_cutoff: f32,
+pub struct PathRecord {
+    /// First refractor hit `P1`.
+    pub p1: Vec3,
+    /// Outward shading normal at `P1`.
+    pub n1: Vec3,
+    /// Direction after the first interface (`T1`).
+    pub t1: Vec3,
+    /// Exact first exit point `P2`: the first hit from inside (whether it refracts or not).
+    pub p2: Vec3,
+    /// Outward shading normal at `P2`.
+    pub n2: Vec3,
+    /// Direction in which the path finally leaves the refractor (the environment lookup
+    /// direction; after the second interface for convex objects).
+    pub t2: Vec3,
+    /// Interfaces crossed by refraction (TIR bounces not counted).
+    pub interfaces: u32,
+    /// Total internal reflection anywhere on the path.
+    pub tir: bool,
+    /// Total internal reflection at the first exit `P2`.
+    pub tir_first_exit: bool,
+    /// Where the escaping ray hit nearby opaque geometry.
+    pub p_geom: Vec3,
 }
 
-impl Default for TraceSettings {
-    fn default() -> Self {
-        Self {
-            mode: TraceMode::Transmission,
-            max_depth: 8,
-            spp: 1,
-            throughput_cutoff: 1e-4,
-        }
+impl PathRecord {
+    /// A pixel that does not see the refractor.
+    pub const EMPTY: Self = Self {
+        p1: Vec3::NAN,
+        n1: Vec3::NAN,
+        t1: Vec3::NAN,
+        p2: Vec3::NAN,
+        n2: Vec3::NAN,
+        t2: Vec3::NAN,
+        interfaces: 0,
+        tir: false,
+        tir_first_exit: false,
+        p_geom: Vec3::NAN,
+    };
+
+    /// Whether the pixel's centre ray hits the refractor.
+    pub fn covers_refractor(&self) -> bool {
+        !self.p1.is_nan()
     }
 }
 
@@ -105,12 +116,12 @@ impl<'a> Tracer<'a> {
         let mut best = self
             .scene
             .refractor
-            .bvh
+            .bvh()
             .closest_hit(ray, 0.0, f32::INFINITY)
             .map(|h| (Surface::Refractor, h));
         for (i, object) in self.scene.objects.iter().enumerate() {
             let t_max = best.map_or(f32::INFINITY, |(_, h)| h.t);
-            if let Some(h) = object.bvh.closest_hit(ray, 0.0, t_max) {
+            if let Some(h) = object.bvh().closest_hit(ray, 0.0, t_max) {
                 best = Some((Surface::Object(i), h));
             }
         }
@@ -134,24 +145,14 @@ impl<'a> Tracer<'a> {
 
     fn shade_object(&self, index: usize, ray: &Ray, hit: &Hit) -> Vec3 {
         let object = &self.scene.objects[index];
-        let uv = if object.mesh.uvs.is_empty() {
-            let p = ray.at(hit.t);
-            Vec2::new(p.x, p.z)
-        } else {
-            let [a, b, c] =
-                object.mesh.triangles[hit.triangle as usize].map(|i| object.mesh.uvs[i as usize]);
-            let w = hit.barycentrics;
-            (1.0 - w.x - w.y) * a + w.x * b + w.y * c
-        };
-        self.scene
-            .light
-            .shade(object.albedo.at(uv), hit.shading_normal)
+        let uv = object.uv_at(hit.triangle, hit.barycentrics, ray.at(hit.t));
+        object.shade(&self.scene.light, uv, hit.shading_normal)
     }
 
     /// Follows the refracted path of `ray` (TIR reflects), recording the ground truth of
-    /// [`PixelAov`]; returns the radiance and the record.
-    pub fn transmission_path(&self, ray: Ray, rays: &mut u64) -> (Vec3, PixelAov) {
-        let mut aov = PixelAov::EMPTY;
+    /// [`PathRecord`]; returns the radiance and the record.
+    pub fn transmission_path(&self, ray: Ray, rays: &mut u64) -> (Vec3, PathRecord) {
+        let mut aov = PathRecord::EMPTY;
         let mut ray = ray;
         let mut depth = 0;
         loop {
@@ -159,7 +160,7 @@ impl<'a> Tracer<'a> {
                 if aov.covers_refractor() {
                     aov.t2 = ray.dir;
                 }
-                return (self.scene.environment.radiance(ray.dir), aov);
+                return (self.scene.environment.radiance_exact(ray.dir), aov);
             };
             let p = ray.at(hit.t);
             let Surface::Object(index) = surface else {
@@ -200,7 +201,7 @@ impl<'a> Tracer<'a> {
     /// Radiance along `ray` with Fresnel splitting at every refractor interface ([`TraceMode::Full`]).
     pub fn full_radiance(&self, ray: Ray, depth: u32, throughput: f32, rays: &mut u64) -> Vec3 {
         let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
-            return self.scene.environment.radiance(ray.dir);
+            return self.scene.environment.radiance_exact(ray.dir);
         };
         if let Surface::Object(index) = surface {
             return self.shade_object(index, &ray, &hit);
@@ -243,7 +244,7 @@ impl<'a> Tracer<'a> {
 
     /// Pixel `(x, y)`: radiance averaged over the pixel's samples, and the ground truth of the
     /// transmission path through the pixel centre.
-    pub fn pixel(&self, camera: &Camera, x: u32, y: u32, rays: &mut u64) -> (Vec3, PixelAov) {
+    pub fn pixel(&self, camera: &Camera, x: u32, y: u32, rays: &mut u64) -> (Vec3, PathRecord) {
         let centre = camera.pixel_ray(Camera::pixel_center(x, y));
         let (centre_radiance, aov) = self.transmission_path(centre, rays);
         let spp = self.settings.spp.max(1);
@@ -262,27 +263,69 @@ impl<'a> Tracer<'a> {
 }
 
 /// Renders the whole frame, rows in parallel (rayon); the result does not depend on the
-/// thread count (every pixel is computed independently from its own coordinates).
+/// thread count (every pixel is computed independently from its own coordinates). The frame has
+/// every reference AOV layer (see the registry row of `reference`).
 pub fn render(scene: &Scene, camera: &Camera, settings: &TraceSettings) -> Frame {
+    let mut frame = Frame::default();
+    render_into(scene, camera, settings, &mut frame);
+    frame
+}
+
+/// [`render`] into an existing frame.
+pub fn render_into(scene: &Scene, camera: &Camera, settings: &TraceSettings, frame: &mut Frame) {
     let tracer = Tracer::new(scene, *settings);
     let (width, height) = (camera.width(), camera.height());
-    let rows: Vec<(Vec<Vec3>, Vec<PixelAov>, u64)> = (0..height)
+    let rows: Vec<(Vec<Vec3>, Vec<PathRecord>, u64)> = (0..height)
         .into_par_iter()
         .map(|y| {
             let mut rays = 0;
-            let (radiance, aov) = (0..width)
+            let (radiance, records) = (0..width)
                 .map(|x| tracer.pixel(camera, x, y, &mut rays))
                 .unzip();
-            (radiance, aov, rays)
+            (radiance, records, rays)
         })
         .collect();
-    let mut frame = Frame::new(width, height);
-    frame.radiance.clear();
-    frame.aov.clear();
-    for (radiance, aov, rays) in rows {
-        frame.radiance.extend(radiance);
-        frame.aov.extend(aov);
+    frame.reset(width, height);
+    let mut records = Vec::with_capacity(frame.pixel_count());
+    let mut offset = 0;
+    for (radiance, row, rays) in rows {
+        frame.color[offset..offset + radiance.len()].copy_from_slice(&radiance);
+        offset += radiance.len();
+        records.extend(row);
         frame.rays += rays;
     }
-    frame
+    write_layers(&records, frame);
+}
+
+/// The records as the frame's AOV layers.
+fn write_layers(records: &[PathRecord], frame: &mut Frame) {
+    type Vector = fn(&PathRecord) -> Vec3;
+    let vectors: [(Aov, Vector); 7] = [
+        (Aov::P1, |r| r.p1),
+        (Aov::N1, |r| r.n1),
+        (Aov::T1, |r| r.t1),
+        (Aov::P2, |r| r.p2),
+        (Aov::N2, |r| r.n2),
+        (Aov::T2, |r| r.t2),
+        (Aov::PGeom, |r| r.p_geom),
+    ];
+    for (aov, get) in vectors {
+        for (out, r) in frame.vec3_mut(aov).iter_mut().zip(records) {
+            *out = get(r);
+        }
+    }
+    type Flag = fn(&PathRecord) -> bool;
+    let flags: [(Aov, Flag); 3] = [
+        (Aov::Covered, PathRecord::covers_refractor),
+        (Aov::Tir, |r| r.tir),
+        (Aov::TirFirstExit, |r| r.tir_first_exit),
+    ];
+    for (aov, get) in flags {
+        for (out, r) in frame.flag_mut(aov).iter_mut().zip(records) {
+            *out = get(r);
+        }
+    }
+    for (out, r) in frame.count_mut(Aov::Interfaces).iter_mut().zip(records) {
+        *out = r.interfaces;
+    }
 }

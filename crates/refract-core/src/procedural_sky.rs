@@ -1,77 +1,12 @@
-//! Distant lighting: lat-long HDR maps (`.exr`, `.hdr`), a constant colour, and the procedural
-//! default environment that needs no file.
-
-use std::path::Path;
+//! The built-in procedural environment (sky with meridian stripes and a sun, checkered
+//! ground): structure in every direction, so refraction errors are visible, and no file needed.
+//! Generic over [`Atan2`] like every environment lookup; the eight-lane version is the
+//! backends' ([`crate::environment::Polynomial`]), bit-identical lane by lane.
 
 use glam::Vec3;
-use refract_core::arctangent::atan2;
-use refract_core::environment::sample_latlong_bilinear;
-use refract_core::lanes::{F32x8, Vec3x8, atan2 as atan2_x8};
 
-use crate::error::TraceError;
-
-/// A lat-long (equirectangular) map of linear RGB radiance, row 0 at the zenith.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LatLongMap {
-    /// Width in texels.
-    pub width: u32,
-    /// Height in texels.
-    pub height: u32,
-    /// `width × height` texels, row-major from the top.
-    pub texels: Vec<Vec3>,
-}
-
-/// What loading a map had to fix.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct EnvironmentReport {
-    /// Negative channel values clamped to 0 (down-sampling ringing in real HDRIs).
-    pub negative_clamped: usize,
-    /// NaN or infinite channel values replaced by 0.
-    pub non_finite_replaced: usize,
-}
-
-/// Radiance arriving from infinitely far away, by direction.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Environment {
-    /// A lat-long map scaled by an intensity, looked up bilinearly (Mitsuba's convention).
-    LatLong {
-        /// The map.
-        map: LatLongMap,
-        /// Radiance scale.
-        intensity: f32,
-    },
-    /// The same radiance from every direction (the white furnace).
-    Constant(Vec3),
-    /// The built-in procedural sky and checkered ground, see [`procedural_radiance`].
-    Procedural,
-}
-
-impl Environment {
-    /// Radiance arriving along `-dir` (i.e. seen when looking along unit `dir`).
-    #[inline]
-    pub fn radiance(&self, dir: Vec3) -> Vec3 {
-        match self {
-            Self::LatLong { map, intensity } => {
-                *intensity * sample_latlong_bilinear(&map.texels, map.width, map.height, dir)
-            }
-            Self::Constant(c) => *c,
-            Self::Procedural => procedural_radiance(dir),
-        }
-    }
-
-    /// [`Self::radiance`] for eight unit directions at once (bit-identical per lane).
-    #[inline]
-    pub fn radiance_x8(&self, dir: Vec3x8) -> Vec3x8 {
-        match self {
-            Self::Procedural => procedural_radiance_x8(dir),
-            Self::Constant(c) => Vec3x8::splat(*c),
-            Self::LatLong { .. } => {
-                let dirs = dir.to_lanes();
-                Vec3x8::from_lanes(&dirs.map(|d| self.radiance(d)))
-            }
-        }
-    }
-}
+use crate::environment::Atan2;
+use crate::lanes::{F32x8, Vec3x8, atan2 as atan2_x8};
 
 /// The procedural sky's sun direction, `normalize(0.4, 0.6, −0.7)`.
 const SUN: Vec3 = Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05);
@@ -93,12 +28,12 @@ const STRIPE_HUES: [Vec3; 4] = [
 ///   warm sun disc.
 /// - Ground (`d.y < 0`): a black-and-white checkerboard on the plane `y = −1` (squares of 0.5),
 ///   fading into the horizon colour far away so that it does not alias.
-pub fn procedural_radiance(dir: Vec3) -> Vec3 {
+pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
     if dir.y >= 0.0 {
         let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
         // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
         // wraps it (the same number as `rem_euclid(12)`, without a call to fmodf).
-        let signed = atan2(dir.x, -dir.z) * (6.0 / core::f32::consts::PI);
+        let signed = A::atan2(dir.x, -dir.z) * (6.0 / core::f32::consts::PI);
         let stripe = if signed < 0.0 { signed + 12.0 } else { signed };
         let nearest = (stripe + 0.5).floor(); // stripe ≥ 0: rounds halves up, as `round` does
         // Meridians converge at the zenith: stop them below it.
@@ -124,7 +59,7 @@ pub fn procedural_radiance(dir: Vec3) -> Vec3 {
     }
 }
 
-/// [`procedural_radiance`] for eight directions at once: both branches evaluated and selected
+/// [`procedural_radiance`] with the polynomial `atan2` for eight directions at once: both branches evaluated and selected
 /// per lane, with the same operations, so each lane has the scalar function's bits.
 pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
     // Neighbouring pixels mostly see the same half: only the halves some lane needs are
@@ -184,107 +119,19 @@ fn ground_x8(dir: Vec3x8) -> Vec3x8 {
     lerp_x8(Vec3x8::splat(HORIZON), tile, fade)
 }
 
-/// Loads a lat-long `.exr` (half or float, RGB or RGBA) or Radiance `.hdr` map. Negative and
-/// non-finite values are clamped to 0 and counted in the report.
-pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), TraceError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let (width, height, mut rgb) = match extension.as_deref() {
-        Some("exr") => read_exr(path)?,
-        Some("hdr") => read_hdr(path)?,
-        _ => {
-            return Err(TraceError::Format {
-                path: path.to_owned(),
-                message: "unsupported environment map; expected a lat-long .exr or .hdr file"
-                    .into(),
-            });
-        }
-    };
-    let mut report = EnvironmentReport::default();
-    for v in &mut rgb {
-        if !v.is_finite() {
-            *v = 0.0;
-            report.non_finite_replaced += 1;
-        } else if *v < 0.0 {
-            *v = 0.0;
-            report.negative_clamped += 1;
-        }
-    }
-    let texels = rgb.chunks_exact(3).map(Vec3::from_slice).collect();
-    Ok((
-        LatLongMap {
-            width,
-            height,
-            texels,
-        },
-        report,
-    ))
-}
-
-fn format_error(path: &Path, message: impl Into<String>) -> TraceError {
-    TraceError::Format {
-        path: path.to_owned(),
-        message: message.into(),
-    }
-}
-
-/// RGB of the first layer that has R, G and B channels (any layer name prefix).
-fn read_exr(path: &Path) -> Result<(u32, u32, Vec<f32>), TraceError> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|err| format_error(path, format!("not a readable OpenEXR file: {err}")))?;
-    for layer in &image.layer_data {
-        let find = |name: &str| {
-            layer.channel_data.list.iter().find(|c| {
-                let full = c.name.to_string();
-                full == name || full.ends_with(&format!(".{name}"))
-            })
-        };
-        let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) else {
-            continue;
-        };
-        let size = layer.size;
-        let (r, g, b): (Vec<f32>, Vec<f32>, Vec<f32>) = (
-            r.sample_data.values_as_f32().collect(),
-            g.sample_data.values_as_f32().collect(),
-            b.sample_data.values_as_f32().collect(),
-        );
-        let rgb = (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect();
-        return Ok((size.width() as u32, size.height() as u32, rgb));
-    }
-    Err(format_error(
-        path,
-        "no layer with R, G and B channels; expected an RGB(A) lat-long map",
-    ))
-}
-
-fn read_hdr(path: &Path) -> Result<(u32, u32, Vec<f32>), TraceError> {
-    let image = image::open(path)
-        .map_err(|err| format_error(path, format!("not a readable Radiance .hdr file: {err}")))?;
-    let rgb = image.to_rgb32f();
-    Ok((rgb.width(), rgb.height(), rgb.into_raw()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::environment::Polynomial;
 
     #[test]
     fn procedural_environment_has_structure_everywhere() {
-        let below = procedural_radiance(Vec3::new(0.1, -0.5, -0.3).normalize());
-        let other = procedural_radiance(Vec3::new(0.35, -0.5, -0.3).normalize());
+        let below = procedural_radiance::<Polynomial>(Vec3::new(0.1, -0.5, -0.3).normalize());
+        let other = procedural_radiance::<Polynomial>(Vec3::new(0.35, -0.5, -0.3).normalize());
         assert_ne!(below, other, "checker squares differ");
-        let sky = procedural_radiance(Vec3::Y);
+        let sky = procedural_radiance::<Polynomial>(Vec3::Y);
         assert!(sky.z > sky.x, "blue zenith");
-        let stripe = procedural_radiance(Vec3::new(0.0, 0.2, -1.0).normalize());
+        let stripe = procedural_radiance::<Polynomial>(Vec3::new(0.0, 0.2, -1.0).normalize());
         assert!(
             stripe.x > 0.8 && stripe.y < 0.2,
             "red stripe toward −z: {stripe}"
@@ -328,14 +175,15 @@ mod tests {
             })
             .collect();
         dirs.extend(mixed);
-        let environment = Environment::Procedural;
         for chunk in dirs.chunks_exact(8) {
             let lanes: [Vec3; 8] = chunk.try_into().expect("eight");
-            let wide = environment
-                .radiance_x8(Vec3x8::from_lanes(&lanes))
-                .to_lanes();
+            let wide = procedural_radiance_x8(Vec3x8::from_lanes(&lanes)).to_lanes();
             for (d, w) in lanes.iter().zip(wide) {
-                assert_eq!(w.to_array(), procedural_radiance(*d).to_array(), "{d}");
+                assert_eq!(
+                    w.to_array(),
+                    procedural_radiance::<Polynomial>(*d).to_array(),
+                    "{d}"
+                );
             }
         }
     }

@@ -1,14 +1,16 @@
-//! Scene files (TOML) and the built-in scenes, turned into what the backends and the reference
-//! render. Relative paths are relative to the scene file.
+//! Scene files (TOML, `docs/scenes.md`) and the built-in scenes, turned into the [`Scene`] every
+//! renderer renders. Relative paths are relative to the scene file.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use refract_core::CameraDesc;
-use refract_geometry::{LoadOptions, Mesh, MeshBvh, builtin, load_mesh, normal_distances};
-use refract_trace::{Albedo, Environment, Object, Refractor, Scene, load_latlong};
+use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
 use serde::Deserialize;
+
+use crate::environment::{Environment, load_latlong};
+use crate::error::SceneError;
+use crate::scene::{Albedo, Material, Object, Refractor, Scene};
 
 /// The built-in scenes: name, one line, TOML. They need no file.
 pub const BUILTIN_SCENES: [(&str, &str, &str); 3] = [
@@ -125,35 +127,39 @@ struct ObjectSection {
     texture: Option<String>,
 }
 
-/// A scene ready to render: the reference's scene, `d_N`, and the camera without resolution.
+/// The names of the built-in scenes, comma-separated.
+pub fn builtin_names() -> String {
+    BUILTIN_SCENES.map(|s| s.0).join(", ")
+}
+
+/// A scene ready to render, and what loading it had to fix.
+#[derive(Debug)]
 pub struct LoadedScene {
-    /// Built-in name or file stem.
-    pub name: String,
-    /// Refractor, objects, environment, light.
+    /// Camera, refractor (mesh, BVH, `d_N`, IOR), objects, environment, light.
     pub scene: Scene,
-    /// Per-vertex `d_N` of the refractor.
-    pub d_n: Vec<f32>,
-    /// The camera (its width and height are set per run).
-    pub camera: CameraDesc,
     /// Lines to show the user (mesh and environment quirks fixed on load).
     pub warnings: Vec<String>,
 }
 
 /// A built-in scene name or a path to a `.toml` scene file.
-pub fn load_scene(spec: &str) -> anyhow::Result<LoadedScene> {
+pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
     if let Some((name, _, toml)) = BUILTIN_SCENES.iter().find(|(name, _, _)| *name == spec) {
-        return build(name, toml, Path::new("."), "built-in scene");
+        return build(
+            name,
+            toml,
+            Path::new("."),
+            &format!("built-in scene {name}"),
+        );
     }
     let path = PathBuf::from(spec);
     if path.extension().is_none_or(|e| e != "toml") {
-        let names: Vec<&str> = BUILTIN_SCENES.iter().map(|s| s.0).collect();
-        bail!(
-            "unknown scene `{spec}`: expected a built-in scene ({}) or a .toml scene file",
-            names.join(", ")
-        );
+        return Err(SceneError::UnknownScene(spec.to_owned()));
     }
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{}: cannot read the scene file", path.display()))?;
+    let text = std::fs::read_to_string(&path).map_err(|source| SceneError::Io {
+        path: path.clone(),
+        action: "cannot read the scene file",
+        source,
+    })?;
     let name = path
         .file_stem()
         .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
@@ -161,14 +167,17 @@ pub fn load_scene(spec: &str) -> anyhow::Result<LoadedScene> {
     build(&name, &text, &base, &path.display().to_string())
 }
 
-fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<LoadedScene> {
-    let file: SceneFile = toml::from_str(text)
-        .map_err(|err| anyhow::anyhow!("{origin}: {}", err.to_string().trim_end()))?;
+fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScene, SceneError> {
+    let file: SceneFile = toml::from_str(text).map_err(|err| SceneError::Parse {
+        origin: origin.to_owned(),
+        message: err.to_string().trim_end().to_owned(),
+    })?;
     let mut warnings = Vec::new();
-    let (mesh, glass_ior) = load_refractor_mesh(
+    let (mesh, glass_ior) = load_mesh_spec(
         &file.refractor.mesh,
         file.refractor.normalize,
         base,
+        origin,
         &mut warnings,
     )?;
     let mut mesh = mesh;
@@ -180,8 +189,16 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<Lo
             "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
         ));
     }
-    let bvh = MeshBvh::build(&mesh);
-    let d_n = normal_distances(&mesh, &bvh);
+    if !(ior > 0.0 && ior.is_finite()) {
+        return Err(SceneError::field(
+            origin,
+            "[refractor] ior",
+            ior,
+            crate::scene::IOR_EXPECTED,
+        ));
+    }
+    let refractor = Refractor::new(mesh, ior)?;
+    let d_n = refractor.normal_distances();
     if d_n.misses > 0 {
         warnings.push(format!(
             "d_N: {} of {} vertices missed (open mesh); they use {:.4}",
@@ -190,8 +207,6 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<Lo
             d_n.fallback
         ));
     }
-    let refractor =
-        Refractor::new(mesh, ior).with_context(|| format!("{origin}: [refractor] ior"))?;
 
     let environment = match &file.environment.file {
         None => Environment::Procedural,
@@ -216,7 +231,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<Lo
     let mut objects = Vec::new();
     for (k, object) in file.objects.iter().enumerate() {
         let (mut mesh, _) =
-            load_refractor_mesh(&object.mesh, object.normalize, base, &mut warnings)?;
+            load_mesh_spec(&object.mesh, object.normalize, base, origin, &mut warnings)?;
         mesh.transform(&affine(object.translate, object.scale, object.rotate_deg));
         let albedo = match object.texture.as_deref() {
             None => Albedo::Constant(object.color.map_or(Vec3::splat(0.6), Vec3::from)),
@@ -226,11 +241,16 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<Lo
                 squares: 8.0,
             },
             Some("color-chart") => Albedo::ColorChart,
-            Some(other) => bail!(
-                "{origin}: objects[{k}].texture = \"{other}\": expected \"checker\" or \"color-chart\""
-            ),
+            Some(other) => {
+                return Err(SceneError::field(
+                    origin,
+                    format!("objects[{k}].texture"),
+                    format!("\"{other}\""),
+                    "\"checker\" or \"color-chart\"",
+                ));
+            }
         };
-        objects.push(Object::new(mesh, albedo));
+        objects.push(Object::new(mesh, Material::Diffuse(albedo)));
     }
 
     let c = &file.camera;
@@ -241,25 +261,25 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> anyhow::Result<Lo
         fov_y: c.fov_y_deg.to_radians(),
         ..CameraDesc::default()
     };
-    let mut scene = Scene::new(refractor, environment);
+    let mut scene = Scene::new(name, refractor, environment);
     scene.objects = objects;
-    Ok(LoadedScene {
-        name: name.to_owned(),
-        scene,
-        d_n: d_n.values,
-        camera,
-        warnings,
-    })
+    scene.camera = camera;
+    Ok(LoadedScene { scene, warnings })
 }
 
-fn load_refractor_mesh(
+fn load_mesh_spec(
     spec: &str,
     normalize: bool,
     base: &Path,
+    origin: &str,
     warnings: &mut Vec<String>,
-) -> anyhow::Result<(Mesh, Option<f32>)> {
+) -> Result<(Mesh, Option<f32>), SceneError> {
+    let geometry = |source| SceneError::Geometry {
+        origin: origin.to_owned(),
+        source,
+    };
     if spec.starts_with(builtin::PREFIX) {
-        let mut mesh = builtin::mesh(spec)?;
+        let mut mesh = builtin::mesh(spec).map_err(geometry)?;
         if normalize {
             mesh.normalize_to_unit_sphere();
         }
@@ -272,7 +292,8 @@ fn load_refractor_mesh(
             normalize,
             ..LoadOptions::default()
         },
-    )?;
+    )
+    .map_err(geometry)?;
     warnings.extend(
         loaded
             .report
@@ -300,9 +321,9 @@ mod tests {
     #[test]
     fn builtin_scenes_load() {
         for (name, _, _) in BUILTIN_SCENES {
-            let scene = load_scene(name).expect(name);
+            let scene = load_scene(name).expect(name).scene;
             assert_eq!(scene.name, name);
-            assert!(scene.d_n.iter().all(|d| d.is_finite()));
+            assert!(scene.refractor.d_n().iter().all(|d| d.is_finite()));
         }
     }
 
@@ -318,7 +339,7 @@ mod tests {
             "unknown.toml",
             "[refractor]\nmesh = \"builtin:sphere\"\nshininess = 3\n",
         );
-        let err = load_scene(&unknown).err().expect("unknown key").to_string();
+        let err = load_scene(&unknown).expect_err("unknown key").to_string();
         assert!(
             err.contains("unknown.toml") && err.contains("shininess"),
             "{err}"
@@ -327,20 +348,19 @@ mod tests {
             "wrong.toml",
             "[refractor]\nmesh = \"builtin:sphere\"\nior = \"glass\"\n",
         );
-        let err = load_scene(&wrong).err().expect("wrong type").to_string();
+        let err = load_scene(&wrong).expect_err("wrong type").to_string();
         assert!(err.contains("wrong.toml") && err.contains("ior"), "{err}");
         let missing = write("missing.toml", "[refractor]\nmesh = \"nowhere.obj\"\n");
-        let err = format!("{:#}", load_scene(&missing).err().expect("missing mesh"));
+        let err = format!("{:#}", load_scene(&missing).expect_err("missing mesh"));
         assert!(err.contains("nowhere.obj"), "{err}");
         let bad_ior = write(
             "bad_ior.toml",
             "[refractor]\nmesh = \"builtin:sphere\"\nior = -1.0\n",
         );
-        let err = format!("{:#}", load_scene(&bad_ior).err().expect("bad ior"));
+        let err = format!("{:#}", load_scene(&bad_ior).expect_err("bad ior"));
         assert!(err.contains("bad_ior.toml") && err.contains("ior"), "{err}");
         let err = load_scene("teapot-in-space")
-            .err()
-            .expect("unknown")
+            .expect_err("unknown")
             .to_string();
         assert!(err.contains("sphere, torus, lens"), "{err}");
     }
@@ -356,9 +376,11 @@ mod tests {
              translate = [0.0, -1.0, 0.0]\nscale = 3.0\n",
         )
         .expect("write");
-        let scene = load_scene(&path.display().to_string()).expect("scene");
-        assert_eq!(scene.scene.objects.len(), 1);
-        let sphere = scene.scene.refractor.mesh.bounding_sphere();
+        let scene = load_scene(&path.display().to_string())
+            .expect("scene")
+            .scene;
+        assert_eq!(scene.objects.len(), 1);
+        let sphere = scene.refractor.mesh().bounding_sphere();
         assert!(
             (sphere.center - Vec3::new(0.0, 0.5, 0.0)).length() < 1e-5
                 && (sphere.radius - 0.5).abs() < 1e-5

@@ -2,10 +2,10 @@
 
 use glam::Vec3;
 use refract_core::vector::angle_between;
-use refract_cpu::MethodFrame;
-use refract_trace::Frame;
-use refract_trace::tonemap::to_srgb8;
 use serde::Serialize;
+
+use crate::frame::{Aov, Frame};
+use crate::tonemap::to_srgb8;
 
 /// One row of `metrics.json`: exactly these fields, `null` where not applicable.
 #[derive(Clone, Debug, Serialize)]
@@ -16,6 +16,8 @@ pub struct MetricsRecord {
     pub method: String,
     /// `cpu`, `gpu` or `trace`.
     pub backend: String,
+    /// The method's parameters, `name=value` separated by spaces.
+    pub params: String,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -63,35 +65,67 @@ pub fn flip_map(reference: &[Vec3], test: &[Vec3], width: u32, height: u32) -> V
     nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
 }
 
-/// Computes the metrics of `frame` against `reference` and the per-pixel maps.
-pub fn evaluate(
-    reference: &Frame,
-    frame: &MethodFrame,
-    diameter: f32,
-) -> (MetricsRecord, ErrorMaps) {
-    let n = reference.aov.len();
-    let flip = flip_map(&reference.radiance, &frame.color, frame.width, frame.height);
+/// The layers a frame lacks read as absent everywhere.
+struct Layers<'f> {
+    covered: Option<&'f [bool]>,
+    t2: Option<&'f [Vec3]>,
+    p2: Option<&'f [Vec3]>,
+    tir: Option<&'f [bool]>,
+}
+
+impl<'f> Layers<'f> {
+    fn of(frame: &'f Frame) -> Self {
+        Self {
+            covered: frame.flag(Aov::Covered),
+            t2: frame.vec3(Aov::T2),
+            p2: frame.vec3(Aov::P2),
+            tir: frame.flag(Aov::Tir),
+        }
+    }
+    fn covered(&self, i: usize) -> bool {
+        self.covered.is_some_and(|c| c[i])
+    }
+    fn t2(&self, i: usize) -> Vec3 {
+        self.t2.map_or(Vec3::NAN, |v| v[i])
+    }
+    fn p2(&self, i: usize) -> Vec3 {
+        self.p2.map_or(Vec3::NAN, |v| v[i])
+    }
+    fn tir(&self, i: usize) -> bool {
+        self.tir.is_some_and(|t| t[i])
+    }
+}
+
+/// Computes the metrics of `frame` against `reference` (design.md, "Measuring") and the
+/// per-pixel maps. Both frames need their AOV layers (`covered`, `T2`, `P2`, `tir`); a missing
+/// layer counts as absent at every pixel. Over the pixels where the reference sees the
+/// refractor: RMSE and PSNR of linear RGB, mean FLIP (after the tonemap), mean angle between
+/// `T2` and the reference's `T2` (degrees) and mean `|P~2 − P2| / diameter`, each also over the
+/// pixels without TIR on the reference path, and the share of pixels with TIR in `frame`.
+pub fn evaluate(reference: &Frame, frame: &Frame, diameter: f32) -> (MetricsRecord, ErrorMaps) {
+    let n = reference.pixel_count();
+    let flip = flip_map(&reference.color, &frame.color, frame.width, frame.height);
+    let (truth, ours) = (Layers::of(reference), Layers::of(frame));
     let mut t2_deg = vec![f32::NAN; n];
     let mut p2_rel = vec![f32::NAN; n];
     for i in 0..n {
-        let (truth, ours) = (&reference.aov[i], &frame.aov[i]);
-        if !(truth.covers_refractor() && ours.covered) {
+        if !(truth.covered(i) && ours.covered(i)) {
             continue;
         }
-        if !truth.t2.is_nan() && !ours.t2.is_nan() && ours.t2 != Vec3::ZERO {
-            t2_deg[i] = angle_between(ours.t2, truth.t2).to_degrees();
+        let (truth_t2, ours_t2) = (truth.t2(i), ours.t2(i));
+        if !truth_t2.is_nan() && !ours_t2.is_nan() && ours_t2 != Vec3::ZERO {
+            t2_deg[i] = angle_between(ours_t2, truth_t2).to_degrees();
         }
-        if !truth.p2.is_nan() && !ours.p2.is_nan() {
-            p2_rel[i] = (ours.p2 - truth.p2).length() / diameter;
+        let (truth_p2, ours_p2) = (truth.p2(i), ours.p2(i));
+        if !truth_p2.is_nan() && !ours_p2.is_nan() {
+            p2_rel[i] = (ours_p2 - truth_p2).length() / diameter;
         }
     }
-    let refractor: Vec<usize> = (0..n)
-        .filter(|&i| reference.aov[i].covers_refractor())
-        .collect();
-    let non_tir = |i: &&usize| !reference.aov[**i].tir;
+    let refractor: Vec<usize> = (0..n).filter(|&i| truth.covered(i)).collect();
+    let non_tir = |i: &&usize| !truth.tir(**i);
     let finite = |v: &[f32], i: usize| v[i].is_finite().then_some(f64::from(v[i]));
     let mse = mean(refractor.iter().map(|&i| {
-        let d = frame.color[i] - reference.radiance[i];
+        let d = frame.color[i] - reference.color[i];
         f64::from(d.length_squared()) / 3.0
     }));
     let rmse = mse.map(f64::sqrt);
@@ -99,6 +133,7 @@ pub fn evaluate(
         scene: String::new(),
         method: String::new(),
         backend: String::new(),
+        params: String::new(),
         width: frame.width,
         height: frame.height,
         rmse,
@@ -118,11 +153,7 @@ pub fn evaluate(
                 .filter(non_tir)
                 .filter_map(|&i| finite(&p2_rel, i)),
         ),
-        tir_fraction: mean(
-            refractor
-                .iter()
-                .map(|&i| f64::from(u8::from(frame.aov[i].tir))),
-        ),
+        tir_fraction: mean(refractor.iter().map(|&i| f64::from(u8::from(ours.tir(i))))),
         ms_per_frame: None,
     };
     (
@@ -137,15 +168,15 @@ pub fn evaluate(
 
 /// The reference's own row: its TIR share and render time.
 pub fn reference_record(reference: &Frame, ms: f64) -> MetricsRecord {
-    let refractor: Vec<_> = reference
-        .aov
-        .iter()
-        .filter(|a| a.covers_refractor())
+    let truth = Layers::of(reference);
+    let refractor: Vec<usize> = (0..reference.pixel_count())
+        .filter(|&i| truth.covered(i))
         .collect();
     MetricsRecord {
         scene: String::new(),
         method: "reference".to_owned(),
         backend: "trace".to_owned(),
+        params: String::new(),
         width: reference.width,
         height: reference.height,
         rmse: None,
@@ -155,7 +186,7 @@ pub fn reference_record(reference: &Frame, ms: f64) -> MetricsRecord {
         t2_angle_deg_mean_non_tir: None,
         p2_error_rel_mean: None,
         p2_error_rel_mean_non_tir: None,
-        tir_fraction: mean(refractor.iter().map(|a| f64::from(u8::from(a.tir)))),
+        tir_fraction: mean(refractor.iter().map(|&i| f64::from(u8::from(truth.tir(i))))),
         ms_per_frame: Some(ms),
     }
 }

@@ -1,0 +1,71 @@
+//! The renderers a command runs: parsing `--backends`, opening the GPU (or saying why not), and
+//! checking every requested method is supported before any work starts.
+
+use refract_cpu::CpuRenderer;
+use refract_gpu::GpuRenderer;
+use refract_scene::{BackendId, MethodParams, Renderer};
+
+/// What to do when no GPU adapter exists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuPolicy {
+    /// The user asked for the GPU: no adapter is an error.
+    Required,
+    /// A default list: run on the CPU with a one-line notice.
+    IfAvailable,
+}
+
+/// Parses a `--backends` list (`cpu`, `gpu`).
+pub fn parse_backends(names: &[String]) -> anyhow::Result<Vec<BackendId>> {
+    names
+        .iter()
+        .map(|name| match name.as_str() {
+            "cpu" => Ok(BackendId::Cpu),
+            "gpu" => Ok(BackendId::Gpu),
+            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
+        })
+        .collect()
+}
+
+/// Opens the renderers of `backends` (the reference is not one of them).
+pub fn open(backends: &[BackendId], policy: GpuPolicy) -> anyhow::Result<Vec<Box<dyn Renderer>>> {
+    let mut renderers: Vec<Box<dyn Renderer>> = Vec::new();
+    for &backend in backends {
+        match backend {
+            BackendId::Cpu => renderers.push(Box::new(CpuRenderer::new())),
+            BackendId::Gpu => match GpuRenderer::new() {
+                Ok(gpu) => {
+                    let info = &gpu.context().info;
+                    eprintln!("GPU: {} ({:?})", info.name, info.backend);
+                    renderers.push(Box::new(gpu));
+                }
+                Err(err) if policy == GpuPolicy::IfAvailable => {
+                    eprintln!("note: {err}; running on the CPU only");
+                }
+                Err(err) => return Err(err.into()),
+            },
+            BackendId::Trace => {
+                anyhow::bail!("--backends: the reference always runs; expected cpu or gpu")
+            }
+        }
+    }
+    Ok(renderers)
+}
+
+/// Fails, naming the method and backend, when a renderer does not support a method.
+pub fn check_supported(
+    renderers: &[Box<dyn Renderer>],
+    methods: &[MethodParams],
+) -> anyhow::Result<()> {
+    for renderer in renderers {
+        for method in methods {
+            if !renderer.supports(method.id()) {
+                return Err(refract_scene::RenderError::Unsupported {
+                    backend: renderer.backend(),
+                    method: method.id(),
+                }
+                .into());
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,260 @@
+//! Wyman 2005a image-space refraction on the CPU (methods `single`, `wyman`, `wyman-dv`,
+//! `wyman-dn`): the back faces rasterised and resolved, then the front faces rasterised band by
+//! band, each band shaded by refract-core's eight-lane kernels right after it is rasterised.
+
+use glam::Vec3;
+use rayon::iter::Either;
+use rayon::prelude::*;
+use refract_core::exit::ExitNormalSource;
+use refract_core::gpu::exit_normal_source_code;
+use refract_core::kernel::ImageSpaceParams;
+use refract_core::{BackSurface, Camera, DistanceMode, TirPolicy};
+use refract_scene::{Aov, Environment, Frame, FrameOutputs, MethodId, Refractor, RenderError};
+
+use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
+use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::shade::{BandRow, BufferRow, ShadeContext};
+
+/// One image-space method run: which interfaces, and the kernel's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ImageSpaceMethod {
+    /// `single`: one interface.
+    Single,
+    /// `wyman` and its ablations: two interfaces with this back surface.
+    TwoInterface {
+        /// Which back surface is rasterised.
+        back: BackSurface,
+    },
+}
+
+/// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
+/// not apply (background pixels, degenerate inputs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct MethodAov {
+    /// The pixel sees the refractor.
+    pub covered: bool,
+    /// `P~2` (two-interface methods).
+    pub p2: Vec3,
+    /// The direction looked up in the environment (`T1` for `single`).
+    pub t2: Vec3,
+    /// The exit normal used (two-interface methods).
+    pub n2: Vec3,
+    /// Where `N2` came from.
+    pub n2_source: Option<ExitNormalSource>,
+    /// Total internal reflection at the entry or exit.
+    pub tir: bool,
+}
+
+impl MethodAov {
+    /// A pixel that does not see the refractor.
+    pub const BACKGROUND: Self = Self {
+        covered: false,
+        p2: Vec3::NAN,
+        t2: Vec3::NAN,
+        n2: Vec3::NAN,
+        n2_source: None,
+        tir: false,
+    };
+}
+
+/// The kernel's parameters, or the IOR error.
+pub fn kernel_params(
+    ior: f32,
+    distance: DistanceMode,
+    tir: TirPolicy,
+) -> Result<ImageSpaceParams, RenderError> {
+    ImageSpaceParams::new(ior, distance, tir).map_err(|err| RenderError::Parameter(err.to_string()))
+}
+
+/// The buffers of one frame: front faces always, back faces for two-interface methods.
+#[derive(Default)]
+pub struct FrameBuffers {
+    /// Front faces (P1, N1, d_N).
+    pub front: SurfaceBuffer,
+    /// Back faces of the chosen surface.
+    pub back: Option<BackFaces>,
+}
+
+/// Pass 1 and 2 of Wyman 2005a §4, stored whole (the two-step path of tests and stage benches;
+/// [`ImageSpacePasses`] fuses the second pass with the kernel): the back faces of `back` (none
+/// for `single`), then the front faces.
+pub fn render_buffers_into(
+    refractor: &Refractor,
+    camera: &Camera,
+    back: Option<BackSurface>,
+    buffers: &mut FrameBuffers,
+) {
+    match back {
+        None => buffers.back = None,
+        Some(surface) => buffers
+            .back
+            .get_or_insert_with(BackFaces::default)
+            .render_into(refractor, camera, surface),
+    }
+    front_faces_into(refractor, camera, &mut buffers.front);
+}
+
+/// [`render_buffers_into`] into new buffers.
+pub fn render_buffers(
+    refractor: &Refractor,
+    camera: &Camera,
+    back: Option<BackSurface>,
+) -> FrameBuffers {
+    let mut buffers = FrameBuffers::default();
+    render_buffers_into(refractor, camera, back, &mut buffers);
+    buffers
+}
+
+/// The per-pixel kernel over stored buffers, and the environment lookup (the two-step path):
+/// writes the colour and, with [`FrameOutputs::ColorAndAovs`], the layers of `method`.
+pub fn shade_into(
+    buffers: &FrameBuffers,
+    environment: &Environment,
+    camera: &Camera,
+    kernel: &ImageSpaceParams,
+    method: MethodId,
+    outputs: FrameOutputs,
+    frame: &mut Frame,
+) {
+    let (width, height) = (camera.width(), camera.height());
+    frame.resize_for_overwrite(width, height);
+    let mut aovs = Vec::new();
+    aovs.resize((width * height) as usize, MethodAov::BACKGROUND);
+    let context = ShadeContext {
+        back: buffers.back.as_ref(),
+        environment,
+        camera,
+        kernel,
+    };
+    frame
+        .color
+        .par_chunks_mut(width as usize)
+        .zip(aovs.par_chunks_mut(width as usize))
+        .enumerate()
+        .for_each(|(y, (colors, aovs))| {
+            let y = y as u32;
+            let front = BufferRow {
+                buffer: &buffers.front,
+                y,
+            };
+            context.row(y, &front, colors, Some(aovs));
+        });
+    if outputs == FrameOutputs::ColorAndAovs {
+        write_layers(&aovs, method, frame);
+    }
+}
+
+/// The pixels of a band of rows just rasterised: colours, and AOVs when asked for.
+fn shade_band(
+    context: &ShadeContext<'_>,
+    band: &Band<'_>,
+    colors: &mut [Vec3],
+    mut aovs: Option<&mut [MethodAov]>,
+) {
+    let width = band.width() as usize;
+    for (row, colors) in colors.chunks_exact_mut(width).enumerate() {
+        let y = band.first_row + row as u32;
+        let aovs = aovs
+            .as_deref_mut()
+            .map(|aovs| &mut aovs[row * width..][..width]);
+        context.row(y, &BandRow { band, y }, colors, aovs);
+    }
+}
+
+/// The passes of the image-space methods with their memory kept between frames, as a real-time
+/// renderer keeps its render targets: after the first frame at a resolution, a colour-only
+/// frame allocates nothing.
+///
+/// A frame is two passes (Wyman 2005a §4): the back faces are rasterised and resolved into
+/// normals and distances; then the front faces are rasterised band by band, and each band of
+/// rows is shaded by the kernel right after it is rasterised, while it is in cache (the front
+/// surface is never stored as a whole G-buffer). The result is bit-identical to
+/// [`render_buffers`] followed by [`shade_into`].
+#[derive(Default)]
+pub struct ImageSpacePasses {
+    front: SurfaceBuffer,
+    back: BackFaces,
+    aovs: Vec<MethodAov>,
+}
+
+impl ImageSpacePasses {
+    /// One frame of `method` (`id` names it for its AOV layers) into `frame`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &mut self,
+        refractor: &Refractor,
+        environment: &Environment,
+        camera: &Camera,
+        kernel: &ImageSpaceParams,
+        method: ImageSpaceMethod,
+        id: MethodId,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) {
+        let back = match method {
+            ImageSpaceMethod::Single => None,
+            ImageSpaceMethod::TwoInterface { back: surface } => {
+                self.back.render_into(refractor, camera, surface);
+                Some(&self.back)
+            }
+        };
+        let context = ShadeContext {
+            back,
+            environment,
+            camera,
+            kernel,
+        };
+        let (width, height) = (camera.width(), camera.height());
+        let n = (width * height) as usize;
+        frame.resize_for_overwrite(width, height);
+        let band = band_pixels(width);
+        let colors = frame.color.par_chunks_mut(band);
+        let with_aovs = outputs == FrameOutputs::ColorAndAovs;
+        let bands = if with_aovs {
+            self.aovs.resize(n, MethodAov::BACKGROUND);
+            Either::Left(colors.zip(self.aovs.par_chunks_mut(band).map(Some)))
+        } else {
+            Either::Right(colors.map(|colors| (colors, None)))
+        };
+        rasterize_bands(
+            &raster_mesh(refractor),
+            camera,
+            Faces::Front,
+            DepthTest::Nearest,
+            &mut self.front,
+            bands,
+            |rows, (colors, aovs)| shade_band(&context, rows, colors, aovs),
+        );
+        if with_aovs {
+            write_layers(&self.aovs[..n], id, frame);
+        }
+    }
+}
+
+/// The kernel's per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
+fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
+    for &aov in method.info().aovs {
+        match aov {
+            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
+            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
+            Aov::P2 => fill(frame.vec3_mut(aov), aovs, |a| a.p2),
+            Aov::N2 => fill(frame.vec3_mut(aov), aovs, |a| a.n2),
+            Aov::T2 => fill(frame.vec3_mut(aov), aovs, |a| a.t2),
+            Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
+                a.n2_source.map_or(0, exit_normal_source_code)
+            }),
+            Aov::P1 | Aov::N1 | Aov::T1 | Aov::PGeom | Aov::Interfaces | Aov::TirFirstExit => {
+                unreachable!("the image-space kernels do not compute {}", aov.name())
+            }
+        }
+    }
+}
+
+fn fill<T>(out: &mut [T], aovs: &[MethodAov], get: impl Fn(&MethodAov) -> T + Sync + Send)
+where
+    T: Send,
+{
+    out.par_iter_mut()
+        .zip(aovs.par_iter())
+        .for_each(|(o, a)| *o = get(a));
+}

@@ -1,0 +1,413 @@
+//! Wyman 2005a image-space refraction on the GPU (methods `single`, `wyman`, `wyman-dv`,
+//! `wyman-dn`): the back faces and front faces rasterised into float targets, then the kernel as
+//! a compute pass (`shaders/image_space.wgsl`), one pipeline per method (`shade_single`, and
+//! `shade_two_interface` with `DISTANCE_MODE` fixed per pipeline); readback into a
+//! [`refract_scene::Frame`] with the method's AOV layers.
+
+use glam::Vec3;
+use refract_core::gpu::{
+    COVERAGE_BACKGROUND, COVERAGE_DEGENERATE, FrameUniforms, distance_mode_code,
+    exit_normal_source_code, exit_normal_source_from_code,
+};
+use refract_core::{BackSurface, Camera, DistanceMode};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId};
+
+use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
+use crate::context::{GpuContext, GpuError};
+use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::scene_buffers::GpuScene;
+use crate::shaders::module_source;
+use crate::timestamps::Timestamps;
+
+/// An image-space method as the GPU runs it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ImageSpaceKernel {
+    /// `single`.
+    Single,
+    /// `wyman` and its ablations.
+    TwoInterface {
+        /// How `d~` is approximated.
+        distance: DistanceMode,
+        /// Which back surface is rasterised.
+        back: BackSurface,
+    },
+}
+
+impl ImageSpaceKernel {
+    fn id(self) -> MethodId {
+        match self {
+            ImageSpaceKernel::Single => MethodId::Single,
+            ImageSpaceKernel::TwoInterface { distance, .. } => match distance {
+                DistanceMode::Interpolated => MethodId::Wyman,
+                DistanceMode::ViewOnly => MethodId::WymanDv,
+                DistanceMode::NormalOnly => MethodId::WymanDn,
+            },
+        }
+    }
+}
+
+const KERNELS: [ImageSpaceKernel; 4] = [
+    ImageSpaceKernel::Single,
+    ImageSpaceKernel::TwoInterface {
+        distance: DistanceMode::Interpolated,
+        back: BackSurface::Furthest,
+    },
+    ImageSpaceKernel::TwoInterface {
+        distance: DistanceMode::ViewOnly,
+        back: BackSurface::Furthest,
+    },
+    ImageSpaceKernel::TwoInterface {
+        distance: DistanceMode::NormalOnly,
+        back: BackSurface::Furthest,
+    },
+];
+
+/// The kernel pipelines: one per method, each with and without AOV stores.
+pub(crate) struct ImageSpacePipelines {
+    layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(MethodId, FrameOutputs, wgpu::ComputePipeline)>,
+}
+
+impl ImageSpacePipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("image_space.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(module_source("image_space").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("image space"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                texture_entry(1),
+                texture_entry(2),
+                texture_entry(3),
+                storage_entry(4, true),
+                storage_entry(5, false),
+                storage_entry(6, false),
+                storage_entry(7, false),
+                storage_entry(8, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("image space"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let mut pipelines = Vec::new();
+        for kernel in KERNELS {
+            for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
+                let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
+                let (entry, constants) = match kernel {
+                    ImageSpaceKernel::Single => ("shade_single", vec![("WRITE_AOVS", write_aovs)]),
+                    ImageSpaceKernel::TwoInterface { distance, .. } => (
+                        "shade_two_interface",
+                        vec![
+                            ("WRITE_AOVS", write_aovs),
+                            ("DISTANCE_MODE", f64::from(distance_mode_code(distance))),
+                        ],
+                    ),
+                };
+                let label = format!("{} ({outputs:?})", kernel.id());
+                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                });
+                pipelines.push((kernel.id(), outputs, pipeline));
+            }
+        }
+        Self { layout, pipelines }
+    }
+
+    fn pipeline(&self, method: MethodId, outputs: FrameOutputs) -> &wgpu::ComputePipeline {
+        self.pipelines
+            .iter()
+            .find(|(m, o, _)| *m == method && *o == outputs)
+            .map(|(_, _, p)| p)
+            .expect("a pipeline for every image-space method")
+    }
+}
+
+/// The targets and buffers of image-space frames at one resolution, allocated once and reused
+/// for every camera and method at that size.
+pub(crate) struct ImageSpaceTargets {
+    width: u32,
+    height: u32,
+    uniforms: wgpu::Buffer,
+    raster_group: wgpu::BindGroup,
+    shade_group: wgpu::BindGroup,
+    back: wgpu::TextureView,
+    front_p1: wgpu::TextureView,
+    front_n1: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    /// Colour (w: coverage code), T2 (w: TIR), P~2 (w: exit-normal code), N2 (w: valid).
+    outputs: [wgpu::Buffer; 4],
+    readback: [wgpu::Buffer; 4],
+}
+
+impl ImageSpaceTargets {
+    /// Allocates the targets for `width × height`, checking the adapter's limits.
+    pub(crate) fn new(
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &ImageSpacePipelines,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
+        let limits = context.device.limits();
+        let too_large = |limit: String| GpuError::ResolutionTooLarge {
+            width,
+            height,
+            adapter: context.info.name.clone(),
+            limit,
+        };
+        if width > limits.max_texture_dimension_2d || height > limits.max_texture_dimension_2d {
+            return Err(too_large(format!(
+                "max texture dimension {}",
+                limits.max_texture_dimension_2d
+            )));
+        }
+        let bytes = u64::from(width) * u64::from(height) * 16;
+        if bytes > limits.max_storage_buffer_binding_size || bytes > limits.max_buffer_size {
+            return Err(too_large(format!(
+                "max storage buffer binding {} bytes",
+                limits.max_storage_buffer_binding_size
+            )));
+        }
+        context.checked(|| Self::allocate(&context.device, raster, pipelines, scene, width, height))
+    }
+
+    fn allocate(
+        device: &wgpu::Device,
+        raster: &RasterPipelines,
+        pipelines: &ImageSpacePipelines,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let raster_group = bind_group(
+            device,
+            "raster",
+            &raster.layout,
+            &[uniforms.as_entire_binding()],
+        );
+        let view = |label, format| {
+            target(device, label, width, height, format)
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let back = view("back faces", TARGET_FORMAT);
+        let front_p1 = view("front P1, d_N", TARGET_FORMAT);
+        let front_n1 = view("front N1", TARGET_FORMAT);
+        let depth = view("depth", DEPTH_FORMAT);
+        let size = u64::from(width) * u64::from(height) * 16;
+        let buffer = |label: &str, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let labels = ["colour", "T2", "P2", "N2"];
+        let outputs = labels.map(|l| {
+            buffer(
+                l,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            )
+        });
+        let readback = labels.map(|l| {
+            buffer(
+                &format!("{l} readback"),
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            )
+        });
+        let shade_group = bind_group(
+            device,
+            "image space",
+            &pipelines.layout,
+            &[
+                uniforms.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&front_p1),
+                wgpu::BindingResource::TextureView(&front_n1),
+                wgpu::BindingResource::TextureView(&back),
+                scene.environment_texels.as_entire_binding(),
+                outputs[0].as_entire_binding(),
+                outputs[1].as_entire_binding(),
+                outputs[2].as_entire_binding(),
+                outputs[3].as_entire_binding(),
+            ],
+        );
+        Self {
+            width,
+            height,
+            uniforms,
+            raster_group,
+            shade_group,
+            back,
+            front_p1,
+            front_n1,
+            depth,
+            outputs,
+            readback,
+        }
+    }
+
+    /// Whether these targets are for `width × height`.
+    pub(crate) fn fits(&self, width: u32, height: u32) -> bool {
+        (self.width, self.height) == (width, height)
+    }
+
+    /// Encodes every per-frame pass (back faces for two interfaces, front faces, the kernel) and
+    /// the copies of the outputs to the readback buffers.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        &self,
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &ImageSpacePipelines,
+        scene: &GpuScene,
+        camera: &Camera,
+        uniforms: &FrameUniforms,
+        kernel: ImageSpaceKernel,
+        outputs: FrameOutputs,
+        timestamps: Option<&Timestamps>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        context
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
+        let mut first = timestamps.map(Timestamps::begin_render);
+        if let ImageSpaceKernel::TwoInterface { back, .. } = kernel {
+            raster.encode(
+                encoder,
+                RasterKind::BackFaces(back),
+                camera,
+                &self.raster_group,
+                &[&scene.refractor],
+                &[&self.back],
+                &self.depth,
+                first.take(),
+            );
+        }
+        raster.encode(
+            encoder,
+            RasterKind::FrontFaces,
+            camera,
+            &self.raster_group,
+            &[&scene.refractor],
+            &[&self.front_p1, &self.front_n1],
+            &self.depth,
+            first.take(),
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("image-space kernel"),
+                timestamp_writes: timestamps.map(Timestamps::end_compute),
+            });
+            pass.set_pipeline(pipelines.pipeline(kernel.id(), outputs));
+            pass.set_bind_group(0, &self.shade_group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        if let Some(timestamps) = timestamps {
+            timestamps.resolve(encoder);
+        }
+        let copies = match outputs {
+            FrameOutputs::ColorAndAovs => 4,
+            FrameOutputs::Color => 1,
+        };
+        for (output, readback) in self.outputs.iter().zip(&self.readback).take(copies) {
+            encoder.copy_buffer_to_buffer(output, 0, readback, 0, output.size());
+        }
+    }
+
+    /// Reads the outputs of the last submitted frame into `frame`: the colour and, with
+    /// [`FrameOutputs::ColorAndAovs`], the layers of `method`'s registry row. Degenerate pixels
+    /// (coverage code [`COVERAGE_DEGENERATE`]) have NaN vectors, as on the CPU.
+    pub(crate) fn read(
+        &self,
+        context: &GpuContext,
+        method: MethodId,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        let read = |buffer: &wgpu::Buffer| -> Result<Vec<[f32; 4]>, GpuError> {
+            Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&context.read_buffer(buffer)?).to_vec())
+        };
+        let color = read(&self.readback[0])?;
+        frame.resize_for_overwrite(self.width, self.height);
+        for (out, c) in frame.color.iter_mut().zip(&color) {
+            *out = Vec3::new(c[0], c[1], c[2]);
+        }
+        if outputs == FrameOutputs::Color {
+            return Ok(());
+        }
+        let (t2, p2, n2) = (
+            read(&self.readback[1])?,
+            read(&self.readback[2])?,
+            read(&self.readback[3])?,
+        );
+        let code = |i: usize| color[i][3].round() as u32;
+        let path = |i: usize| !matches!(code(i), COVERAGE_BACKGROUND | COVERAGE_DEGENERATE);
+        let xyz = |v: [f32; 4]| Vec3::new(v[0], v[1], v[2]);
+        let source =
+            |i: usize| exit_normal_source_from_code(p2[i][3].round() as u32).filter(|_| path(i));
+        for &aov in method.info().aovs {
+            let n = frame.pixel_count();
+            match aov {
+                Aov::Covered => {
+                    let out = frame.flag_mut(aov);
+                    (0..n).for_each(|i| out[i] = code(i) != COVERAGE_BACKGROUND);
+                }
+                Aov::Tir => {
+                    let out = frame.flag_mut(aov);
+                    (0..n).for_each(|i| out[i] = path(i) && t2[i][3] > 0.5);
+                }
+                Aov::T2 => {
+                    let out = frame.vec3_mut(aov);
+                    (0..n).for_each(|i| out[i] = if path(i) { xyz(t2[i]) } else { Vec3::NAN });
+                }
+                Aov::P2 => {
+                    let out = frame.vec3_mut(aov);
+                    (0..n).for_each(|i| {
+                        out[i] = if source(i).is_some() {
+                            xyz(p2[i])
+                        } else {
+                            Vec3::NAN
+                        }
+                    });
+                }
+                Aov::N2 => {
+                    let out = frame.vec3_mut(aov);
+                    (0..n).for_each(|i| {
+                        out[i] = if path(i) && n2[i][3] > 0.5 {
+                            xyz(n2[i])
+                        } else {
+                            Vec3::NAN
+                        }
+                    });
+                }
+                Aov::ExitNormalSource => {
+                    let out = frame.count_mut(aov);
+                    (0..n).for_each(|i| out[i] = source(i).map_or(0, exit_normal_source_code));
+                }
+                Aov::P1 | Aov::N1 | Aov::T1 | Aov::PGeom | Aov::Interfaces | Aov::TirFirstExit => {
+                    unreachable!("the image-space kernels do not compute {}", aov.name())
+                }
+            }
+        }
+        Ok(())
+    }
+}

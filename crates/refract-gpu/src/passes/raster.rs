@@ -1,0 +1,251 @@
+//! Rasterising any mesh of the scene from any camera into float targets (`shaders/raster.wgsl`):
+//! the back-face and front-face passes of Wyman 2005a §4, and a generic surface pass (position,
+//! normal, uv, object id) for opaque objects. Mirrored cameras (cube-map faces) flip the
+//! winding, so every pipeline exists for both windings.
+
+use refract_core::{BackSurface, Camera};
+
+use crate::bindings::uniform_entry;
+use crate::scene_buffers::{GpuMesh, Vertex};
+use crate::shaders::module_source;
+
+/// The format of every colour target: 32-bit float RGBA.
+pub(crate) const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The depth format.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// What a raster pass draws and keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RasterKind {
+    /// Back faces, furthest or second surface (Wyman 2005a §3.2): one target, (N, distance).
+    BackFaces(BackSurface),
+    /// Nearest front faces: (P1, d_N) and (N1, 1).
+    FrontFaces,
+    /// Nearest front faces of any surface: (P, scalar), (N, 1), (uv, object, 1).
+    Surface,
+}
+
+impl RasterKind {
+    fn targets(self) -> usize {
+        match self {
+            RasterKind::BackFaces(_) => 1,
+            RasterKind::FrontFaces => 2,
+            RasterKind::Surface => 3,
+        }
+    }
+
+    /// The depth the pass clears to: 0 for depth Greater (furthest), 1 for Less.
+    pub(crate) fn clear_depth(self) -> f32 {
+        match self {
+            RasterKind::BackFaces(BackSurface::Furthest) => 0.0,
+            _ => 1.0,
+        }
+    }
+
+    /// The colour the pass clears to: `w = −1` marks an empty back-face texel, `w = 0` an
+    /// empty front-face or surface texel.
+    pub(crate) fn clear_color(self) -> wgpu::Color {
+        match self {
+            RasterKind::BackFaces(_) => wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: 0.0,
+                a: -1.0,
+            },
+            _ => wgpu::Color::TRANSPARENT,
+        }
+    }
+}
+
+const KINDS: [RasterKind; 4] = [
+    RasterKind::BackFaces(BackSurface::Furthest),
+    RasterKind::BackFaces(BackSurface::Second),
+    RasterKind::FrontFaces,
+    RasterKind::Surface,
+];
+
+/// The raster pipelines: every [`RasterKind`] for both windings.
+pub(crate) struct RasterPipelines {
+    /// Binding 0: the frame uniforms.
+    pub layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(RasterKind, bool, wgpu::RenderPipeline)>,
+}
+
+impl RasterPipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(module_source("raster").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raster"),
+            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raster"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Vertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &Vertex::ATTRIBUTES,
+        };
+        let target = Some(wgpu::ColorTargetState {
+            format: TARGET_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let mut pipelines = Vec::new();
+        for kind in KINDS {
+            for mirrored in [false, true] {
+                let (cull, compare, fragment) = match kind {
+                    // Wyman 2005a §3.2: the furthest surface (cull front faces, depth Greater
+                    // cleared to 0) or the second surface (the nearest back face, Less).
+                    RasterKind::BackFaces(BackSurface::Furthest) => {
+                        (wgpu::Face::Front, wgpu::CompareFunction::Greater, "fs_back")
+                    }
+                    RasterKind::BackFaces(BackSurface::Second) => {
+                        (wgpu::Face::Front, wgpu::CompareFunction::Less, "fs_back")
+                    }
+                    RasterKind::FrontFaces => {
+                        (wgpu::Face::Back, wgpu::CompareFunction::Less, "fs_front")
+                    }
+                    RasterKind::Surface => {
+                        (wgpu::Face::Back, wgpu::CompareFunction::Less, "fs_surface")
+                    }
+                };
+                let targets = vec![target.clone(); kind.targets()];
+                let label = format!(
+                    "raster {kind:?}{}",
+                    if mirrored { " (mirrored)" } else { "" }
+                );
+                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&label),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_mesh"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(vertex_layout.clone())],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        // A mirrored view turns counter-clockwise triangles clockwise on screen.
+                        front_face: if mirrored {
+                            wgpu::FrontFace::Cw
+                        } else {
+                            wgpu::FrontFace::Ccw
+                        },
+                        cull_mode: Some(cull),
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(compare),
+                        stencil: wgpu::StencilState::default(),
+                        bias: wgpu::DepthBiasState::default(),
+                    }),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fragment),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                });
+                pipelines.push((kind, mirrored, pipeline));
+            }
+        }
+        Self { layout, pipelines }
+    }
+
+    fn pipeline(&self, kind: RasterKind, camera: &Camera) -> &wgpu::RenderPipeline {
+        let mirrored = camera.is_mirrored();
+        self.pipelines
+            .iter()
+            .find(|(k, m, _)| *k == kind && *m == mirrored)
+            .map(|(_, _, p)| p)
+            .expect("a pipeline for every kind and winding")
+    }
+
+    /// Encodes one raster pass of `meshes` into `targets` (as many as `kind` writes) with
+    /// `depth`, cleared first. `timestamp` writes the frame's first timestamp at the start.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kind: RasterKind,
+        camera: &Camera,
+        uniforms: &wgpu::BindGroup,
+        meshes: &[&GpuMesh],
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::TextureView,
+        timestamp: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        debug_assert_eq!(targets.len(), kind.targets());
+        let color_attachments: Vec<_> = targets
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(kind.clear_color()),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("raster"),
+            color_attachments: &color_attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(kind.clear_depth()),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamp,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(self.pipeline(kind, camera));
+        pass.set_bind_group(0, uniforms, &[]);
+        for mesh in meshes {
+            mesh.draw(&mut pass);
+        }
+    }
+}
+
+/// A 2D render target usable as a texture binding and copy source.
+pub(crate) fn target(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}

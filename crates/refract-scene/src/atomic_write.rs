@@ -1,0 +1,102 @@
+//! The one way refract writes a file: to a temporary file beside the target, flushed and
+//! checked, then renamed into place, so a failed or interrupted write never leaves a partial
+//! file under the final name (the temporary is removed on every error path).
+
+use std::fmt::Display;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use crate::error::SceneError;
+
+/// Writes `path` through `write`, atomically: `write` gets a buffered writer on a temporary
+/// file in the same directory; the buffer is flushed (a failed flush is an error, e.g. a full
+/// disk), then the file is renamed to `path`. `what` names the content in error messages.
+pub fn write_atomically<E: Display>(
+    path: &Path,
+    what: &str,
+    write: impl FnOnce(&mut BufWriter<&mut File>) -> Result<(), E>,
+) -> Result<(), SceneError> {
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let stem = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let mut temporary = tempfile::Builder::new()
+        .prefix(&format!(".{stem}."))
+        .suffix(".partial")
+        .tempfile_in(dir)
+        .map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            action: "cannot create a temporary file beside it",
+            source,
+        })?;
+    let format = |message: String| SceneError::Format {
+        path: path.to_owned(),
+        message,
+    };
+    {
+        let mut writer = BufWriter::new(temporary.as_file_mut());
+        write(&mut writer).map_err(|err| format(format!("cannot write {what}: {err}")))?;
+        writer
+            .flush()
+            .map_err(|err| format(format!("cannot write {what}: {err}")))?;
+    }
+    temporary.persist(path).map_err(|err| SceneError::Io {
+        path: path.to_owned(),
+        action: "cannot move the finished file into place",
+        source: err.error,
+    })?;
+    Ok(())
+}
+
+/// [`write_atomically`] of a text.
+pub fn write_text_atomically(path: &Path, text: &str) -> Result<(), SceneError> {
+    write_atomically(path, "the text", |w| w.write_all(text.as_bytes()))
+}
+
+/// [`write_atomically`] of RGB8 pixels as a PNG.
+pub fn write_png_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+) -> Result<(), SceneError> {
+    use image::ImageEncoder;
+    write_atomically(path, "the PNG", |w| {
+        image::codecs::png::PngEncoder::new(w).write_image(
+            pixels,
+            width,
+            height,
+            image::ExtendedColorType::Rgb8,
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_write_leaves_no_file() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("out.txt");
+        let result = write_atomically(&path, "the text", |_| Err("disk on fire"));
+        assert!(result.is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 0);
+        write_text_atomically(&path, "hello").expect("write");
+        assert_eq!(std::fs::read_to_string(&path).expect("read"), "hello");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+
+    #[test]
+    fn renaming_onto_a_directory_fails_and_cleans_up() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let target = dir.path().join("taken");
+        std::fs::create_dir(&target).expect("mkdir");
+        assert!(write_text_atomically(&target, "x").is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+}

@@ -1,0 +1,177 @@
+//! Distant lighting: lat-long HDR maps (`.exr`, `.hdr`) and their loaders, a constant colour,
+//! and the procedural default environment that needs no file.
+
+use std::path::Path;
+
+use glam::Vec3;
+use refract_core::environment::{Atan2, Exact, Polynomial, sample_latlong_bilinear};
+use refract_core::lanes::Vec3x8;
+use refract_core::procedural_sky::{procedural_radiance, procedural_radiance_x8};
+
+use crate::error::SceneError;
+
+/// A lat-long (equirectangular) map of linear RGB radiance, row 0 at the zenith.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LatLongMap {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width × height` texels, row-major from the top.
+    pub texels: Vec<Vec3>,
+}
+
+/// What loading a map had to fix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EnvironmentReport {
+    /// Negative channel values clamped to 0 (down-sampling ringing in real HDRIs).
+    pub negative_clamped: usize,
+    /// NaN or infinite channel values replaced by 0.
+    pub non_finite_replaced: usize,
+}
+
+/// Radiance arriving from infinitely far away, by direction.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// A lat-long map scaled by an intensity, looked up bilinearly (Mitsuba's convention).
+    LatLong {
+        /// The map.
+        map: LatLongMap,
+        /// Radiance scale.
+        intensity: f32,
+    },
+    /// The same radiance from every direction (the white furnace).
+    Constant(Vec3),
+    /// The built-in procedural sky and checkered ground, see [`procedural_radiance`].
+    Procedural,
+}
+
+impl Environment {
+    /// Radiance arriving along `-dir` (i.e. seen when looking along unit `dir`), with `atan2`
+    /// evaluated by `A`.
+    #[inline]
+    pub fn radiance_with<A: Atan2>(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Self::LatLong { map, intensity } => {
+                *intensity * sample_latlong_bilinear::<A>(&map.texels, map.width, map.height, dir)
+            }
+            Self::Constant(c) => *c,
+            Self::Procedural => procedural_radiance::<A>(dir),
+        }
+    }
+
+    /// The backends' lookup: [`Self::radiance_with`] the polynomial `atan2` that the WGSL twin
+    /// is held to.
+    #[inline]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        self.radiance_with::<Polynomial>(dir)
+    }
+
+    /// The reference's lookup: [`Self::radiance_with`] libm's `atan2f`, no approximation.
+    #[inline]
+    pub fn radiance_exact(&self, dir: Vec3) -> Vec3 {
+        self.radiance_with::<Exact>(dir)
+    }
+
+    /// [`Self::radiance`] for eight unit directions at once (bit-identical per lane).
+    #[inline]
+    pub fn radiance_x8(&self, dir: Vec3x8) -> Vec3x8 {
+        match self {
+            Self::Procedural => procedural_radiance_x8(dir),
+            Self::Constant(c) => Vec3x8::splat(*c),
+            Self::LatLong { .. } => {
+                let dirs = dir.to_lanes();
+                Vec3x8::from_lanes(&dirs.map(|d| self.radiance(d)))
+            }
+        }
+    }
+}
+
+/// Loads a lat-long `.exr` (half or float, RGB or RGBA) or Radiance `.hdr` map. Negative and
+/// non-finite values are clamped to 0 and counted in the report.
+pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), SceneError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let (width, height, mut rgb) = match extension.as_deref() {
+        Some("exr") => read_exr(path)?,
+        Some("hdr") => read_hdr(path)?,
+        _ => {
+            return Err(SceneError::Format {
+                path: path.to_owned(),
+                message: "unsupported environment map; expected a lat-long .exr or .hdr file"
+                    .into(),
+            });
+        }
+    };
+    let mut report = EnvironmentReport::default();
+    for v in &mut rgb {
+        if !v.is_finite() {
+            *v = 0.0;
+            report.non_finite_replaced += 1;
+        } else if *v < 0.0 {
+            *v = 0.0;
+            report.negative_clamped += 1;
+        }
+    }
+    let texels = rgb.chunks_exact(3).map(Vec3::from_slice).collect();
+    Ok((
+        LatLongMap {
+            width,
+            height,
+            texels,
+        },
+        report,
+    ))
+}
+
+fn format_error(path: &Path, message: impl Into<String>) -> SceneError {
+    SceneError::Format {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// RGB of the first layer that has R, G and B channels (any layer name prefix).
+fn read_exr(path: &Path) -> Result<(u32, u32, Vec<f32>), SceneError> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|err| format_error(path, format!("not a readable OpenEXR file: {err}")))?;
+    for layer in &image.layer_data {
+        let find = |name: &str| {
+            layer.channel_data.list.iter().find(|c| {
+                let full = c.name.to_string();
+                full == name || full.ends_with(&format!(".{name}"))
+            })
+        };
+        let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) else {
+            continue;
+        };
+        let size = layer.size;
+        let (r, g, b): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+            r.sample_data.values_as_f32().collect(),
+            g.sample_data.values_as_f32().collect(),
+            b.sample_data.values_as_f32().collect(),
+        );
+        let rgb = (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect();
+        return Ok((size.width() as u32, size.height() as u32, rgb));
+    }
+    Err(format_error(
+        path,
+        "no layer with R, G and B channels; expected an RGB(A) lat-long map",
+    ))
+}
+
+fn read_hdr(path: &Path) -> Result<(u32, u32, Vec<f32>), SceneError> {
+    let image = image::open(path)
+        .map_err(|err| format_error(path, format!("not a readable Radiance .hdr file: {err}")))?;
+    let rgb = image.to_rgb32f();
+    Ok((rgb.width(), rgb.height(), rgb.into_raw()))
+}

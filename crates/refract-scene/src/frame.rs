@@ -1,0 +1,405 @@
+//! One rendered frame for methods and the reference alike: linear RGB colour plus named AOV
+//! layers, with multi-channel EXR output and input and tonemapped PNG output.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::atomic_write::{write_atomically, write_png_rgb8};
+use crate::error::SceneError;
+
+/// A per-pixel output beside the colour (an "arbitrary output variable"). Quantities that do not
+/// exist at a pixel are NaN (vectors), 0 (counts) or false (flags).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Aov {
+    /// The pixel sees the refractor.
+    Covered,
+    /// Entry point `P1`.
+    P1,
+    /// Outward shading normal at `P1`.
+    N1,
+    /// Direction after the first interface, `T1`.
+    T1,
+    /// Exit point: exact `P2` (reference) or the estimate `P~2` (methods).
+    P2,
+    /// Outward normal at the exit point.
+    N2,
+    /// The direction the path finally leaves in (the environment lookup direction).
+    T2,
+    /// Where the escaping ray hit nearby opaque geometry.
+    PGeom,
+    /// Where the exit normal came from, as [`refract_core::gpu::exit_normal_source_code`] (0: none).
+    ExitNormalSource,
+    /// Interfaces crossed by refraction (TIR bounces not counted).
+    Interfaces,
+    /// Total internal reflection anywhere on the path.
+    Tir,
+    /// Total internal reflection at the first exit.
+    TirFirstExit,
+}
+
+/// The type of an [`Aov`]'s per-pixel values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AovKind {
+    /// A 3-vector (`NAME.X`, `NAME.Y`, `NAME.Z` in EXR).
+    Vec3,
+    /// A small non-negative integer.
+    Count,
+    /// A boolean (0/1 in EXR).
+    Flag,
+}
+
+impl Aov {
+    /// Every AOV, in EXR channel order.
+    pub const ALL: [Aov; 12] = [
+        Aov::Covered,
+        Aov::P1,
+        Aov::N1,
+        Aov::T1,
+        Aov::P2,
+        Aov::N2,
+        Aov::T2,
+        Aov::PGeom,
+        Aov::ExitNormalSource,
+        Aov::Interfaces,
+        Aov::Tir,
+        Aov::TirFirstExit,
+    ];
+
+    /// The layer name (EXR channel or channel prefix).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Aov::Covered => "covered",
+            Aov::P1 => "P1",
+            Aov::N1 => "N1",
+            Aov::T1 => "T1",
+            Aov::P2 => "P2",
+            Aov::N2 => "N2",
+            Aov::T2 => "T2",
+            Aov::PGeom => "Pgeom",
+            Aov::ExitNormalSource => "n2_source",
+            Aov::Interfaces => "interfaces",
+            Aov::Tir => "tir",
+            Aov::TirFirstExit => "tir_first_exit",
+        }
+    }
+
+    /// The type of its values.
+    pub const fn kind(self) -> AovKind {
+        match self {
+            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::PGeom => AovKind::Vec3,
+            Aov::ExitNormalSource | Aov::Interfaces => AovKind::Count,
+            Aov::Covered | Aov::Tir | Aov::TirFirstExit => AovKind::Flag,
+        }
+    }
+}
+
+/// The values of one AOV layer, one per pixel, row-major from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Layer {
+    /// Vectors (NaN where absent).
+    Vec3(Vec<Vec3>),
+    /// Counts or codes (0 where absent).
+    Count(Vec<u32>),
+    /// Flags (false where absent).
+    Flag(Vec<bool>),
+}
+
+impl Layer {
+    fn empty(kind: AovKind, n: usize) -> Self {
+        match kind {
+            AovKind::Vec3 => Layer::Vec3(vec![Vec3::NAN; n]),
+            AovKind::Count => Layer::Count(vec![0; n]),
+            AovKind::Flag => Layer::Flag(vec![false; n]),
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Layer::Vec3(v) => v.len(),
+            Layer::Count(v) => v.len(),
+            Layer::Flag(v) => v.len(),
+        }
+    }
+}
+
+/// A rendered frame: linear RGB colour and the AOV layers the renderer wrote.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB, row-major from the top.
+    pub color: Vec<Vec3>,
+    layers: BTreeMap<Aov, Layer>,
+    /// Rays traced (closest-hit queries; the reference only).
+    pub rays: u64,
+}
+
+const AXES: [&str; 3] = ["X", "Y", "Z"];
+
+impl Frame {
+    /// A black frame without layers.
+    pub fn new(width: u32, height: u32) -> Self {
+        let mut frame = Self::default();
+        frame.reset(width, height);
+        frame
+    }
+
+    /// Makes this a black `width × height` frame without layers, keeping the colour's memory.
+    pub fn reset(&mut self, width: u32, height: u32) {
+        self.width = width;
+        self.height = height;
+        self.color.clear();
+        self.color
+            .resize((width as usize) * (height as usize), Vec3::ZERO);
+        self.layers.clear();
+        self.rays = 0;
+    }
+
+    /// Makes this a `width × height` frame without layers for a renderer that overwrites every
+    /// pixel's colour: the colour's memory (and, where sizes agree, its stale values) is kept, so
+    /// a frame of the same size costs no allocation and no clearing.
+    pub fn resize_for_overwrite(&mut self, width: u32, height: u32) {
+        self.width = width;
+        self.height = height;
+        self.color
+            .resize((width as usize) * (height as usize), Vec3::ZERO);
+        self.layers.clear();
+        self.rays = 0;
+    }
+
+    /// Pixels in the frame.
+    pub fn pixel_count(&self) -> usize {
+        self.color.len()
+    }
+
+    /// The AOVs present.
+    pub fn aovs(&self) -> impl Iterator<Item = Aov> + '_ {
+        self.layers.keys().copied()
+    }
+
+    /// Whether the layer exists.
+    pub fn has(&self, aov: Aov) -> bool {
+        self.layers.contains_key(&aov)
+    }
+
+    /// The layer `aov` (mutable), created empty (NaN / 0 / false) when absent.
+    pub fn layer_mut(&mut self, aov: Aov) -> &mut Layer {
+        let n = self.pixel_count();
+        let layer = self
+            .layers
+            .entry(aov)
+            .or_insert_with(|| Layer::empty(aov.kind(), n));
+        if layer.len() != n {
+            *layer = Layer::empty(aov.kind(), n);
+        }
+        layer
+    }
+
+    /// A vector layer, if present.
+    pub fn vec3(&self, aov: Aov) -> Option<&[Vec3]> {
+        match self.layers.get(&aov)? {
+            Layer::Vec3(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// A count layer, if present.
+    pub fn count(&self, aov: Aov) -> Option<&[u32]> {
+        match self.layers.get(&aov)? {
+            Layer::Count(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// A flag layer, if present.
+    pub fn flag(&self, aov: Aov) -> Option<&[bool]> {
+        match self.layers.get(&aov)? {
+            Layer::Flag(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// A vector layer to write, created (NaN) when absent.
+    ///
+    /// # Panics
+    /// If `aov` is not a vector AOV (a programming error, not an input error).
+    pub fn vec3_mut(&mut self, aov: Aov) -> &mut [Vec3] {
+        match self.layer_mut(aov) {
+            Layer::Vec3(v) => v,
+            _ => panic!("{} is not a vector AOV", aov.name()),
+        }
+    }
+
+    /// A count layer to write, created (0) when absent.
+    ///
+    /// # Panics
+    /// If `aov` is not a count AOV.
+    pub fn count_mut(&mut self, aov: Aov) -> &mut [u32] {
+        match self.layer_mut(aov) {
+            Layer::Count(v) => v,
+            _ => panic!("{} is not a count AOV", aov.name()),
+        }
+    }
+
+    /// A flag layer to write, created (false) when absent.
+    ///
+    /// # Panics
+    /// If `aov` is not a flag AOV.
+    pub fn flag_mut(&mut self, aov: Aov) -> &mut [bool] {
+        match self.layer_mut(aov) {
+            Layer::Flag(v) => v,
+            _ => panic!("{} is not a flag AOV", aov.name()),
+        }
+    }
+
+    /// Writes one EXR with channels `R G B` and every layer present: vectors as `NAME.X`,
+    /// `NAME.Y`, `NAME.Z` (e.g. `T2.X`), counts and flags as one channel (`interfaces`, `tir`),
+    /// all 32-bit float. Written atomically (no partial file on failure).
+    pub fn write_exr(&self, path: &Path) -> Result<(), SceneError> {
+        use exr::prelude::*;
+        let mut channels = Vec::new();
+        for (k, name) in ["R", "G", "B"].iter().enumerate() {
+            let samples = self.color.iter().map(|c| c[k]).collect();
+            channels.push(AnyChannel::new(*name, FlatSamples::F32(samples)));
+        }
+        for (aov, layer) in &self.layers {
+            match layer {
+                self::Layer::Vec3(values) => {
+                    for (k, axis) in AXES.iter().enumerate() {
+                        let samples = values.iter().map(|v| v[k]).collect();
+                        channels.push(AnyChannel::new(
+                            format!("{}.{axis}", aov.name()).as_str(),
+                            FlatSamples::F32(samples),
+                        ));
+                    }
+                }
+                self::Layer::Count(values) => channels.push(AnyChannel::new(
+                    aov.name(),
+                    FlatSamples::F32(values.iter().map(|&v| v as f32).collect()),
+                )),
+                self::Layer::Flag(values) => channels.push(AnyChannel::new(
+                    aov.name(),
+                    FlatSamples::F32(values.iter().map(|&v| f32::from(u8::from(v))).collect()),
+                )),
+            }
+        }
+        let size = (self.width as usize, self.height as usize);
+        let image = Image::from_channels(size, AnyChannels::sort(channels.into()));
+        write_atomically(path, "the EXR", |w| image.write().to_buffered(w))
+    }
+
+    /// Writes the colour as an 8-bit sRGB PNG after [`crate::tonemap::to_srgb8`], atomically.
+    pub fn write_png(&self, path: &Path) -> Result<(), SceneError> {
+        let pixels: Vec<u8> = self
+            .color
+            .iter()
+            .flat_map(|&c| crate::tonemap::to_srgb8(c))
+            .collect();
+        write_png_rgb8(path, self.width, self.height, &pixels)
+    }
+
+    /// Reads a frame written by [`Frame::write_exr`]: the colour and every layer whose channels
+    /// are present (the ray count is not stored: 0).
+    pub fn read_exr(path: &Path) -> Result<Self, SceneError> {
+        use exr::prelude::*;
+        let format = |message: String| SceneError::Format {
+            path: path.to_owned(),
+            message,
+        };
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(path)
+            .map_err(|err| format(format!("not a readable OpenEXR file: {err}")))?;
+        let layer = image.layer_data;
+        let (width, height) = (layer.size.width() as u32, layer.size.height() as u32);
+        let channel = |name: &str| -> Option<Vec<f32>> {
+            layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name.to_string() == name)
+                .map(|c| c.sample_data.values_as_f32().collect())
+        };
+        let mut frame = Self::new(width, height);
+        for (k, name) in ["R", "G", "B"].iter().enumerate() {
+            let values = channel(name).ok_or_else(|| {
+                format(format!(
+                    "missing channel `{name}`; expected a refract frame file"
+                ))
+            })?;
+            for (pixel, v) in frame.color.iter_mut().zip(values) {
+                pixel[k] = v;
+            }
+        }
+        for aov in Aov::ALL {
+            match aov.kind() {
+                AovKind::Vec3 => {
+                    let axes: Option<Vec<Vec<f32>>> = AXES
+                        .iter()
+                        .map(|axis| channel(&format!("{}.{axis}", aov.name())))
+                        .collect();
+                    let Some(axes) = axes else { continue };
+                    for (i, v) in frame.vec3_mut(aov).iter_mut().enumerate() {
+                        *v = Vec3::new(axes[0][i], axes[1][i], axes[2][i]);
+                    }
+                }
+                AovKind::Count => {
+                    let Some(values) = channel(aov.name()) else {
+                        continue;
+                    };
+                    for (c, v) in frame.count_mut(aov).iter_mut().zip(values) {
+                        *c = v as u32;
+                    }
+                }
+                AovKind::Flag => {
+                    let Some(values) = channel(aov.name()) else {
+                        continue;
+                    };
+                    for (f, v) in frame.flag_mut(aov).iter_mut().zip(values) {
+                        *f = v > 0.5;
+                    }
+                }
+            }
+        }
+        Ok(frame)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layers_round_trip_through_exr() {
+        let mut frame = Frame::new(3, 2);
+        frame.color[4] = Vec3::new(0.5, 2.0, 7.0);
+        frame.vec3_mut(Aov::T2)[1] = Vec3::new(0.0, 0.6, -0.8);
+        frame.flag_mut(Aov::Tir)[5] = true;
+        frame.count_mut(Aov::Interfaces)[0] = 2;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("frame.exr");
+        frame.write_exr(&path).expect("write");
+        let back = Frame::read_exr(&path).expect("read");
+        assert_eq!(back.color, frame.color);
+        assert_eq!(
+            back.aovs().collect::<Vec<_>>(),
+            [Aov::T2, Aov::Interfaces, Aov::Tir]
+        );
+        assert_eq!(
+            back.vec3(Aov::T2).expect("T2")[1],
+            Vec3::new(0.0, 0.6, -0.8)
+        );
+        assert!(back.vec3(Aov::T2).expect("T2")[0].is_nan());
+        assert!(back.flag(Aov::Tir).expect("tir")[5]);
+        assert_eq!(back.count(Aov::Interfaces).expect("n")[0], 2);
+        assert!(back.vec3(Aov::P1).is_none());
+    }
+}

@@ -1,0 +1,364 @@
+//! What every renderer consumes: a camera, one refractor (mesh, BVH, `d_N`, IOR), nearby
+//! opaque objects (mesh, BVH, material), a directional light and a distant environment. Built
+//! once, with one BVH per mesh; shared by the backends and the reference through `Arc<Scene>`.
+
+use glam::{Vec2, Vec3};
+use refract_core::CameraDesc;
+use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
+
+use crate::environment::Environment;
+use crate::error::SceneError;
+
+/// The dielectric object every method refracts through: its mesh, the mesh's BVH (built once),
+/// the per-vertex `d_N` of Wyman 2005a §3.1 (computed once with that BVH) and its index of
+/// refraction.
+#[derive(Clone, Debug)]
+pub struct Refractor {
+    mesh: Mesh,
+    bvh: MeshBvh,
+    normal_distances: NormalDistances,
+    ior: f32,
+}
+
+/// The range of an index of refraction: finite and greater than 0.
+pub const IOR_EXPECTED: &str = "a finite index of refraction greater than 0";
+
+impl Refractor {
+    /// A refractor of index `ior` (the outside is 1): builds the BVH and `d_N` (Wyman 2005a §3.1,
+    /// one BVH ray per vertex along `−N`).
+    pub fn new(mesh: Mesh, ior: f32) -> Result<Self, SceneError> {
+        check_ior(ior)?;
+        let bvh = MeshBvh::build(&mesh);
+        let normal_distances = normal_distances(&mesh, &bvh);
+        Ok(Self {
+            mesh,
+            bvh,
+            normal_distances,
+            ior,
+        })
+    }
+
+    /// A refractor with `d_N` computed elsewhere: one value per vertex, finite and ≥ 0.
+    pub fn with_normal_distances(
+        mesh: Mesh,
+        normal_distances: NormalDistances,
+        ior: f32,
+    ) -> Result<Self, SceneError> {
+        check_ior(ior)?;
+        let values = &normal_distances.values;
+        if values.len() != mesh.positions.len() {
+            return Err(SceneError::field(
+                "refractor",
+                "d_N",
+                format!("{} values", values.len()),
+                format!("one value per vertex ({})", mesh.positions.len()),
+            ));
+        }
+        if let Some(bad) = values.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
+            return Err(SceneError::field(
+                "refractor",
+                "d_N",
+                bad,
+                "finite distances ≥ 0",
+            ));
+        }
+        let bvh = MeshBvh::build(&mesh);
+        Ok(Self {
+            mesh,
+            bvh,
+            normal_distances,
+            ior,
+        })
+    }
+
+    /// Its mesh (outward winding and normals).
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Its BVH.
+    pub fn bvh(&self) -> &MeshBvh {
+        &self.bvh
+    }
+
+    /// `d_N` per vertex, one per mesh vertex.
+    pub fn d_n(&self) -> &[f32] {
+        &self.normal_distances.values
+    }
+
+    /// `d_N` with how many vertices missed (open meshes) and the value they use.
+    pub fn normal_distances(&self) -> &NormalDistances {
+        &self.normal_distances
+    }
+
+    /// Index of refraction.
+    pub fn ior(&self) -> f32 {
+        self.ior
+    }
+
+    /// Changes the index of refraction (the BVH and `d_N` do not depend on it).
+    pub fn set_ior(&mut self, ior: f32) -> Result<(), SceneError> {
+        check_ior(ior)?;
+        self.ior = ior;
+        Ok(())
+    }
+
+    /// The diameter of the mesh's bounding sphere (the unit of the `|P~2 − P2|` metric).
+    pub fn diameter(&self) -> f32 {
+        2.0 * self.mesh.bounding_sphere().radius
+    }
+}
+
+fn check_ior(ior: f32) -> Result<(), SceneError> {
+    if ior > 0.0 && ior.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::field("refractor", "ior", ior, IOR_EXPECTED))
+    }
+}
+
+/// The reflectance of an opaque diffuse surface.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Albedo {
+    /// One colour.
+    Constant(Vec3),
+    /// A checkerboard of two colours with `squares` squares per unit of uv (or of world `x`/`z`
+    /// when the mesh has no uvs).
+    Checker {
+        /// First colour.
+        a: Vec3,
+        /// Second colour.
+        b: Vec3,
+        /// Squares per unit.
+        squares: f32,
+    },
+    /// A 6 × 4 colour chart over the uv square (approximate linear-sRGB values of the 24
+    /// patches of the classic ColorChecker), grey elsewhere.
+    ColorChart,
+}
+
+/// Linear sRGB of the 24 ColorChecker patches, row by row (approximate published values).
+const COLOR_CHART: [[f32; 3]; 24] = [
+    [0.173, 0.085, 0.059],
+    [0.554, 0.300, 0.222],
+    [0.117, 0.195, 0.335],
+    [0.107, 0.148, 0.058],
+    [0.236, 0.221, 0.432],
+    [0.132, 0.515, 0.409],
+    [0.680, 0.198, 0.025],
+    [0.072, 0.103, 0.386],
+    [0.545, 0.085, 0.117],
+    [0.109, 0.045, 0.142],
+    [0.327, 0.503, 0.049],
+    [0.741, 0.364, 0.020],
+    [0.030, 0.046, 0.287],
+    [0.066, 0.291, 0.066],
+    [0.428, 0.031, 0.040],
+    [0.816, 0.578, 0.010],
+    [0.505, 0.083, 0.288],
+    [0.000, 0.235, 0.383],
+    [0.887, 0.887, 0.869],
+    [0.588, 0.591, 0.590],
+    [0.361, 0.367, 0.368],
+    [0.191, 0.191, 0.192],
+    [0.088, 0.089, 0.090],
+    [0.031, 0.032, 0.032],
+];
+
+impl Albedo {
+    /// The albedo at texture coordinates `uv` (or world `xz` for meshes without uvs).
+    pub fn at(&self, uv: Vec2) -> Vec3 {
+        match *self {
+            Self::Constant(c) => c,
+            Self::Checker { a, b, squares } => {
+                let cell = (uv * squares).floor();
+                if (cell.x + cell.y).rem_euclid(2.0) < 1.0 {
+                    a
+                } else {
+                    b
+                }
+            }
+            Self::ColorChart => {
+                if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
+                    return Vec3::splat(0.18);
+                }
+                let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
+                Vec3::from_array(COLOR_CHART[row * 6 + col])
+            }
+        }
+    }
+}
+
+/// What an opaque object's surface does with light.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// View-independent diffuse shading under the scene's [`DirectionalLight`].
+    Diffuse(Albedo),
+}
+
+/// An opaque object near the refractor (Wyman 2005b's "nearby geometry").
+#[derive(Clone, Debug)]
+pub struct Object {
+    mesh: Mesh,
+    bvh: MeshBvh,
+    /// Its surface.
+    pub material: Material,
+}
+
+impl Object {
+    /// An object of `mesh`; builds its BVH.
+    pub fn new(mesh: Mesh, material: Material) -> Self {
+        let bvh = MeshBvh::build(&mesh);
+        Self {
+            mesh,
+            bvh,
+            material,
+        }
+    }
+
+    /// Its mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Its BVH.
+    pub fn bvh(&self) -> &MeshBvh {
+        &self.bvh
+    }
+
+    /// The texture coordinates at a point `p_ws` of triangle `triangle`: the mesh's uvs
+    /// interpolated barycentrically, or world `(x, z)` for meshes without uvs.
+    pub fn uv_at(&self, triangle: u32, barycentrics: Vec2, p_ws: Vec3) -> Vec2 {
+        if self.mesh.uvs.is_empty() {
+            return Vec2::new(p_ws.x, p_ws.z);
+        }
+        let [a, b, c] = self.mesh.triangles[triangle as usize].map(|i| self.mesh.uvs[i as usize]);
+        (1.0 - barycentrics.x - barycentrics.y) * a + barycentrics.x * b + barycentrics.y * c
+    }
+
+    /// Outgoing radiance at a point with texture coordinates `uv` and unit normal `n`.
+    pub fn shade(&self, light: &DirectionalLight, uv: Vec2, n: Vec3) -> Vec3 {
+        match &self.material {
+            Material::Diffuse(albedo) => light.shade(albedo.at(uv), n),
+        }
+    }
+}
+
+/// View-independent lighting of opaque objects: `albedo × (ambient + max(0, N·L) · radiance)`.
+/// No shadows: image-space methods that store nearby geometry in a texture (Wyman 2005b) see
+/// exactly this, so the comparison stays fair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionalLight {
+    /// Unit direction toward the light.
+    pub direction: Vec3,
+    /// Radiance scale of the light.
+    pub radiance: Vec3,
+    /// Ambient term.
+    pub ambient: Vec3,
+}
+
+impl Default for DirectionalLight {
+    fn default() -> Self {
+        Self {
+            direction: Vec3::new(0.4, 0.6, -0.7).normalize(),
+            radiance: Vec3::splat(0.8),
+            ambient: Vec3::splat(0.25),
+        }
+    }
+}
+
+impl DirectionalLight {
+    /// Diffuse radiance leaving a surface of `albedo` with unit normal `n`, seen from either side.
+    pub fn shade(&self, albedo: Vec3, n: Vec3) -> Vec3 {
+        albedo * (self.ambient + n.dot(self.direction).abs() * self.radiance)
+    }
+}
+
+/// Which mesh of a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SceneMesh {
+    /// The refractor.
+    Refractor,
+    /// Opaque object `k` of [`Scene::objects`].
+    Object(usize),
+}
+
+impl SceneMesh {
+    /// The object id raster passes write: 0 for the refractor, `1 + k` for object `k`.
+    pub fn object_id(self) -> u32 {
+        match self {
+            SceneMesh::Refractor => 0,
+            SceneMesh::Object(k) => 1 + k as u32,
+        }
+    }
+}
+
+/// The nearest front surface of one mesh at one pixel centre, as a raster pass of any mesh from
+/// any camera sees it (both backends produce these, so they can be compared).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceTexel {
+    /// Perspective-correct interpolated world position.
+    pub p_ws: Vec3,
+    /// Interpolated vertex normal, normalised.
+    pub n_ws: Vec3,
+    /// Interpolated texture coordinates (0 for meshes without).
+    pub uv: Vec2,
+    /// [`SceneMesh::object_id`] of the mesh.
+    pub object: u32,
+}
+
+/// Everything a renderer renders.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Built-in name or file stem.
+    pub name: String,
+    /// The scene's camera; each run sets its resolution (`width`, `height`).
+    pub camera: CameraDesc,
+    /// The refractor.
+    pub refractor: Refractor,
+    /// Opaque objects near it.
+    pub objects: Vec<Object>,
+    /// Distant lighting.
+    pub environment: Environment,
+    /// The light of the opaque objects.
+    pub light: DirectionalLight,
+}
+
+impl Scene {
+    /// A refractor alone in an environment, seen by the default camera.
+    pub fn new(name: impl Into<String>, refractor: Refractor, environment: Environment) -> Self {
+        Self {
+            name: name.into(),
+            camera: CameraDesc::default(),
+            refractor,
+            objects: Vec::new(),
+            environment,
+            light: DirectionalLight::default(),
+        }
+    }
+
+    /// The mesh `which`, or `None` for an object index out of range.
+    pub fn mesh(&self, which: SceneMesh) -> Option<&Mesh> {
+        match which {
+            SceneMesh::Refractor => Some(self.refractor.mesh()),
+            SceneMesh::Object(k) => self.objects.get(k).map(Object::mesh),
+        }
+    }
+
+    /// The scene's camera at `width × height`.
+    pub fn camera(&self, width: u32, height: u32) -> Result<refract_core::Camera, SceneError> {
+        refract_core::Camera::new(CameraDesc {
+            width,
+            height,
+            ..self.camera
+        })
+        .map_err(|err| {
+            SceneError::field(
+                format!("scene {}", self.name),
+                "camera",
+                format!("{width}x{height}"),
+                err.to_string(),
+            )
+        })
+    }
+}

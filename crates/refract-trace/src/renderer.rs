@@ -1,0 +1,71 @@
+//! The exact reference as a [`Renderer`]: it runs `reference` and declines every approximate
+//! method.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use refract_core::Camera;
+use refract_scene::{
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
+    Scene, TimingSource,
+};
+
+use crate::tracer::render_into;
+
+/// The reference tracer behind the [`Renderer`] interface.
+#[derive(Debug, Default)]
+pub struct ReferenceRenderer {
+    scene: Option<Arc<Scene>>,
+}
+
+impl ReferenceRenderer {
+    /// A renderer without a scene.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl Renderer for ReferenceRenderer {
+    fn backend(&self) -> BackendId {
+        BackendId::Trace
+    }
+
+    fn supports(&self, method: MethodId) -> bool {
+        matches!(MethodParams::defaults(method), MethodParams::Reference(_))
+    }
+
+    fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
+        // The BVHs were built with the scene: nothing to upload.
+        self.scene = Some(Arc::clone(scene));
+        Ok(())
+    }
+
+    /// The reference always writes its AOV layers (the ground truth costs nothing extra).
+    fn render(
+        &mut self,
+        camera: &Camera,
+        method: &MethodParams,
+        _outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        let scene = self
+            .scene
+            .as_ref()
+            .ok_or(RenderError::NotPrepared(BackendId::Trace))?;
+        let settings = match method {
+            MethodParams::Reference(settings) => settings,
+            MethodParams::Single | MethodParams::TwoInterface(_) => {
+                return Err(RenderError::Unsupported {
+                    backend: BackendId::Trace,
+                    method: method.id(),
+                });
+            }
+        };
+        let start = Instant::now();
+        render_into(scene, camera, settings, frame);
+        Ok(FrameTiming {
+            ms: start.elapsed().as_secs_f64() * 1e3,
+            source: TimingSource::Wall,
+        })
+    }
+}

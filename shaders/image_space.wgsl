@@ -1,0 +1,192 @@
+// Wyman 2005a image-space refraction, pass 3: the per-pixel kernels over the buffers, as a
+// compute pass, one entry point per family member: `shade_single` (method single) and
+// `shade_two_interface` (wyman, wyman-dv, wyman-dn: one pipeline each, DISTANCE_MODE an
+// override constant). The twin of crates/refract-cpu/src/shade.rs with
+// refract_core::kernel::{one_interface, two_interface}.
+//
+// A compute pass (not the paper's fragment program) because every AOV (colour, T2, P~2, N2 and
+// flags: 64 bytes per pixel) goes to storage buffers; fragment outputs would exceed the
+// 32-byte-per-sample colour attachment limit of WebGPU, and the kernel stays one entry point
+// that reads like the CPU backend.
+
+@group(0) @binding(1) var front_p1_dn: texture_2d<f32>;
+@group(0) @binding(2) var front_n1: texture_2d<f32>;
+@group(0) @binding(3) var back_faces: texture_2d<f32>;
+@group(0) @binding(5) var<storage, read_write> out_color: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> out_t2: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out_p2: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> out_n2: array<vec4<f32>>;
+
+// buffers.rs: BackFaces::back_face. xyz = normal, w = distance; w < 0 where empty.
+fn back_face(uv_px: vec2<f32>) -> vec4<f32> {
+    let w = f32(frame.width);
+    let h = f32(frame.height);
+    if !(uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h) {
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    }
+    return textureLoad(back_faces, vec2<i32>(i32(uv_px.x), i32(uv_px.y)), 0);
+}
+
+fn is_finite3(v: vec3<f32>) -> bool {
+    let a = abs(v);
+    return a.x <= F32_MAX && a.y <= F32_MAX && a.z <= F32_MAX;
+}
+
+// Whether the AOVs (T2, P~2, N2) are stored: false for colour-only frames (a pipeline
+// constant; FrameOutputs::Color).
+override WRITE_AOVS: bool = true;
+// How d~ is approximated (refract_core::gpu::distance_mode_code): fixed per pipeline, one
+// pipeline per method.
+override DISTANCE_MODE: u32 = DISTANCE_INTERPOLATED;
+
+fn write_aovs(i: u32, t2: vec4<f32>, p2: vec4<f32>, n2: vec4<f32>) {
+    if WRITE_AOVS {
+        out_t2[i] = t2;
+        out_p2[i] = p2;
+        out_n2[i] = n2;
+    }
+}
+
+fn write_degenerate(i: u32) {
+    // A covered pixel whose kernel reported a degenerate input: black, no path (read back as
+    // NaN AOVs, like the CPU backend's).
+    out_color[i] = vec4<f32>(0.0, 0.0, 0.0, f32(COVERAGE_DEGENERATE));
+    write_aovs(i, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+}
+
+// One pixel of the front-face buffer.
+struct FrontPixel {
+    index: u32,
+    uv: vec2<f32>,
+    covered: bool,
+    p1: vec3<f32>,
+    n1: vec3<f32>,
+    d_n: f32,
+}
+
+fn front_pixel(id: vec3<u32>) -> FrontPixel {
+    var px: FrontPixel;
+    px.index = id.y * frame.width + id.x;
+    px.uv = vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5);
+    let coords = vec2<i32>(i32(id.x), i32(id.y));
+    let n1_covered = textureLoad(front_n1, coords, 0);
+    px.covered = n1_covered.w >= 0.5;
+    px.n1 = n1_covered.xyz;
+    let p1_dn = textureLoad(front_p1_dn, coords, 0);
+    px.p1 = p1_dn.xyz;
+    px.d_n = p1_dn.w;
+    return px;
+}
+
+// A pixel that sees the environment directly.
+fn write_background(px: FrontPixel) {
+    out_color[px.index] = vec4<f32>(environment_radiance(pixel_ray_dir(px.uv)), f32(COVERAGE_BACKGROUND));
+    write_aovs(px.index, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+}
+
+// The entry refraction at P1.
+struct Entry {
+    valid: bool,
+    view: vec3<f32>,
+    n1: vec3<f32>,
+    t1: vec3<f32>,
+    tir: bool,
+}
+
+// kernel.rs: entry_frame + one_interface.
+fn one_interface(p1: vec3<f32>, n1_raw: vec3<f32>) -> Entry {
+    var entry: Entry;
+    entry.valid = false;
+    let view4 = robust_normalize(p1 - frame.eye.xyz);
+    let n4 = robust_normalize(n1_raw);
+    if view4.w < 0.5 || n4.w < 0.5 {
+        return entry;
+    }
+    entry.view = view4.xyz;
+    entry.n1 = face_forward_shading_normal(n4.xyz, entry.view);
+    let refracted = refract_dir(entry.view, entry.n1, 1.0 / frame.ior);
+    entry.tir = all(refracted == vec3<f32>(0.0));
+    let t1_4 = robust_normalize(select(refracted, reflect_dir(entry.view, entry.n1), entry.tir));
+    entry.t1 = t1_4.xyz;
+    entry.valid = t1_4.w >= 0.5;
+    return entry;
+}
+
+// Method `single`: the environment along T1.
+@compute @workgroup_size(8, 8)
+fn shade_single(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.width || id.y >= frame.height {
+        return;
+    }
+    let px = front_pixel(id);
+    if !px.covered {
+        write_background(px);
+        return;
+    }
+    let entry = one_interface(px.p1, px.n1);
+    if !entry.valid {
+        write_degenerate(px.index);
+        return;
+    }
+    out_color[px.index] = vec4<f32>(environment_radiance(entry.t1), f32(COVERAGE_PATH));
+    write_aovs(px.index, vec4<f32>(entry.t1, select(0.0, 1.0, entry.tir)), vec4<f32>(0.0), vec4<f32>(0.0));
+}
+
+// Methods `wyman`, `wyman-dv`, `wyman-dn` (kernel.rs: two_interface): the environment along T2.
+@compute @workgroup_size(8, 8)
+fn shade_two_interface(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.width || id.y >= frame.height {
+        return;
+    }
+    let px = front_pixel(id);
+    let i = px.index;
+    if !px.covered {
+        write_background(px);
+        return;
+    }
+    let entry = one_interface(px.p1, px.n1);
+    if !entry.valid || !(px.d_n >= 0.0 && px.d_n <= F32_MAX) {
+        write_degenerate(i);
+        return;
+    }
+    let p1 = px.p1;
+    let t1 = entry.t1;
+    let back = back_face(px.uv);
+    let d_v = back.w - length(p1 - frame.eye.xyz);
+    let has_d_v = back.w >= 0.0 && d_v >= 0.0 && d_v <= F32_MAX;
+    if entry.tir {
+        out_color[i] = vec4<f32>(environment_radiance(t1), f32(COVERAGE_PATH));
+        write_aovs(i, vec4<f32>(t1, 1.0), vec4<f32>(p1, f32(EXIT_NORMAL_FALLBACK)), vec4<f32>(entry.n1, 1.0));
+        return;
+    }
+    let eta_in = 1.0 / frame.ior;
+    let theta_i = angle_between(-entry.view, entry.n1);
+    let theta_t = angle_between(t1, -entry.n1);
+    let d_tilde = approximate_distance(DISTANCE_MODE, theta_i, theta_t, eta_in, select(px.d_n, d_v, has_d_v), px.d_n);
+    let p2 = p1 + d_tilde * t1;
+
+    var n2 = exit_normal_outside_silhouette(t1, frame.look_dir.xyz);
+    var source = EXIT_NORMAL_FALLBACK;
+    let pixel = world_to_pixel(p2);
+    if pixel.w > 0.5 {
+        let sampled = back_face(pixel.xy);
+        if sampled.w >= 0.0 {
+            let unit = robust_normalize(sampled.xyz);
+            if unit.w > 0.5 {
+                n2 = unit.xyz;
+                source = EXIT_NORMAL_BACK_FACE;
+            }
+        }
+    }
+    let exit = refract_exit(t1, n2, frame.ior, frame.tir_policy);
+    if !(is_finite3(p2) && abs(d_tilde) <= F32_MAX && is_finite3(exit.xyz)) {
+        write_degenerate(i);
+        return;
+    }
+    var color = vec3<f32>(0.0);
+    if any(exit.xyz != vec3<f32>(0.0)) {
+        color = environment_radiance(exit.xyz);
+    }
+    out_color[i] = vec4<f32>(color, f32(COVERAGE_PATH));
+    write_aovs(i, vec4<f32>(exit.xyz, select(0.0, 1.0, exit.w > 0.5)), vec4<f32>(p2, f32(source)), vec4<f32>(n2, 1.0));
+}
