@@ -235,7 +235,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance of one camera ray in the configured mode.
-    pub fn radiance(&self, ray: Ray, rays: &mut u64) -> Vec3 {
+    pub fn sample_radiance(&self, ray: Ray, rays: &mut u64) -> Vec3 {
         match self.settings.mode {
             TraceMode::Transmission => self.transmission_path(ray, rays).0,
             TraceMode::Full => self.full_radiance(ray, 0, 1.0, rays),
@@ -255,7 +255,7 @@ impl<'a> Tracer<'a> {
             .map(|i| {
                 let offset = pixel_sample(x, y, i, spp);
                 let ray = camera.pixel_ray(Vec2::new(x as f32, y as f32) + offset);
-                self.radiance(ray, rays)
+                self.sample_radiance(ray, rays)
             })
             .sum();
         (sum / spp as f32, aov)

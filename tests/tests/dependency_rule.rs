@@ -1,0 +1,125 @@
+//! The dependency rule of `docs/architecture.md`, checked over `cargo metadata`: refract-core
+//! depends on no workspace crate; geometry on core only; the scene crate on core and geometry;
+//! the reference and the two backends on the scene crate and never on one another; and the
+//! reference uses exact math only, never an approximation a backend uses.
+
+use std::collections::BTreeSet;
+use std::process::Command;
+
+/// Every workspace package with the workspace crates it depends on (any kind: normal, dev,
+/// build).
+fn workspace_dependencies() -> Vec<(String, BTreeSet<String>)> {
+    let output = Command::new(env!("CARGO"))
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(refract_tests::workspace_root())
+        .output()
+        .expect("cargo metadata");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).expect("json");
+    let packages = metadata["packages"].as_array().expect("packages");
+    let names: BTreeSet<String> = packages
+        .iter()
+        .filter_map(|p| p["name"].as_str().map(str::to_owned))
+        .collect();
+    packages
+        .iter()
+        .map(|p| {
+            let deps = p["dependencies"]
+                .as_array()
+                .expect("dependencies")
+                .iter()
+                .filter_map(|d| d["name"].as_str())
+                .filter(|d| names.contains(*d))
+                .map(str::to_owned)
+                .collect();
+            (p["name"].as_str().expect("name").to_owned(), deps)
+        })
+        .collect()
+}
+
+fn set(names: &[&str]) -> BTreeSet<String> {
+    names.iter().map(|s| (*s).to_owned()).collect()
+}
+
+#[test]
+fn crates_depend_only_downward() {
+    let packages = workspace_dependencies();
+    let deps = |name: &str| -> BTreeSet<String> {
+        packages
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, d)| d.clone())
+            .unwrap_or_else(|| panic!("no package {name}"))
+    };
+    assert_eq!(
+        deps("refract-core"),
+        set(&[]),
+        "core depends on no workspace crate"
+    );
+    assert_eq!(deps("refract-geometry"), set(&["refract-core"]));
+    assert_eq!(
+        deps("refract-scene"),
+        set(&["refract-core", "refract-geometry"])
+    );
+    let renderers = ["refract-trace", "refract-cpu", "refract-gpu"];
+    for renderer in renderers {
+        let d = deps(renderer);
+        assert!(
+            d.contains("refract-scene"),
+            "{renderer} renders refract-scene's Scene"
+        );
+        for other in renderers.iter().filter(|o| **o != renderer) {
+            assert!(!d.contains(*other), "{renderer} must not depend on {other}");
+        }
+        assert!(
+            !d.contains("refract-cli") && !d.contains("refract-tests"),
+            "{renderer}: {d:?}"
+        );
+    }
+    println!("{packages:#?}");
+}
+
+/// The reference's sources name nothing of the backends' approximations: the polynomial
+/// `atan2`, the eight-lane kernels and lookups, or the environment lookup built on them.
+#[test]
+fn the_reference_uses_exact_math_only() {
+    let src = refract_tests::workspace_root().join("crates/refract-trace/src");
+    let forbidden = [
+        "arctangent",
+        "Polynomial",
+        "lanes",
+        "kernel_x8",
+        "_x8",
+        ".radiance(",
+        "radiance_with",
+    ];
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&src).expect("refract-trace/src") {
+        let path = entry.expect("entry").path();
+        let text = std::fs::read_to_string(&path).expect("source");
+        for word in forbidden {
+            assert!(
+                !text.contains(word),
+                "{} uses `{word}`: the reference must use exact math (radiance_exact, libm)",
+                path.display()
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 3, "read the reference's sources");
+    let tracer = std::fs::read_to_string(src.join("tracer.rs")).expect("tracer.rs");
+    assert!(
+        tracer.contains("radiance_exact"),
+        "the tracer looks the environment up exactly"
+    );
+}
