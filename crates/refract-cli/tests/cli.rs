@@ -135,8 +135,44 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["compare", "sphere", "--methods", "wyman,magic"], "magic"),
+        (
+            &["compare", "sphere", "--methods", "reference", "--res", "8"],
+            "reference",
+        ),
+        (
+            &["compare", "sphere", "--param", "seeds=7", "--res", "8"],
+            "seeds",
+        ),
+        (
+            &[
+                "render",
+                "sphere",
+                "--param",
+                "back=middle",
+                "--res",
+                "8",
+                "--out",
+                "x.png",
+            ],
+            "furthest, second",
+        ),
+        (
+            &[
+                "render",
+                "sphere",
+                "--method",
+                "single",
+                "--param",
+                "tir=black",
+                "--res",
+                "8",
+                "--out",
+                "x.png",
+            ],
+            "no parameters",
+        ),
         (
             &["compare", "nowhere", "--res", "16"],
             "sphere, torus, lens",
@@ -176,6 +212,52 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         !dir.path().join("x.png").exists(),
         "no partial output on failure"
     );
+}
+
+/// `refract methods` prints every registry row with its parameters, and a method parameter set
+/// on the command line changes the frame (`back=second` on the torus).
+#[test]
+fn methods_are_listed_and_parameters_apply() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(&["methods"], dir.path());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", stderr(&output));
+    for row in ["reference", "single", "wyman ", "wyman-dv", "wyman-dn"] {
+        assert!(text.contains(row), "{row}: {text}");
+    }
+    assert!(
+        text.contains("--param back=<furthest | second> (default furthest)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("--param depth=<1..=64> (default 8)"),
+        "{text}"
+    );
+    // A torus seen across its ring: rays through both sides of the tube meet four surfaces.
+    std::fs::write(
+        dir.path().join("ring.toml"),
+        "[refractor]\nmesh = \"builtin:torus\"\nior = 1.33\n",
+    )
+    .expect("write");
+    let mut images = Vec::new();
+    for (param, file) in [("back=furthest", "f.png"), ("back=second", "s.png")] {
+        let output = refract(
+            &[
+                "render",
+                "ring.toml",
+                "--param",
+                param,
+                "--res",
+                "48",
+                "--out",
+                file,
+            ],
+            dir.path(),
+        );
+        assert!(output.status.success(), "{param}: {}", stderr(&output));
+        images.push(std::fs::read(dir.path().join(file)).expect("png"));
+    }
+    assert_ne!(images[0], images[1], "the back surface changes the torus");
 }
 
 #[test]
@@ -243,7 +325,24 @@ fn info_lists_adapters_and_mesh_facts() {
     let output = refract(&["info", "builtin:lens"], dir.path());
     let text = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success(), "{}", stderr(&output));
-    assert!(text.contains("GPU adapter"), "{text}");
+    // One line per adapter with its name, backend and type, or the one line saying there is none;
+    // with REFRACT_REQUIRE_GPU=1 an adapter must be listed.
+    let adapters: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("GPU adapter      "))
+        .collect();
+    let none = text.lines().any(|l| l.starts_with("GPU adapters     none"));
+    assert!(adapters.is_empty() == none, "{text}");
+    for line in &adapters {
+        let detail = line.trim_start_matches("GPU adapter").trim();
+        assert!(detail.contains(" (") && detail.ends_with(')'), "{line}");
+    }
+    if std::env::var("REFRACT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+        assert!(
+            !adapters.is_empty(),
+            "REFRACT_REQUIRE_GPU=1 but no adapter listed: {text}"
+        );
+    }
     assert!(text.contains("watertight       yes"), "{text}");
     let output = refract(&["info", "missing.obj"], dir.path());
     assert!(!output.status.success() && stderr(&output).contains("missing.obj"));

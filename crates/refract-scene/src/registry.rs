@@ -168,8 +168,8 @@ pub const REGISTRY: [MethodInfo; 5] = [
     MethodInfo {
         id: MethodId::Reference,
         name: "reference",
-        paper: "all",
-        section: "-",
+        paper: "ground truth",
+        section: "(docs/reference.md)",
         family: Family::Reference,
         summary: "exact recursive ray tracing through the mesh (BVH), the same shading normals",
         params: REFERENCE_PARAMS,

@@ -359,55 +359,106 @@ impl ImageSpaceTargets {
             read(&self.readback[2])?,
             read(&self.readback[3])?,
         );
-        let code = |i: usize| color[i][3].round() as u32;
-        let path = |i: usize| !matches!(code(i), COVERAGE_BACKGROUND | COVERAGE_DEGENERATE);
-        let xyz = |v: [f32; 4]| Vec3::new(v[0], v[1], v[2]);
-        let source =
-            |i: usize| exit_normal_source_from_code(p2[i][3].round() as u32).filter(|_| path(i));
+        let pixels: Vec<DecodedPixel> = (0..frame.pixel_count())
+            .map(|i| DecodedPixel::new(color[i], t2[i], p2[i], n2[i]))
+            .collect();
         for &aov in method.info().aovs {
-            let n = frame.pixel_count();
             match aov {
-                Aov::Covered => {
-                    let out = frame.flag_mut(aov);
-                    (0..n).for_each(|i| out[i] = code(i) != COVERAGE_BACKGROUND);
-                }
-                Aov::Tir => {
-                    let out = frame.flag_mut(aov);
-                    (0..n).for_each(|i| out[i] = path(i) && t2[i][3] > 0.5);
-                }
-                Aov::T2 => {
-                    let out = frame.vec3_mut(aov);
-                    (0..n).for_each(|i| out[i] = if path(i) { xyz(t2[i]) } else { Vec3::NAN });
-                }
-                Aov::P2 => {
-                    let out = frame.vec3_mut(aov);
-                    (0..n).for_each(|i| {
-                        out[i] = if source(i).is_some() {
-                            xyz(p2[i])
-                        } else {
-                            Vec3::NAN
-                        }
-                    });
-                }
-                Aov::N2 => {
-                    let out = frame.vec3_mut(aov);
-                    (0..n).for_each(|i| {
-                        out[i] = if path(i) && n2[i][3] > 0.5 {
-                            xyz(n2[i])
-                        } else {
-                            Vec3::NAN
-                        }
-                    });
-                }
-                Aov::ExitNormalSource => {
-                    let out = frame.count_mut(aov);
-                    (0..n).for_each(|i| out[i] = source(i).map_or(0, exit_normal_source_code));
-                }
+                Aov::Covered => fill(frame.flag_mut(aov), &pixels, |p| p.covered),
+                Aov::Tir => fill(frame.flag_mut(aov), &pixels, |p| p.tir),
+                Aov::T2 => fill(frame.vec3_mut(aov), &pixels, |p| p.t2),
+                Aov::P2 => fill(frame.vec3_mut(aov), &pixels, |p| p.p2),
+                Aov::N2 => fill(frame.vec3_mut(aov), &pixels, |p| p.n2),
+                Aov::ExitNormalSource => fill(frame.count_mut(aov), &pixels, |p| {
+                    p.n2_source.map_or(0, exit_normal_source_code)
+                }),
                 Aov::P1 | Aov::N1 | Aov::T1 | Aov::PGeom | Aov::Interfaces | Aov::TirFirstExit => {
                     unreachable!("the image-space kernels do not compute {}", aov.name())
                 }
             }
         }
         Ok(())
+    }
+}
+
+fn fill<T>(out: &mut [T], pixels: &[DecodedPixel], get: impl Fn(&DecodedPixel) -> T) {
+    for (o, p) in out.iter_mut().zip(pixels) {
+        *o = get(p);
+    }
+}
+
+/// One pixel of the kernel's outputs, decoded with the shared codes
+/// (`refract_core::gpu::COVERAGE_*`, [`exit_normal_source_from_code`]) into what the CPU
+/// backend writes: NaN vectors where there is no path (background and degenerate pixels).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct DecodedPixel {
+    covered: bool,
+    t2: Vec3,
+    p2: Vec3,
+    n2: Vec3,
+    n2_source: Option<refract_core::ExitNormalSource>,
+    tir: bool,
+}
+
+impl DecodedPixel {
+    /// `color.w`: coverage code; `t2.w`: TIR; `p2.w`: exit-normal code; `n2.w`: N2 valid.
+    fn new(color: [f32; 4], t2: [f32; 4], p2: [f32; 4], n2: [f32; 4]) -> Self {
+        let code = color[3].round() as u32;
+        let path = !matches!(code, COVERAGE_BACKGROUND | COVERAGE_DEGENERATE);
+        let xyz = |v: [f32; 4], valid: bool| {
+            if valid {
+                Vec3::new(v[0], v[1], v[2])
+            } else {
+                Vec3::NAN
+            }
+        };
+        let n2_source = exit_normal_source_from_code(p2[3].round() as u32).filter(|_| path);
+        Self {
+            covered: code != COVERAGE_BACKGROUND,
+            t2: xyz(t2, path),
+            p2: xyz(p2, n2_source.is_some()),
+            n2: xyz(n2, path && n2[3] > 0.5),
+            n2_source,
+            tir: path && t2[3] > 0.5,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use refract_core::ExitNormalSource;
+    use refract_core::gpu::COVERAGE_PATH;
+
+    use super::*;
+
+    /// A degenerate pixel (the shader writes `COVERAGE_DEGENERATE` and zero vectors) reads back
+    /// as the CPU backend writes it: covered, NaN vectors, no exit normal, no TIR. Before the
+    /// shared codes the GPU's zero T2 came back as a direction.
+    #[test]
+    fn degenerate_pixels_decode_like_the_cpu_backend() {
+        let zero = [0.0; 4];
+        let degenerate = DecodedPixel::new(
+            [0.0, 0.0, 0.0, COVERAGE_DEGENERATE as f32],
+            zero,
+            zero,
+            zero,
+        );
+        assert!(degenerate.covered && !degenerate.tir && degenerate.n2_source.is_none());
+        assert!(degenerate.t2.is_nan() && degenerate.p2.is_nan() && degenerate.n2.is_nan());
+        let background = DecodedPixel::new(zero, zero, zero, zero);
+        assert!(!background.covered && background.t2.is_nan());
+        let source = exit_normal_source_code(ExitNormalSource::SilhouetteFallback) as f32;
+        let path = DecodedPixel::new(
+            [0.5, 0.5, 0.5, COVERAGE_PATH as f32],
+            [0.0, 0.0, -1.0, 1.0],
+            [0.1, 0.2, 0.3, source],
+            [0.0, 1.0, 0.0, 1.0],
+        );
+        assert!(path.covered && path.tir);
+        assert_eq!(path.n2_source, Some(ExitNormalSource::SilhouetteFallback));
+        assert_eq!(
+            (path.t2, path.p2, path.n2),
+            (Vec3::NEG_Z, Vec3::new(0.1, 0.2, 0.3), Vec3::Y)
+        );
     }
 }
