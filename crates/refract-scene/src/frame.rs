@@ -199,6 +199,29 @@ impl Frame {
         layer
     }
 
+    /// Puts `layer` in as `aov`, replacing any layer of that name: for renderers that fill
+    /// their layers in parallel, row by row, and hand them over whole.
+    ///
+    /// # Panics
+    /// If the layer's type is not `aov`'s or its length is not the frame's pixel count (a
+    /// programming error, not an input error).
+    pub fn insert_layer(&mut self, aov: Aov, layer: Layer) {
+        let kind = match &layer {
+            Layer::Vec3(_) => AovKind::Vec3,
+            Layer::Count(_) => AovKind::Count,
+            Layer::Flag(_) => AovKind::Flag,
+        };
+        assert!(
+            kind == aov.kind() && layer.len() == self.pixel_count(),
+            "layer {} of {kind:?} × {} for a {:?} AOV of {} pixels",
+            aov.name(),
+            layer.len(),
+            aov.kind(),
+            self.pixel_count()
+        );
+        self.layers.insert(aov, layer);
+    }
+
     /// A vector layer, if present.
     pub fn vec3(&self, aov: Aov) -> Option<&[Vec3]> {
         match self.layers.get(&aov)? {

@@ -8,7 +8,7 @@ use refract_core::fresnel::fresnel_dielectric;
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::{Camera, Ray};
 use refract_geometry::Hit;
-use refract_scene::{Aov, Frame, Scene, TraceMode, TraceSettings};
+use refract_scene::{Aov, Frame, Layer, Scene, TraceMode, TraceSettings};
 
 use crate::sampling::pixel_sample;
 
@@ -274,58 +274,115 @@ pub fn render(scene: &Scene, camera: &Camera, settings: &TraceSettings) -> Frame
 /// [`render`] into an existing frame.
 pub fn render_into(scene: &Scene, camera: &Camera, settings: &TraceSettings, frame: &mut Frame) {
     let tracer = Tracer::new(scene, *settings);
-    let (width, height) = (camera.width(), camera.height());
-    let rows: Vec<(Vec<Vec3>, Vec<PathRecord>, u64)> = (0..height)
-        .into_par_iter()
-        .map(|y| {
-            let mut rays = 0;
-            let (radiance, records) = (0..width)
-                .map(|x| tracer.pixel(camera, x, y, &mut rays))
-                .unzip();
-            (radiance, records, rays)
-        })
+    let (width, height) = (camera.width() as usize, camera.height() as usize);
+    let n = width * height;
+    frame.reset(camera.width(), camera.height());
+    let mut layers = RecordLayers::new(n);
+    // One row of every output per task, written in place: no serial copy of the records.
+    let rows: Vec<RowOut<'_>> = frame
+        .color
+        .chunks_mut(width)
+        .zip(layers.rows(width))
+        .map(|(color, layers)| RowOut { color, layers })
         .collect();
-    frame.reset(width, height);
-    let mut records = Vec::with_capacity(frame.pixel_count());
-    let mut offset = 0;
-    for (radiance, row, rays) in rows {
-        frame.color[offset..offset + radiance.len()].copy_from_slice(&radiance);
-        offset += radiance.len();
-        records.extend(row);
-        frame.rays += rays;
-    }
-    write_layers(&records, frame);
+    let rays: u64 = rows
+        .into_par_iter()
+        .enumerate()
+        .map(|(y, mut row)| {
+            let mut rays = 0;
+            for x in 0..width {
+                let (radiance, record) = tracer.pixel(camera, x as u32, y as u32, &mut rays);
+                row.color[x] = radiance;
+                row.layers.write(x, &record);
+            }
+            rays
+        })
+        .sum();
+    frame.rays = rays;
+    layers.into_frame(frame);
 }
 
-/// The records as the frame's AOV layers.
-fn write_layers(records: &[PathRecord], frame: &mut Frame) {
-    type Vector = fn(&PathRecord) -> Vec3;
-    let vectors: [(Aov, Vector); 7] = [
-        (Aov::P1, |r| r.p1),
-        (Aov::N1, |r| r.n1),
-        (Aov::T1, |r| r.t1),
-        (Aov::P2, |r| r.p2),
-        (Aov::N2, |r| r.n2),
-        (Aov::T2, |r| r.t2),
-        (Aov::PGeom, |r| r.p_geom),
-    ];
-    for (aov, get) in vectors {
-        for (out, r) in frame.vec3_mut(aov).iter_mut().zip(records) {
-            *out = get(r);
+/// The reference's AOV layers (the `reference` row of the registry), filled row by row.
+struct RecordLayers {
+    vectors: [(Aov, Vec<Vec3>); 7],
+    flags: [(Aov, Vec<bool>); 3],
+    interfaces: Vec<u32>,
+}
+
+/// One row of [`RecordLayers`].
+struct RecordRow<'a> {
+    vectors: [&'a mut [Vec3]; 7],
+    flags: [&'a mut [bool]; 3],
+    interfaces: &'a mut [u32],
+}
+
+struct RowOut<'a> {
+    color: &'a mut [Vec3],
+    layers: RecordRow<'a>,
+}
+
+impl RecordLayers {
+    fn new(n: usize) -> Self {
+        let v = |aov| (aov, vec![Vec3::NAN; n]);
+        let f = |aov| (aov, vec![false; n]);
+        Self {
+            vectors: [
+                v(Aov::P1),
+                v(Aov::N1),
+                v(Aov::T1),
+                v(Aov::P2),
+                v(Aov::N2),
+                v(Aov::T2),
+                v(Aov::PGeom),
+            ],
+            flags: [f(Aov::Covered), f(Aov::Tir), f(Aov::TirFirstExit)],
+            interfaces: vec![0; n],
         }
     }
-    type Flag = fn(&PathRecord) -> bool;
-    let flags: [(Aov, Flag); 3] = [
-        (Aov::Covered, PathRecord::covers_refractor),
-        (Aov::Tir, |r| r.tir),
-        (Aov::TirFirstExit, |r| r.tir_first_exit),
-    ];
-    for (aov, get) in flags {
-        for (out, r) in frame.flag_mut(aov).iter_mut().zip(records) {
-            *out = get(r);
-        }
+
+    /// The layers split into rows of `width`.
+    fn rows(&mut self, width: usize) -> impl Iterator<Item = RecordRow<'_>> {
+        let mut vectors: Vec<_> = self
+            .vectors
+            .iter_mut()
+            .map(|(_, v)| v.chunks_mut(width))
+            .collect();
+        let mut flags: Vec<_> = self
+            .flags
+            .iter_mut()
+            .map(|(_, v)| v.chunks_mut(width))
+            .collect();
+        self.interfaces
+            .chunks_mut(width)
+            .map(move |interfaces| RecordRow {
+                vectors: core::array::from_fn(|k| vectors[k].next().unwrap_or_default()),
+                flags: core::array::from_fn(|k| flags[k].next().unwrap_or_default()),
+                interfaces,
+            })
     }
-    for (out, r) in frame.count_mut(Aov::Interfaces).iter_mut().zip(records) {
-        *out = r.interfaces;
+
+    fn into_frame(self, frame: &mut Frame) {
+        for (aov, values) in self.vectors {
+            frame.insert_layer(aov, Layer::Vec3(values));
+        }
+        for (aov, values) in self.flags {
+            frame.insert_layer(aov, Layer::Flag(values));
+        }
+        frame.insert_layer(Aov::Interfaces, Layer::Count(self.interfaces));
+    }
+}
+
+impl RecordRow<'_> {
+    /// Pixel `x` of the row; the order is [`RecordLayers::new`]'s.
+    fn write(&mut self, x: usize, r: &PathRecord) {
+        let vectors = [r.p1, r.n1, r.t1, r.p2, r.n2, r.t2, r.p_geom];
+        for (layer, v) in self.vectors.iter_mut().zip(vectors) {
+            layer[x] = v;
+        }
+        let flags = [r.covers_refractor(), r.tir, r.tir_first_exit];
+        for (layer, f) in self.flags.iter_mut().zip(flags) {
+            layer[x] = f;
+        }
+        self.interfaces[x] = r.interfaces;
     }
 }
