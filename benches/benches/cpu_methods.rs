@@ -2,7 +2,7 @@
 //! built-in sphere and the real meshes (Wyman 2005a Table 1 models).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use refract_cpu::{CpuRenderer, FrameBuffers, kernel_params, render_buffers_into, shade_into};
+use refract_cpu::{CpuRenderer, FrameBuffers, render_buffers_into, shade_into};
 use refract_geometry::{Mesh, builtin};
 use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
@@ -48,11 +48,14 @@ fn cpu_methods(c: &mut Criterion) {
                 });
             }
             // The two-step path, stage by stage (memory reused as in a frame).
-            let (back, distance, tir) = match params {
-                MethodParams::TwoInterface(p) => (Some(p.back), p.distance, p.tir),
-                _ => (None, Default::default(), Default::default()),
+            let back = match params {
+                MethodParams::TwoInterface(p) => Some(p.back),
+                _ => None,
             };
-            let kernel = kernel_params(scene.refractor.ior(), distance, tir).expect("kernel");
+            let kernel = params
+                .image_space_kernel(scene.refractor.ior())
+                .expect("an image-space method")
+                .expect("kernel");
             let mut buffers = FrameBuffers::default();
             group.bench_function(format!("{id}/buffers"), |b| {
                 b.iter(|| render_buffers_into(&scene.refractor, &camera, back, &mut buffers))

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use refract_core::vector::angle_between;
 use refract_core::{BackSurface, Camera, Ray};
-use refract_cpu::{CpuRenderer, front_faces, kernel_params, render_buffers, shade_into};
+use refract_cpu::{CpuRenderer, front_faces, render_buffers, shade_into};
 use refract_geometry::{Hit, shapes};
 use refract_scene::metrics::{MetricsRecord, evaluate};
 use refract_scene::{
@@ -430,13 +430,15 @@ fn reusing_renderer_matches_fresh_frames() {
 
 /// The two-step path: buffers stored whole, then the kernel.
 fn two_step(scene: &Scene, cam: &Camera, params: &MethodParams) -> Frame {
-    let (back, distance, tir) = match params {
-        MethodParams::Single => (None, Default::default(), Default::default()),
-        MethodParams::TwoInterface(p) => (Some(p.back), p.distance, p.tir),
-        MethodParams::Reference(_) => unreachable!("not an image-space method"),
+    let back = match params {
+        MethodParams::TwoInterface(p) => Some(p.back),
+        _ => None,
     };
+    let kernel = params
+        .image_space_kernel(scene.refractor.ior())
+        .expect("an image-space method")
+        .expect("kernel");
     let buffers = render_buffers(&scene.refractor, cam, back);
-    let kernel = kernel_params(scene.refractor.ior(), distance, tir).expect("kernel");
     let mut frame = Frame::default();
     shade_into(
         &buffers,

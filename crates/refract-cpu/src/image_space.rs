@@ -8,8 +8,8 @@ use rayon::prelude::*;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
-use refract_core::{BackSurface, Camera, DistanceMode, TirPolicy};
-use refract_scene::{Aov, Environment, Frame, FrameOutputs, MethodId, Refractor, RenderError};
+use refract_core::{BackSurface, Camera};
+use refract_scene::{Aov, Environment, Frame, FrameOutputs, MethodId, Refractor};
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
@@ -55,15 +55,6 @@ impl MethodAov {
         n2_source: None,
         tir: false,
     };
-}
-
-/// The kernel's parameters, or the IOR error.
-pub fn kernel_params(
-    ior: f32,
-    distance: DistanceMode,
-    tir: TirPolicy,
-) -> Result<ImageSpaceParams, RenderError> {
-    ImageSpaceParams::new(ior, distance, tir).map_err(|err| RenderError::Parameter(err.to_string()))
 }
 
 /// The buffers of one frame: front faces always, back faces for two-interface methods.

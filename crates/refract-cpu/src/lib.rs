@@ -23,8 +23,8 @@ pub mod surfaces;
 
 pub use buffers::{BackFaces, front_faces, front_faces_into};
 pub use image_space::{
-    FrameBuffers, ImageSpaceMethod, ImageSpacePasses, kernel_params, render_buffers,
-    render_buffers_into, shade_into,
+    FrameBuffers, ImageSpaceMethod, ImageSpacePasses, render_buffers, render_buffers_into,
+    shade_into,
 };
 pub use raster::{
     BAND_ROWS, Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, band_pixels, rasterize,

@@ -4,13 +4,13 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use refract_core::{Camera, DistanceMode, TirPolicy};
+use refract_core::Camera;
 use refract_scene::{
     BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
     Scene, TimingSource,
 };
 
-use crate::image_space::{ImageSpaceMethod, ImageSpacePasses, kernel_params};
+use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
 /// resolution a colour-only frame allocates nothing.
@@ -58,27 +58,18 @@ impl Renderer for CpuRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Cpu))?;
         let refractor = &scene.refractor;
         let start = Instant::now();
-        let (image_space, kernel) = match method {
-            MethodParams::Reference(_) => {
-                return Err(RenderError::Unsupported {
-                    backend: BackendId::Cpu,
-                    method: method.id(),
-                });
-            }
-            MethodParams::Single => (
-                ImageSpaceMethod::Single,
-                // `single` has no d~ and no exit; the kernel ignores both.
-                kernel_params(
-                    refractor.ior(),
-                    DistanceMode::Interpolated,
-                    TirPolicy::default(),
-                )?,
-            ),
-            MethodParams::TwoInterface(p) => (
-                ImageSpaceMethod::TwoInterface { back: p.back },
-                kernel_params(refractor.ior(), p.distance, p.tir)?,
-            ),
+        let unsupported = || RenderError::Unsupported {
+            backend: BackendId::Cpu,
+            method: method.id(),
         };
+        let image_space = match method {
+            MethodParams::Reference(_) => return Err(unsupported()),
+            MethodParams::Single => ImageSpaceMethod::Single,
+            MethodParams::TwoInterface(p) => ImageSpaceMethod::TwoInterface { back: p.back },
+        };
+        let kernel = method
+            .image_space_kernel(refractor.ior())
+            .ok_or_else(unsupported)??;
         self.image_space.render(
             refractor,
             &scene.environment,

@@ -4,8 +4,8 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use refract_core::Camera;
 use refract_core::kernel::ImageSpaceParams;
-use refract_core::{Camera, DistanceMode, TirPolicy};
 use refract_scene::{
     BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
     Scene, SceneMesh, SurfaceTexel, TimingSource,
@@ -146,6 +146,7 @@ impl GpuRenderer {
             camera,
             &uniforms,
             kernel,
+            id,
             outputs,
             self.timestamps.as_ref(),
             &mut encoder,
@@ -167,14 +168,6 @@ impl GpuRenderer {
         targets.read(&self.context, id, outputs, frame)?;
         Ok(timing)
     }
-}
-
-fn kernel_params(
-    ior: f32,
-    distance: DistanceMode,
-    tir: TirPolicy,
-) -> Result<ImageSpaceParams, RenderError> {
-    ImageSpaceParams::new(ior, distance, tir).map_err(|err| RenderError::Parameter(err.to_string()))
 }
 
 impl Renderer for GpuRenderer {
@@ -213,24 +206,16 @@ impl Renderer for GpuRenderer {
             .refractor
             .ior();
         let id = method.id();
-        match method {
-            MethodParams::Reference(_) => Err(RenderError::Unsupported {
-                backend: BackendId::Gpu,
-                method: id,
-            }),
-            MethodParams::Single => {
-                // `single` has no d~ and no exit; the kernel ignores both.
-                let params = kernel_params(ior, DistanceMode::Interpolated, TirPolicy::default())?;
-                self.image_space(camera, ImageSpaceKernel::Single, id, params, outputs, frame)
-            }
-            MethodParams::TwoInterface(p) => {
-                let params = kernel_params(ior, p.distance, p.tir)?;
-                let kernel = ImageSpaceKernel::TwoInterface {
-                    distance: p.distance,
-                    back: p.back,
-                };
-                self.image_space(camera, kernel, id, params, outputs, frame)
-            }
-        }
+        let unsupported = || RenderError::Unsupported {
+            backend: BackendId::Gpu,
+            method: id,
+        };
+        let kernel = match method {
+            MethodParams::Reference(_) => return Err(unsupported()),
+            MethodParams::Single => ImageSpaceKernel::Single,
+            MethodParams::TwoInterface(p) => ImageSpaceKernel::TwoInterface { back: p.back },
+        };
+        let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
+        self.image_space(camera, kernel, id, params, outputs, frame)
     }
 }

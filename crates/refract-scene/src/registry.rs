@@ -6,10 +6,12 @@
 
 use core::fmt;
 
+use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, DistanceMode, TirPolicy};
 
 use crate::error::SceneError;
 use crate::frame::Aov;
+use crate::renderer::RenderError;
 
 /// Every method, by its design.md id.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -478,6 +480,20 @@ impl MethodParams {
             p.tir = tir;
         }
         self
+    }
+
+    /// The parameters of refract-core's image-space kernels for a refractor of index `ior`
+    /// (`single` ignores the distance mode and exit policy), `None` for other methods.
+    pub fn image_space_kernel(&self, ior: f32) -> Option<Result<ImageSpaceParams, RenderError>> {
+        let (distance, tir) = match self {
+            MethodParams::Single => (DistanceMode::Interpolated, TirPolicy::default()),
+            MethodParams::TwoInterface(p) => (p.distance, p.tir),
+            MethodParams::Reference(_) => return None,
+        };
+        Some(
+            ImageSpaceParams::new(ior, distance, tir)
+                .map_err(|err| RenderError::Parameter(err.to_string())),
+        )
     }
 
     /// `name=value` of every parameter, for reports.

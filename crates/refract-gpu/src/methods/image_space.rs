@@ -9,8 +9,10 @@ use refract_core::gpu::{
     COVERAGE_BACKGROUND, COVERAGE_DEGENERATE, FrameUniforms, distance_mode_code,
     exit_normal_source_code, exit_normal_source_from_code,
 };
-use refract_core::{BackSurface, Camera, DistanceMode};
-use refract_scene::{Aov, Frame, FrameOutputs, MethodId};
+use refract_core::{BackSurface, Camera};
+use refract_scene::{
+    Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY, TwoInterfaceParams,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
@@ -24,43 +26,12 @@ use crate::timestamps::Timestamps;
 pub(crate) enum ImageSpaceKernel {
     /// `single`.
     Single,
-    /// `wyman` and its ablations.
+    /// `wyman` and its ablations (the pipeline, chosen by method id, fixes `d~`).
     TwoInterface {
-        /// How `d~` is approximated.
-        distance: DistanceMode,
         /// Which back surface is rasterised.
         back: BackSurface,
     },
 }
-
-impl ImageSpaceKernel {
-    fn id(self) -> MethodId {
-        match self {
-            ImageSpaceKernel::Single => MethodId::Single,
-            ImageSpaceKernel::TwoInterface { distance, .. } => match distance {
-                DistanceMode::Interpolated => MethodId::Wyman,
-                DistanceMode::ViewOnly => MethodId::WymanDv,
-                DistanceMode::NormalOnly => MethodId::WymanDn,
-            },
-        }
-    }
-}
-
-const KERNELS: [ImageSpaceKernel; 4] = [
-    ImageSpaceKernel::Single,
-    ImageSpaceKernel::TwoInterface {
-        distance: DistanceMode::Interpolated,
-        back: BackSurface::Furthest,
-    },
-    ImageSpaceKernel::TwoInterface {
-        distance: DistanceMode::ViewOnly,
-        back: BackSurface::Furthest,
-    },
-    ImageSpaceKernel::TwoInterface {
-        distance: DistanceMode::NormalOnly,
-        back: BackSurface::Furthest,
-    },
-];
 
 /// The kernel pipelines: one per method, each with and without AOV stores.
 pub(crate) struct ImageSpacePipelines {
@@ -94,20 +65,25 @@ impl ImageSpacePipelines {
             immediate_size: 0,
         });
         let mut pipelines = Vec::new();
-        for kernel in KERNELS {
+        let methods = REGISTRY
+            .iter()
+            .filter(|m| m.family == Family::ImageSpace)
+            .map(|m| m.id);
+        for id in methods {
             for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
                 let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
-                let (entry, constants) = match kernel {
-                    ImageSpaceKernel::Single => ("shade_single", vec![("WRITE_AOVS", write_aovs)]),
-                    ImageSpaceKernel::TwoInterface { distance, .. } => (
+                let (entry, constants) = match MethodParams::defaults(id) {
+                    MethodParams::Single => ("shade_single", vec![("WRITE_AOVS", write_aovs)]),
+                    MethodParams::TwoInterface(TwoInterfaceParams { distance, .. }) => (
                         "shade_two_interface",
                         vec![
                             ("WRITE_AOVS", write_aovs),
                             ("DISTANCE_MODE", f64::from(distance_mode_code(distance))),
                         ],
                     ),
+                    MethodParams::Reference(_) => unreachable!("not an image-space method"),
                 };
-                let label = format!("{} ({outputs:?})", kernel.id());
+                let label = format!("{id} ({outputs:?})");
                 let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(&label),
                     layout: Some(&pipeline_layout),
@@ -119,7 +95,7 @@ impl ImageSpacePipelines {
                     },
                     cache: None,
                 });
-                pipelines.push((kernel.id(), outputs, pipeline));
+                pipelines.push((id, outputs, pipeline));
             }
         }
         Self { layout, pipelines }
@@ -282,6 +258,7 @@ impl ImageSpaceTargets {
         camera: &Camera,
         uniforms: &FrameUniforms,
         kernel: ImageSpaceKernel,
+        id: MethodId,
         outputs: FrameOutputs,
         timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
@@ -317,7 +294,7 @@ impl ImageSpaceTargets {
                 label: Some("image-space kernel"),
                 timestamp_writes: timestamps.map(Timestamps::end_compute),
             });
-            pass.set_pipeline(pipelines.pipeline(kernel.id(), outputs));
+            pass.set_pipeline(pipelines.pipeline(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
