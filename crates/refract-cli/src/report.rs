@@ -33,7 +33,7 @@ fn cell(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
 }
 
-fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 10]> {
+fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 11]> {
     records
         .iter()
         .map(|r| {
@@ -41,6 +41,7 @@ fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 10]> {
                 r.scene.clone(),
                 r.method.clone(),
                 r.backend.clone(),
+                r.params.clone(),
                 cell(r.psnr_db, 2),
                 cell(r.flip_mean, 4),
                 cell(r.t2_angle_deg_mean, 3),
@@ -53,10 +54,11 @@ fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 10]> {
         .collect()
 }
 
-const HEADERS: [&str; 10] = [
+const HEADERS: [&str; 11] = [
     "scene",
     "method",
     "backend",
+    "parameters",
     "PSNR (dB)",
     "mean FLIP",
     "T2 error (°)",
@@ -86,7 +88,7 @@ pub fn write_reports(
         options.res, options.spp, options.frames
     );
     let _ = writeln!(md, "| {} |", HEADERS.join(" | "));
-    let _ = writeln!(md, "|{}|", ["---"; 10].join("|"));
+    let _ = writeln!(md, "|{}|", ["---"; HEADERS.len()].join("|"));
     for row in &rows {
         let _ = writeln!(md, "| {} |", row.join(" | "));
     }
@@ -112,7 +114,7 @@ pub fn write_reports(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>refract comparison</title><style>\
 body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
 table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:4px 10px;border-bottom:1px solid #ddd;text-align:right}}\
-td:nth-child(-n+3),th:nth-child(-n+3){{text-align:left}}th{{background:#eee}}\
+td:nth-child(-n+4),th:nth-child(-n+4){{text-align:left}}th{{background:#eee}}\
 .row{{display:flex;flex-wrap:wrap;gap:8px;align-items:flex-start;margin:8px 0}}.row figure{{margin:0}}\
 img{{width:220px;image-rendering:pixelated;border:1px solid #ccc}}img.map{{width:227px}}\
 figcaption{{font-size:12px;color:#555}}h2{{margin-top:32px}}</style></head><body>\
