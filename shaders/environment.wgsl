@@ -5,10 +5,11 @@
 @group(0) @binding(4) var<storage, read> env_texels: array<vec4<f32>>;
 
 // environment.rs: sample_latlong_bilinear, texels row-major from the top in env_texels.
+// Mitsuba 3's convention: columns x = u W - 1/2 (wrapping), rows on the poles y = v (H - 1).
 fn sample_latlong_bilinear(width: u32, height: u32, dir: vec3<f32>) -> vec3<f32> {
     let uv = direction_to_latlong(dir);
     let x = uv.x * f32(width) - 0.5;
-    let y = clamp(uv.y * f32(height) - 0.5, 0.0, f32(height - 1u));
+    let y = clamp(uv.y * f32(height - 1u), 0.0, f32(height - 1u));
     let x0 = floor(x);
     let y0 = floor(y);
     let fx = x - x0;

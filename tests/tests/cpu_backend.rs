@@ -213,7 +213,7 @@ fn errors_against_reference(scene: &Arc<Scene>, id: MethodId, res: u32) -> Metri
         &method(MethodId::Reference),
     );
     let frame = cpu_frame(scene, &cam, &method(id));
-    evaluate(&reference, &frame, scene.refractor.diameter()).0
+    evaluate(&reference, &frame, &cam, scene.refractor.diameter()).0
 }
 
 /// Mean T2 error (degrees) and mean |P~2 − P2| / diameter, without TIR on the reference path.

@@ -124,7 +124,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         .render(&camera, method, FrameOutputs::Color, &mut scratch)?
                         .ms)
                 })?;
-                let (mut record, maps) = evaluate(&truth, &frame, diameter);
+                let (mut record, maps) = evaluate(&truth, &frame, &camera, diameter);
                 let (id, backend) = (method.id(), renderer.backend());
                 record.scene.clone_from(&scene.name);
                 record.method = id.name().to_owned();
@@ -188,7 +188,7 @@ pub fn print_summary(records: &[MetricsRecord], out: &Path) {
         v.map_or_else(|| "-".to_owned(), |v| format!("{v:.digits$}"))
     };
     println!(
-        "{:<10} {:<10} {:<7} {:>8} {:>8} {:>12} {:>12} {:>7} {:>10}",
+        "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
         "scene",
         "method",
         "backend",
@@ -196,23 +196,28 @@ pub fn print_summary(records: &[MetricsRecord], out: &Path) {
         "FLIP",
         "T2 err deg",
         "P2 err/diam",
+        "P2 px p90",
         "TIR",
         "ms/frame"
     );
     for r in records {
         println!(
-            "{:<10} {:<10} {:<7} {:>8} {:>8} {:>12} {:>12} {:>7} {:>10}",
+            "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
             r.scene,
             r.method,
             r.backend,
-            f(r.psnr_db, 2),
+            f(r.psnr_ldr_db, 2),
             f(r.flip_mean, 4),
             f(r.t2_angle_deg_mean_non_tir, 3),
             f(r.p2_error_rel_mean_non_tir, 4),
+            f(r.p2_error_px_p90_non_tir, 2),
             f(r.tir_fraction.map(|t| 100.0 * t), 1) + "%",
             f(r.ms_per_frame, 1)
         );
     }
+    println!(
+        "\nrefractor pixels only; T2 and P2 at the first exit, without TIR there (docs/metrics.md)"
+    );
     println!(
         "\nwrote {}/index.html, report.md and metrics.json",
         out.display()

@@ -33,7 +33,7 @@ fn cell(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
 }
 
-fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 11]> {
+fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 14]> {
     records
         .iter()
         .map(|r| {
@@ -42,11 +42,14 @@ fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 11]> {
                 r.method.clone(),
                 r.backend.clone(),
                 r.params.clone(),
-                cell(r.psnr_db, 2),
+                cell(r.psnr_ldr_db, 2),
+                cell(r.rel_mse, 4),
                 cell(r.flip_mean, 4),
                 cell(r.t2_angle_deg_mean, 3),
                 cell(r.t2_angle_deg_mean_non_tir, 3),
+                cell(r.t2_angle_deg_p90_non_tir, 3),
                 cell(r.p2_error_rel_mean_non_tir, 4),
+                cell(r.p2_error_px_p90_non_tir, 2),
                 cell(r.tir_fraction.map(|t| 100.0 * t), 1),
                 cell(r.ms_per_frame, 2),
             ]
@@ -54,16 +57,19 @@ fn table_rows(records: &[MetricsRecord]) -> Vec<[String; 11]> {
         .collect()
 }
 
-const HEADERS: [&str; 11] = [
+const HEADERS: [&str; 14] = [
     "scene",
     "method",
     "backend",
     "parameters",
-    "PSNR (dB)",
+    "PSNR LDR (dB)",
+    "rel. MSE",
     "mean FLIP",
     "T2 error (°)",
     "T2 error, no TIR (°)",
+    "T2 error p90, no TIR (°)",
     "|P~2−P2|/diam, no TIR",
+    "|P~2−P2| p90 (px), no TIR",
     "TIR (%)",
     "ms / frame",
 ];

@@ -61,9 +61,11 @@ pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
     Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
 }
 
-/// Bilinear lookup (Wyman and Mitsuba: `L(d) = bilerp(map, x(u), y(v))`) in a `width × height` lat-long image of linear RGB texels (row 0 at
-/// `v = 0`), texel centres at half-integers: `x = u·W − ½`, `y = v·H − ½`; wraps in `u`,
-/// clamps in `v`.
+/// Bilinear lookup in a `width × height` lat-long image of linear RGB texels (row 0 at
+/// `v = 0`, the zenith), as Mitsuba 3's `envmap` samples it (measured on Mitsuba 3.9.1):
+/// columns have their centres at half-integers and wrap, `x = u·W − ½`; rows sit on the poles,
+/// `y = v·(H − 1)` (row 0 is the zenith, row `H − 1` the nadir), clamped to `[0, H − 1]`.
+/// `L(d) = bilerp(map, x(u), y(v))`.
 #[inline]
 pub fn sample_latlong_bilinear<A: Atan2>(
     texels: &[Vec3],
@@ -73,10 +75,10 @@ pub fn sample_latlong_bilinear<A: Atan2>(
 ) -> Vec3 {
     let uv = direction_to_latlong::<A>(dir);
     let x = uv.x * width as f32 - 0.5;
-    let y = (uv.y * height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
+    let y = (uv.y * (height - 1) as f32).clamp(0.0, (height - 1) as f32);
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let w = width as i64;
+    let w = i64::from(width);
     let wrap = |x: i64| x.rem_euclid(w) as usize;
     let (xa, xb) = (wrap(x0 as i64), wrap(x0 as i64 + 1));
     let ya = y0 as usize;
@@ -119,22 +121,54 @@ mod tests {
         }
     }
 
+    /// Mitsuba's convention pinned on a synthetic 4 × 3 map of distinct texels: the poles are
+    /// rows 0 and H − 1 exactly, the equator row 1; columns are centred at half-integers and
+    /// wrap across the seam at u = 0; the corners of the map are reached at the poles.
     #[test]
-    fn bilinear_hits_texel_centres_and_wraps() {
-        // 4 × 2 map with distinct texels.
-        let texels: Vec<Vec3> = (0..8).map(|i| Vec3::splat(i as f32)).collect();
-        let centre = latlong_to_direction(Vec2::new(1.5 / 4.0, 0.5 / 2.0));
+    fn bilinear_follows_mitsuba_rows_on_poles_and_wrapping_columns() {
+        let (w, h) = (4u32, 3u32);
+        let texels: Vec<Vec3> = (0..w * h).map(|i| Vec3::splat(i as f32)).collect();
+        let at = |u: f32, v: f32| {
+            sample_latlong_bilinear::<Exact>(&texels, w, h, latlong_to_direction(Vec2::new(u, v)))
+        };
+        let close = |a: Vec3, b: f32| (a - Vec3::splat(b)).abs().max_element() < 2e-3;
+        // Column centres: u = (x + ½)/W. Zenith (v = 0) is row 0, the nadir row 2, the equator
+        // (v = ½) row 1 exactly: y = v (H − 1).
         assert!(
-            (sample_latlong_bilinear::<Polynomial>(&texels, 4, 2, centre) - Vec3::splat(1.0))
-                .length()
-                < 1e-4
+            close(at(1.5 / 4.0, 0.5), 5.0),
+            "equator, column 1: {}",
+            at(1.5 / 4.0, 0.5)
         );
-        // Halfway across the seam between x = 3 and x = 0 on row 0.
-        let seam = latlong_to_direction(Vec2::new(0.0, 0.5 / 2.0));
+        assert!(close(at(2.5 / 4.0, 0.5), 6.0));
+        // A quarter of the way down: halfway between rows 0 and 1.
+        assert!(close(at(1.5 / 4.0, 0.25), 3.0), "{}", at(1.5 / 4.0, 0.25));
+        // Seam: u = 0 is halfway between column 3 and column 0 (wrapping), on row 1.
+        assert!(close(at(0.0, 0.5), 0.5 * (7.0 + 4.0)), "{}", at(0.0, 0.5));
+        // Corners: near the zenith and nadir, on the first and last columns' centres.
+        assert!(close(at(0.5 / 4.0, 1e-4), 0.0), "{}", at(0.5 / 4.0, 1e-4));
+        assert!(close(at(3.5 / 4.0, 1e-4), 3.0));
         assert!(
-            (sample_latlong_bilinear::<Polynomial>(&texels, 4, 2, seam) - Vec3::splat(1.5))
-                .length()
-                < 1e-4
+            close(at(0.5 / 4.0, 1.0 - 1e-4), 8.0),
+            "{}",
+            at(0.5 / 4.0, 1.0 - 1e-4)
         );
+        assert!(close(at(3.5 / 4.0, 1.0 - 1e-4), 11.0));
+        // The old convention (rows at half-integers, y = v·H − ½) would give row 1.0 at v = ½
+        // too, but 0.25 at v = 1/4 (a quarter of the way to row 1): this pins the difference.
+        assert!(!close(at(1.5 / 4.0, 0.25), 1.0 + 0.25 * 4.0));
+    }
+
+    #[test]
+    fn one_row_maps_sample_that_row_everywhere() {
+        let texels = vec![Vec3::X, Vec3::Y];
+        for v in [0.1, 0.5, 0.9] {
+            let c = sample_latlong_bilinear::<Exact>(
+                &texels,
+                2,
+                1,
+                latlong_to_direction(Vec2::new(0.25, v)),
+            );
+            assert!((c - Vec3::X).length() < 1e-5, "{c}");
+        }
     }
 }

@@ -25,8 +25,12 @@ pub enum Aov {
     P2,
     /// Outward normal at the exit point.
     N2,
-    /// The direction the path finally leaves in (the environment lookup direction).
+    /// The direction leaving the exit point: for the reference the direction leaving the first
+    /// exit `P2` (what image-space methods approximate); for methods their final direction.
     T2,
+    /// The direction the reference's path finally leaves the refractor in (the environment
+    /// lookup direction; differs from `T2` on paths that leave and re-enter).
+    TOut,
     /// Where the escaping ray hit nearby opaque geometry.
     PGeom,
     /// Where the exit normal came from, as [`refract_core::gpu::exit_normal_source_code`] (0: none).
@@ -52,7 +56,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 12] = [
+    pub const ALL: [Aov; 13] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -60,6 +64,7 @@ impl Aov {
         Aov::P2,
         Aov::N2,
         Aov::T2,
+        Aov::TOut,
         Aov::PGeom,
         Aov::ExitNormalSource,
         Aov::Interfaces,
@@ -77,6 +82,7 @@ impl Aov {
             Aov::P2 => "P2",
             Aov::N2 => "N2",
             Aov::T2 => "T2",
+            Aov::TOut => "Tout",
             Aov::PGeom => "Pgeom",
             Aov::ExitNormalSource => "n2_source",
             Aov::Interfaces => "interfaces",
@@ -88,7 +94,9 @@ impl Aov {
     /// The type of its values.
     pub const fn kind(self) -> AovKind {
         match self {
-            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::PGeom => AovKind::Vec3,
+            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::TOut | Aov::PGeom => {
+                AovKind::Vec3
+            }
             Aov::ExitNormalSource | Aov::Interfaces => AovKind::Count,
             Aov::Covered | Aov::Tir | Aov::TirFirstExit => AovKind::Flag,
         }

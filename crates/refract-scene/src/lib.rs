@@ -32,8 +32,8 @@ pub use environment::{Environment, EnvironmentReport, LatLongMap, load_latlong};
 pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
-    BackendId, Family, MethodId, MethodInfo, MethodParams, REGISTRY, TraceMode, TraceSettings,
-    TwoInterfaceParams,
+    BackendId, Family, InterfaceRule, MethodId, MethodInfo, MethodParams, REGISTRY, TraceMode,
+    TraceSettings, TwoInterfaceParams,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

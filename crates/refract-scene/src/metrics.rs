@@ -1,14 +1,22 @@
-//! Error metrics of a method frame against the reference (design.md, "Measuring").
+//! Error metrics of a method frame against the reference (design.md, "Measuring"; every
+//! definition in `docs/metrics.md`). Image metrics are over the refractor pixels (where the
+//! reference's centre ray hits the refractor; the background is the same by construction);
+//! geometric metrics compare what the image-space methods approximate: the exit point `P2` and
+//! the direction leaving it, `T2`, at the *first* exit, over the pixels without TIR there.
 
 use glam::Vec3;
+use refract_core::Camera;
 use refract_core::vector::angle_between;
 use serde::Serialize;
 
 use crate::frame::{Aov, Frame};
 use crate::tonemap::to_srgb8;
 
+/// The `ε` of the relative MSE, `(a − b)² / (b² + ε)` (pbrt's `imgtool diff --metric MRSE`).
+pub const REL_MSE_EPSILON: f64 = 0.01;
+
 /// One row of `metrics.json`: exactly these fields, `null` where not applicable.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct MetricsRecord {
     /// Scene name.
     pub scene: String,
@@ -22,22 +30,47 @@ pub struct MetricsRecord {
     pub width: u32,
     /// Image height.
     pub height: u32,
+    /// Refractor pixels (the reference's centre ray hits the refractor).
+    pub refractor_pixels: usize,
     /// Root mean square error of linear RGB over refractor pixels.
     pub rmse: Option<f64>,
-    /// `20 log10(1 / rmse)` (peak 1.0 of linear RGB).
-    pub psnr_db: Option<f64>,
+    /// Relative MSE of linear RGB over refractor pixels: mean of `(a − b)² / (b² + 0.01)`.
+    pub rel_mse: Option<f64>,
+    /// PSNR of the tonemapped 8-bit sRGB image over refractor pixels, `10 log10(1 / MSE)` with
+    /// values in `[0, 1]`.
+    pub psnr_ldr_db: Option<f64>,
     /// Mean FLIP (LDR, after the tonemap) over refractor pixels.
     pub flip_mean: Option<f64>,
-    /// Mean angle between T2 and the reference T2, degrees.
+    /// Mean angle between T2 and the reference's T2 (leaving the first exit), degrees, over
+    /// refractor pixels where both exist.
     pub t2_angle_deg_mean: Option<f64>,
-    /// The same over pixels without TIR on the reference path.
+    /// The same over pixels without TIR at the reference's first exit.
     pub t2_angle_deg_mean_non_tir: Option<f64>,
-    /// Mean |P~2 − P2| / bounding-sphere diameter.
+    /// Median (nearest rank) of the non-TIR T2 angle error, degrees.
+    pub t2_angle_deg_p50_non_tir: Option<f64>,
+    /// 90th percentile (nearest rank) of the non-TIR T2 angle error, degrees.
+    pub t2_angle_deg_p90_non_tir: Option<f64>,
+    /// 99th percentile (nearest rank) of the non-TIR T2 angle error, degrees.
+    pub t2_angle_deg_p99_non_tir: Option<f64>,
+    /// Path level: mean angle between T2 and the direction the reference path finally leaves
+    /// in (`Tout`), over pixels without TIR anywhere on the reference path.
+    pub t_out_angle_deg_mean_no_path_tir: Option<f64>,
+    /// Mean `|P~2 − P2|` / bounding-sphere diameter, where both exist.
     pub p2_error_rel_mean: Option<f64>,
-    /// The same over non-TIR pixels.
+    /// The same over pixels without TIR at the first exit.
     pub p2_error_rel_mean_non_tir: Option<f64>,
-    /// Share of the refractor pixels where the method (or the reference) has TIR.
+    /// Median (nearest rank) of the screen-space exit error `|px(P~2) − px(P2)|`, pixels, over
+    /// non-TIR pixels where both project.
+    pub p2_error_px_p50_non_tir: Option<f64>,
+    /// 90th percentile of the screen-space exit error, pixels.
+    pub p2_error_px_p90_non_tir: Option<f64>,
+    /// 99th percentile of the screen-space exit error, pixels.
+    pub p2_error_px_p99_non_tir: Option<f64>,
+    /// Share of the refractor pixels where the frame has TIR (the method's own flag; for the
+    /// reference, TIR anywhere on the path).
     pub tir_fraction: Option<f64>,
+    /// Share of the refractor pixels with TIR at the reference's first exit.
+    pub tir_first_exit_fraction: Option<f64>,
     /// Median time per frame (all per-frame passes), milliseconds.
     pub ms_per_frame: Option<f64>,
 }
@@ -46,7 +79,7 @@ pub struct MetricsRecord {
 pub struct ErrorMaps {
     /// FLIP per pixel (over the whole image).
     pub flip: Vec<f32>,
-    /// T2 angle error, degrees.
+    /// T2 angle error against the first-exit T2, degrees.
     pub t2_deg: Vec<f32>,
     /// |P~2 − P2| / diameter.
     pub p2_rel: Vec<f32>,
@@ -55,6 +88,17 @@ pub struct ErrorMaps {
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
     let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
     (n > 0).then(|| sum / n as f64)
+}
+
+/// The nearest-rank percentile `p ∈ (0, 100]` of `values` (sorted in place): the smallest value
+/// with at least `p` % of the values at or below it, `v[⌈p n / 100⌉ − 1]`.
+pub fn percentile(values: &mut [f64], p: f64) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let rank = ((p / 100.0) * values.len() as f64).ceil() as usize;
+    Some(values[rank.clamp(1, values.len()) - 1])
 }
 
 /// FLIP error map of `test` against `reference`, both tonemapped to 8-bit sRGB.
@@ -69,8 +113,10 @@ pub fn flip_map(reference: &[Vec3], test: &[Vec3], width: u32, height: u32) -> V
 struct Layers<'f> {
     covered: Option<&'f [bool]>,
     t2: Option<&'f [Vec3]>,
+    t_out: Option<&'f [Vec3]>,
     p2: Option<&'f [Vec3]>,
     tir: Option<&'f [bool]>,
+    tir_first_exit: Option<&'f [bool]>,
 }
 
 impl<'f> Layers<'f> {
@@ -78,83 +124,125 @@ impl<'f> Layers<'f> {
         Self {
             covered: frame.flag(Aov::Covered),
             t2: frame.vec3(Aov::T2),
+            t_out: frame.vec3(Aov::TOut),
             p2: frame.vec3(Aov::P2),
             tir: frame.flag(Aov::Tir),
+            tir_first_exit: frame.flag(Aov::TirFirstExit),
         }
     }
-    fn covered(&self, i: usize) -> bool {
-        self.covered.is_some_and(|c| c[i])
+    fn flag(layer: Option<&[bool]>, i: usize) -> bool {
+        layer.is_some_and(|l| l[i])
     }
-    fn t2(&self, i: usize) -> Vec3 {
-        self.t2.map_or(Vec3::NAN, |v| v[i])
-    }
-    fn p2(&self, i: usize) -> Vec3 {
-        self.p2.map_or(Vec3::NAN, |v| v[i])
-    }
-    fn tir(&self, i: usize) -> bool {
-        self.tir.is_some_and(|t| t[i])
+    fn vector(layer: Option<&[Vec3]>, i: usize) -> Vec3 {
+        layer.map_or(Vec3::NAN, |l| l[i])
     }
 }
 
-/// Computes the metrics of `frame` against `reference` (design.md, "Measuring") and the
-/// per-pixel maps. Both frames need their AOV layers (`covered`, `T2`, `P2`, `tir`); a missing
-/// layer counts as absent at every pixel. Over the pixels where the reference sees the
-/// refractor: RMSE and PSNR of linear RGB, mean FLIP (after the tonemap), mean angle between
-/// `T2` and the reference's `T2` (degrees) and mean `|P~2 − P2| / diameter`, each also over the
-/// pixels without TIR on the reference path, and the share of pixels with TIR in `frame`.
-pub fn evaluate(reference: &Frame, frame: &Frame, diameter: f32) -> (MetricsRecord, ErrorMaps) {
+/// The angle in degrees between a method's direction and a true one, where both exist (a zero
+/// method direction, absorbed by `TirPolicy::Black`, has none).
+fn angle_deg(ours: Vec3, truth: Vec3) -> Option<f32> {
+    (!ours.is_nan() && !truth.is_nan() && ours != Vec3::ZERO)
+        .then(|| angle_between(ours, truth).to_degrees())
+}
+
+/// Computes the metrics of `frame` against `reference` (both from `camera`; the reference
+/// needs its AOV layers, the frame at least `covered`, `T2`, `P2`, `tir` where the method has
+/// them: a missing layer counts as absent at every pixel) and the per-pixel maps. `diameter`
+/// is the refractor's bounding-sphere diameter. Definitions: `docs/metrics.md`.
+pub fn evaluate(
+    reference: &Frame,
+    frame: &Frame,
+    camera: &Camera,
+    diameter: f32,
+) -> (MetricsRecord, ErrorMaps) {
     let n = reference.pixel_count();
     let flip = flip_map(&reference.color, &frame.color, frame.width, frame.height);
     let (truth, ours) = (Layers::of(reference), Layers::of(frame));
+    let refractor: Vec<usize> = (0..n).filter(|&i| Layers::flag(truth.covered, i)).collect();
+    let non_tir = |i: usize| !Layers::flag(truth.tir_first_exit, i);
     let mut t2_deg = vec![f32::NAN; n];
     let mut p2_rel = vec![f32::NAN; n];
-    for i in 0..n {
-        if !(truth.covered(i) && ours.covered(i)) {
+    let mut p2_px = vec![f32::NAN; n];
+    let mut t_out_deg = vec![f32::NAN; n];
+    let pixel = |p: Vec3| camera.world_to_pixel(p).map(|q| q.truncate());
+    for &i in &refractor {
+        if !Layers::flag(ours.covered, i) {
             continue;
         }
-        let (truth_t2, ours_t2) = (truth.t2(i), ours.t2(i));
-        if !truth_t2.is_nan() && !ours_t2.is_nan() && ours_t2 != Vec3::ZERO {
-            t2_deg[i] = angle_between(ours_t2, truth_t2).to_degrees();
+        let t2 = Layers::vector(ours.t2, i);
+        if let Some(a) = angle_deg(t2, Layers::vector(truth.t2, i)) {
+            t2_deg[i] = a;
         }
-        let (truth_p2, ours_p2) = (truth.p2(i), ours.p2(i));
-        if !truth_p2.is_nan() && !ours_p2.is_nan() {
+        if let Some(a) = angle_deg(t2, Layers::vector(truth.t_out, i)) {
+            t_out_deg[i] = a;
+        }
+        let (ours_p2, truth_p2) = (Layers::vector(ours.p2, i), Layers::vector(truth.p2, i));
+        if !ours_p2.is_nan() && !truth_p2.is_nan() {
             p2_rel[i] = (ours_p2 - truth_p2).length() / diameter;
+            if let (Some(a), Some(b)) = (pixel(ours_p2), pixel(truth_p2)) {
+                p2_px[i] = (a - b).length();
+            }
         }
     }
-    let refractor: Vec<usize> = (0..n).filter(|&i| truth.covered(i)).collect();
-    let non_tir = |i: &&usize| !truth.tir(**i);
     let finite = |v: &[f32], i: usize| v[i].is_finite().then_some(f64::from(v[i]));
+    let over = |v: &[f32], keep: &dyn Fn(usize) -> bool| -> Vec<f64> {
+        refractor
+            .iter()
+            .filter(|&&i| keep(i))
+            .filter_map(|&i| finite(v, i))
+            .collect()
+    };
+    let all = |_: usize| true;
+    let mut t2_non_tir = over(&t2_deg, &non_tir);
+    let mut p2_px_non_tir = over(&p2_px, &non_tir);
+    let no_path_tir = |i: usize| !Layers::flag(truth.tir, i);
+
+    let hdr = |i: usize| (frame.color[i].as_dvec3(), reference.color[i].as_dvec3());
     let mse = mean(refractor.iter().map(|&i| {
-        let d = frame.color[i] - reference.color[i];
-        f64::from(d.length_squared()) / 3.0
+        let (a, b) = hdr(i);
+        (a - b).length_squared() / 3.0
     }));
-    let rmse = mse.map(f64::sqrt);
+    let rel_mse = mean(refractor.iter().map(|&i| {
+        let (a, b) = hdr(i);
+        let d = (a - b) * (a - b) / (b * b + glam::DVec3::splat(REL_MSE_EPSILON));
+        (d.x + d.y + d.z) / 3.0
+    }));
+    let ldr_mse = mean(refractor.iter().map(|&i| {
+        let (a, b) = (to_srgb8(frame.color[i]), to_srgb8(reference.color[i]));
+        (0..3)
+            .map(|k| ((f64::from(a[k]) - f64::from(b[k])) / 255.0).powi(2))
+            .sum::<f64>()
+            / 3.0
+    }));
+    let share = |flags: Option<&[bool]>| {
+        mean(
+            refractor
+                .iter()
+                .map(|&i| f64::from(u8::from(Layers::flag(flags, i)))),
+        )
+    };
     let record = MetricsRecord {
-        scene: String::new(),
-        method: String::new(),
-        backend: String::new(),
-        params: String::new(),
         width: frame.width,
         height: frame.height,
-        rmse,
-        psnr_db: rmse.map(|r| 20.0 * (1.0 / r.max(1e-12)).log10()),
+        refractor_pixels: refractor.len(),
+        rmse: mse.map(f64::sqrt),
+        rel_mse,
+        psnr_ldr_db: ldr_mse.map(|m| 10.0 * (1.0 / m.max(1e-20)).log10()),
         flip_mean: mean(refractor.iter().map(|&i| f64::from(flip[i]))),
-        t2_angle_deg_mean: mean(refractor.iter().filter_map(|&i| finite(&t2_deg, i))),
-        t2_angle_deg_mean_non_tir: mean(
-            refractor
-                .iter()
-                .filter(non_tir)
-                .filter_map(|&i| finite(&t2_deg, i)),
-        ),
-        p2_error_rel_mean: mean(refractor.iter().filter_map(|&i| finite(&p2_rel, i))),
-        p2_error_rel_mean_non_tir: mean(
-            refractor
-                .iter()
-                .filter(non_tir)
-                .filter_map(|&i| finite(&p2_rel, i)),
-        ),
-        tir_fraction: mean(refractor.iter().map(|&i| f64::from(u8::from(ours.tir(i))))),
-        ms_per_frame: None,
+        t2_angle_deg_mean: mean(over(&t2_deg, &all).into_iter()),
+        t2_angle_deg_mean_non_tir: mean(t2_non_tir.iter().copied()),
+        t2_angle_deg_p50_non_tir: percentile(&mut t2_non_tir, 50.0),
+        t2_angle_deg_p90_non_tir: percentile(&mut t2_non_tir, 90.0),
+        t2_angle_deg_p99_non_tir: percentile(&mut t2_non_tir, 99.0),
+        t_out_angle_deg_mean_no_path_tir: mean(over(&t_out_deg, &no_path_tir).into_iter()),
+        p2_error_rel_mean: mean(over(&p2_rel, &all).into_iter()),
+        p2_error_rel_mean_non_tir: mean(over(&p2_rel, &non_tir).into_iter()),
+        p2_error_px_p50_non_tir: percentile(&mut p2_px_non_tir, 50.0),
+        p2_error_px_p90_non_tir: percentile(&mut p2_px_non_tir, 90.0),
+        p2_error_px_p99_non_tir: percentile(&mut p2_px_non_tir, 99.0),
+        tir_fraction: share(ours.tir),
+        tir_first_exit_fraction: share(truth.tir_first_exit),
+        ..MetricsRecord::default()
     };
     (
         record,
@@ -166,27 +254,161 @@ pub fn evaluate(reference: &Frame, frame: &Frame, diameter: f32) -> (MetricsReco
     )
 }
 
-/// The reference's own row: its TIR share and render time.
+/// The reference's own row: its refractor pixels, TIR shares and render time.
 pub fn reference_record(reference: &Frame, ms: f64) -> MetricsRecord {
     let truth = Layers::of(reference);
     let refractor: Vec<usize> = (0..reference.pixel_count())
-        .filter(|&i| truth.covered(i))
+        .filter(|&i| Layers::flag(truth.covered, i))
         .collect();
+    let share = |flags: Option<&[bool]>| {
+        mean(
+            refractor
+                .iter()
+                .map(|&i| f64::from(u8::from(Layers::flag(flags, i)))),
+        )
+    };
     MetricsRecord {
-        scene: String::new(),
         method: "reference".to_owned(),
         backend: "trace".to_owned(),
-        params: String::new(),
         width: reference.width,
         height: reference.height,
-        rmse: None,
-        psnr_db: None,
-        flip_mean: None,
-        t2_angle_deg_mean: None,
-        t2_angle_deg_mean_non_tir: None,
-        p2_error_rel_mean: None,
-        p2_error_rel_mean_non_tir: None,
-        tir_fraction: mean(refractor.iter().map(|&i| f64::from(u8::from(truth.tir(i))))),
+        refractor_pixels: refractor.len(),
+        tir_fraction: share(truth.tir),
+        tir_first_exit_fraction: share(truth.tir_first_exit),
         ms_per_frame: Some(ms),
+        ..MetricsRecord::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use refract_core::CameraDesc;
+
+    use super::*;
+
+    /// A 4 × 1 reference: pixels 0–2 see the refractor (pixel 2 with TIR at the first exit and
+    /// a path that leaves and re-enters), pixel 3 is background.
+    fn reference() -> (Frame, Camera) {
+        let camera = Camera::new(CameraDesc {
+            width: 4,
+            height: 1,
+            ..CameraDesc::default()
+        })
+        .expect("camera");
+        let mut f = Frame::new(4, 1);
+        f.color = vec![
+            Vec3::splat(0.5),
+            Vec3::splat(1.0),
+            Vec3::splat(2.0),
+            Vec3::ONE,
+        ];
+        f.flag_mut(Aov::Covered)[..3].fill(true);
+        f.flag_mut(Aov::TirFirstExit)[2] = true;
+        f.flag_mut(Aov::Tir)[2] = true;
+        let t2 = f.vec3_mut(Aov::T2);
+        t2[..3].fill(Vec3::NEG_Z);
+        let t_out = f.vec3_mut(Aov::TOut);
+        t_out[0] = Vec3::NEG_Z;
+        t_out[1] = Vec3::X; // left and re-entered: the path leaves along +x
+        t_out[2] = Vec3::NEG_Z;
+        let p2 = f.vec3_mut(Aov::P2);
+        p2[..3].fill(Vec3::new(0.0, 0.0, -1.0));
+        (f, camera)
+    }
+
+    fn method(color: [Vec3; 4], t2: [Vec3; 3], p2: [Vec3; 3]) -> Frame {
+        let mut f = Frame::new(4, 1);
+        f.color = color.to_vec();
+        f.flag_mut(Aov::Covered)[..3].fill(true);
+        f.vec3_mut(Aov::T2)[..3].copy_from_slice(&t2);
+        f.vec3_mut(Aov::P2)[..3].copy_from_slice(&p2);
+        f.flag_mut(Aov::Tir)[1] = true;
+        f
+    }
+
+    fn close(a: Option<f64>, b: f64) -> bool {
+        a.is_some_and(|a| (a - b).abs() < 1e-6 * b.abs().max(1.0))
+    }
+
+    #[test]
+    fn a_perfect_frame_has_no_error() {
+        let (truth, camera) = reference();
+        let p2 = Vec3::new(0.0, 0.0, -1.0);
+        let frame = method(
+            [
+                Vec3::splat(0.5),
+                Vec3::splat(1.0),
+                Vec3::splat(2.0),
+                Vec3::ZERO,
+            ],
+            [Vec3::NEG_Z; 3],
+            [p2; 3],
+        );
+        let (r, maps) = evaluate(&truth, &frame, &camera, 2.0);
+        assert_eq!(r.refractor_pixels, 3);
+        assert!(close(r.rmse, 0.0) && close(r.rel_mse, 0.0), "{r:?}");
+        assert!(r.psnr_ldr_db.expect("psnr") > 150.0, "identical: huge PSNR");
+        assert!(close(r.t2_angle_deg_mean, 0.0) && close(r.p2_error_px_p99_non_tir, 0.0));
+        // The background pixel differs (black vs white) but is not counted.
+        assert!(maps.t2_deg[3].is_nan() && maps.p2_rel[3].is_nan());
+        // Path level: pixel 1's path leaves along +x, 90° from T2.
+        assert!(close(r.t_out_angle_deg_mean_no_path_tir, 45.0), "{r:?}");
+        assert!(close(r.tir_fraction, 1.0 / 3.0) && close(r.tir_first_exit_fraction, 1.0 / 3.0));
+    }
+
+    #[test]
+    fn known_errors_give_known_metrics() {
+        let (truth, camera) = reference();
+        let p2 = Vec3::new(0.0, 0.0, -1.0);
+        let tilt = |deg: f32| {
+            let r = deg.to_radians();
+            Vec3::new(r.sin(), 0.0, -r.cos())
+        };
+        // Colours off by 0.1, 0.0, 0.5 in every channel; T2 off by 10°, 20°, 30° (the last at a
+        // TIR pixel); P~2 off by 0.2, 0.4, 0.6 along x.
+        let frame = method(
+            [
+                Vec3::splat(0.6),
+                Vec3::splat(1.0),
+                Vec3::splat(2.5),
+                Vec3::ONE,
+            ],
+            [tilt(10.0), tilt(20.0), tilt(30.0)],
+            [p2 + Vec3::X * 0.2, p2 + Vec3::X * 0.4, p2 + Vec3::X * 0.6],
+        );
+        let (r, _) = evaluate(&truth, &frame, &camera, 2.0);
+        let mse: f64 = (0.01 + 0.0 + 0.25) / 3.0;
+        assert!(close(r.rmse, mse.sqrt()), "{r:?}");
+        let rel = (0.01f64 / (0.25 + 0.01) + 0.0 + 0.25 / (4.0 + 0.01)) / 3.0;
+        assert!((r.rel_mse.expect("rel") - rel).abs() < 1e-6, "{r:?}");
+        // Means: all three pixels, or the two without TIR at the first exit.
+        assert!((r.t2_angle_deg_mean.expect("t2") - 20.0).abs() < 1e-3);
+        assert!((r.t2_angle_deg_mean_non_tir.expect("t2") - 15.0).abs() < 1e-3);
+        // Nearest rank over {10, 20}: p50 = 10, p90 = p99 = 20.
+        assert!((r.t2_angle_deg_p50_non_tir.expect("p50") - 10.0).abs() < 1e-3);
+        assert!((r.t2_angle_deg_p99_non_tir.expect("p99") - 20.0).abs() < 1e-3);
+        assert!((r.p2_error_rel_mean.expect("p2") - 0.2).abs() < 1e-6);
+        assert!((r.p2_error_rel_mean_non_tir.expect("p2") - 0.15).abs() < 1e-6);
+        // Screen space: the same world offsets seen at distance 4 through the 4-pixel-wide
+        // 40° camera (aspect 4): pixels per unit = W / (2 · 4 · tan 20° · 4).
+        let per_unit = 4.0 / (2.0 * 4.0 * 20f64.to_radians().tan() * 4.0);
+        let p50 = r.p2_error_px_p50_non_tir.expect("px");
+        assert!(
+            (p50 - 0.2 * per_unit).abs() < 1e-4,
+            "{p50} vs {}",
+            0.2 * per_unit
+        );
+        let p90 = r.p2_error_px_p90_non_tir.expect("px");
+        assert!((p90 - 0.4 * per_unit).abs() < 1e-4);
+    }
+
+    #[test]
+    fn percentiles_are_nearest_rank() {
+        let mut v: Vec<f64> = (1..=10).map(f64::from).collect();
+        assert_eq!(percentile(&mut v, 50.0), Some(5.0));
+        assert_eq!(percentile(&mut v, 90.0), Some(9.0));
+        assert_eq!(percentile(&mut v, 99.0), Some(10.0));
+        assert_eq!(percentile(&mut v, 100.0), Some(10.0));
+        assert_eq!(percentile(&mut [], 50.0), None);
     }
 }

@@ -118,6 +118,7 @@ pub struct MethodInfo {
 const TIR_CHOICES: &[&str] = &["clamp", "reflect", "black"];
 const BACK_CHOICES: &[&str] = &["furthest", "second"];
 const MODE_CHOICES: &[&str] = &["transmission", "full"];
+const INTERFACE_CHOICES: &[&str] = &["shading", "geometric"];
 
 const TWO_INTERFACE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -146,6 +147,12 @@ const REFERENCE_PARAMS: &[ParamSpec] = &[
         doc: "refractor interactions per path; a path that needs more is black",
         kind: ParamKind::Integer { min: 1, max: 64 },
         default: "8",
+    },
+    ParamSpec {
+        name: "interface",
+        doc: "which side of an interface a ray is on: shading (Mitsuba 3: from the shading normal, radiance × η² per refraction) or geometric (from the geometric normal, no η²)",
+        kind: ParamKind::Choice(INTERFACE_CHOICES),
+        default: "shading",
     },
     ParamSpec {
         name: "spp",
@@ -183,6 +190,7 @@ pub const REGISTRY: [MethodInfo; 5] = [
             Aov::P2,
             Aov::N2,
             Aov::T2,
+            Aov::TOut,
             Aov::PGeom,
             Aov::Interfaces,
             Aov::Tir,
@@ -297,6 +305,22 @@ pub enum TraceMode {
     Full,
 }
 
+/// How the reference decides which side of a refractor interface a ray is on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum InterfaceRule {
+    /// Mitsuba 3's dielectric: the side from the interpolated shading normal
+    /// (`cos θi = −d·N_s ≥ 0`: outside), Snell about that normal, and radiance scaled by
+    /// `η² = (n_i/n_t)²` per refraction. With smooth normals the shading side can disagree with
+    /// the geometric one on concave meshes, and there the `η²` factors do not cancel. The
+    /// default, so the reference can be checked against Mitsuba.
+    #[default]
+    ShadingNormal,
+    /// The side from the geometric normal, the shading normal flipped to it and turned past
+    /// grazing if needed; no radiance scaling (it cancels for closed objects entered and left
+    /// once).
+    GeometricNormal,
+}
+
 /// Parameters of the reference tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraceSettings {
@@ -308,6 +332,8 @@ pub struct TraceSettings {
     pub spp: u32,
     /// `Full` mode drops branches whose throughput falls below this.
     pub throughput_cutoff: f32,
+    /// Which side of an interface a ray is on.
+    pub interface: InterfaceRule,
 }
 
 impl Default for TraceSettings {
@@ -317,6 +343,7 @@ impl Default for TraceSettings {
             max_depth: 8,
             spp: 1,
             throughput_cutoff: 1e-4,
+            interface: InterfaceRule::ShadingNormal,
         }
     }
 }
@@ -385,6 +412,10 @@ const BACK_TABLE: [(&str, BackSurface); 2] = [
     ("furthest", BackSurface::Furthest),
     ("second", BackSurface::Second),
 ];
+const INTERFACE_TABLE: [(&str, InterfaceRule); 2] = [
+    ("shading", InterfaceRule::ShadingNormal),
+    ("geometric", InterfaceRule::GeometricNormal),
+];
 const MODE_TABLE: [(&str, TraceMode); 2] = [
     ("transmission", TraceMode::Transmission),
     ("full", TraceMode::Full),
@@ -449,6 +480,7 @@ impl MethodParams {
             MethodParams::Reference(settings) => match name {
                 "mode" => settings.mode = choice(name, value, &MODE_TABLE, origin)?,
                 "depth" => settings.max_depth = integer(name, value, 1, 64, origin)?,
+                "interface" => settings.interface = choice(name, value, &INTERFACE_TABLE, origin)?,
                 "spp" => settings.spp = integer(name, value, 1, 4096, origin)?,
                 _ => return Err(unknown(id)),
             },
@@ -468,6 +500,9 @@ impl MethodParams {
             (MethodParams::Reference(s), "mode") => Some(name_of(&MODE_TABLE, &s.mode).into()),
             (MethodParams::Reference(s), "depth") => Some(s.max_depth.to_string()),
             (MethodParams::Reference(s), "spp") => Some(s.spp.to_string()),
+            (MethodParams::Reference(s), "interface") => {
+                Some(name_of(&INTERFACE_TABLE, &s.interface).into())
+            }
             (MethodParams::TwoInterface(p), "back") => Some(name_of(&BACK_TABLE, &p.back).into()),
             (MethodParams::TwoInterface(p), "tir") => Some(name_of(&TIR_TABLE, &p.tir).into()),
             _ => None,

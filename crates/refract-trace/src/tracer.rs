@@ -8,7 +8,7 @@ use refract_core::fresnel::fresnel_dielectric;
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::{Camera, Ray};
 use refract_geometry::Hit;
-use refract_scene::{Aov, Frame, Layer, Scene, TraceMode, TraceSettings};
+use refract_scene::{Aov, Frame, InterfaceRule, Layer, Scene, TraceMode, TraceSettings};
 
 use crate::sampling::pixel_sample;
 
@@ -26,9 +26,12 @@ pub struct PathRecord {
     pub p2: Vec3,
     /// Outward shading normal at `P2`.
     pub n2: Vec3,
-    /// Direction in which the path finally leaves the refractor (the environment lookup
-    /// direction; after the second interface for convex objects).
+    /// Direction leaving the first exit point `P2` (refracted there, or reflected under TIR at
+    /// `P2`): what the image-space methods approximate with their `T2`.
     pub t2: Vec3,
+    /// Direction in which the path finally leaves the refractor (the environment lookup
+    /// direction); equal to `t2` for paths that leave once.
+    pub t_out: Vec3,
     /// Interfaces crossed by refraction (TIR bounces not counted).
     pub interfaces: u32,
     /// Total internal reflection anywhere on the path.
@@ -48,6 +51,7 @@ impl PathRecord {
         p2: Vec3::NAN,
         n2: Vec3::NAN,
         t2: Vec3::NAN,
+        t_out: Vec3::NAN,
         interfaces: 0,
         tir: false,
         tir_first_exit: false,
@@ -69,26 +73,52 @@ enum Surface {
 
 /// The refraction geometry at a refractor hit.
 struct Interface {
-    /// Entering the refractor (the ray meets the outward geometric normal head-on).
+    /// Entering the refractor (by the settings' [`InterfaceRule`]).
     entering: bool,
-    /// Shading normal facing the incoming ray (flipped inside, turned past grazing if needed).
+    /// Shading normal facing the incoming ray.
     facing: Vec3,
     /// `n_i / n_t`.
     eta: f32,
+    /// The factor of radiance carried through a refraction: `η²` under
+    /// [`InterfaceRule::ShadingNormal`] (the camera-side radiance of a ray refracted from medium
+    /// `i` into `t` is `(n_i/n_t)²` of the radiance on the other side), 1 under
+    /// [`InterfaceRule::GeometricNormal`].
+    transmitted_radiance: f32,
 }
 
 impl Interface {
-    fn at(dir: Vec3, hit: &Hit, ior: f32) -> Self {
-        let entering = dir.dot(hit.geometric_normal) < 0.0;
-        let oriented = if entering {
-            hit.shading_normal
-        } else {
-            -hit.shading_normal
-        };
-        Self {
-            entering,
-            facing: face_forward_shading_normal(oriented, dir),
-            eta: if entering { 1.0 / ior } else { ior },
+    fn at(dir: Vec3, hit: &Hit, ior: f32, rule: InterfaceRule) -> Self {
+        match rule {
+            InterfaceRule::ShadingNormal => {
+                // Mitsuba 3's dielectric: the side from the shading frame, cos θi = −d·Ns ≥ 0
+                // outside; the oriented shading normal faces the ray by construction.
+                let entering = -dir.dot(hit.shading_normal) >= 0.0;
+                let eta = if entering { 1.0 / ior } else { ior };
+                Self {
+                    entering,
+                    facing: if entering {
+                        hit.shading_normal
+                    } else {
+                        -hit.shading_normal
+                    },
+                    eta,
+                    transmitted_radiance: eta * eta,
+                }
+            }
+            InterfaceRule::GeometricNormal => {
+                let entering = dir.dot(hit.geometric_normal) < 0.0;
+                let oriented = if entering {
+                    hit.shading_normal
+                } else {
+                    -hit.shading_normal
+                };
+                Self {
+                    entering,
+                    facing: face_forward_shading_normal(oriented, dir),
+                    eta: if entering { 1.0 / ior } else { ior },
+                    transmitted_radiance: 1.0,
+                }
+            }
         }
     }
 }
@@ -155,12 +185,13 @@ impl<'a> Tracer<'a> {
         let mut aov = PathRecord::EMPTY;
         let mut ray = ray;
         let mut depth = 0;
+        let mut scale = 1.0;
         loop {
             let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
                 if aov.covers_refractor() {
-                    aov.t2 = ray.dir;
+                    aov.t_out = ray.dir;
                 }
-                return (self.scene.environment.radiance_exact(ray.dir), aov);
+                return (scale * self.scene.environment.radiance_exact(ray.dir), aov);
             };
             let p = ray.at(hit.t);
             let Surface::Object(index) = surface else {
@@ -168,14 +199,21 @@ impl<'a> Tracer<'a> {
                     return (Vec3::ZERO, aov);
                 }
                 depth += 1;
-                let interface = Interface::at(ray.dir, &hit, self.scene.refractor.ior());
+                let interface = Interface::at(
+                    ray.dir,
+                    &hit,
+                    self.scene.refractor.ior(),
+                    self.settings.interface,
+                );
                 let refracted = refract(ray.dir, interface.facing, interface.eta);
                 let tir = refracted == Vec3::ZERO;
                 let next = if tir {
                     reflect(ray.dir, interface.facing)
                 } else {
+                    scale *= interface.transmitted_radiance;
                     refracted
-                };
+                }
+                .normalize();
                 if !aov.covers_refractor() {
                     aov.p1 = p;
                     aov.n1 = hit.shading_normal;
@@ -183,18 +221,19 @@ impl<'a> Tracer<'a> {
                 } else if aov.p2.is_nan() && !interface.entering {
                     aov.p2 = p;
                     aov.n2 = hit.shading_normal;
+                    aov.t2 = next;
                     aov.tir_first_exit = tir;
                 }
                 aov.tir |= tir;
                 aov.interfaces += u32::from(!tir);
-                ray = self.continue_ray(&ray, &hit, next.normalize());
+                ray = self.continue_ray(&ray, &hit, next);
                 continue;
             };
             if aov.covers_refractor() {
-                aov.t2 = ray.dir;
+                aov.t_out = ray.dir;
                 aov.p_geom = p;
             }
-            return (self.shade_object(index, &ray, &hit), aov);
+            return (scale * self.shade_object(index, &ray, &hit), aov);
         }
     }
 
@@ -209,7 +248,12 @@ impl<'a> Tracer<'a> {
         if depth >= self.settings.max_depth {
             return Vec3::ZERO;
         }
-        let interface = Interface::at(ray.dir, &hit, self.scene.refractor.ior());
+        let interface = Interface::at(
+            ray.dir,
+            &hit,
+            self.scene.refractor.ior(),
+            self.settings.interface,
+        );
         let reflectance = fresnel_dielectric(-ray.dir.dot(interface.facing), interface.eta);
         let refracted = refract(ray.dir, interface.facing, interface.eta);
         let reflectance = if refracted == Vec3::ZERO {
@@ -229,6 +273,7 @@ impl<'a> Tracer<'a> {
         if transmittance * throughput > cutoff {
             let next = self.continue_ray(&ray, &hit, refracted.normalize());
             radiance += transmittance
+                * interface.transmitted_radiance
                 * self.full_radiance(next, depth + 1, throughput * transmittance, rays);
         }
         radiance
@@ -304,14 +349,14 @@ pub fn render_into(scene: &Scene, camera: &Camera, settings: &TraceSettings, fra
 
 /// The reference's AOV layers (the `reference` row of the registry), filled row by row.
 struct RecordLayers {
-    vectors: [(Aov, Vec<Vec3>); 7],
+    vectors: [(Aov, Vec<Vec3>); 8],
     flags: [(Aov, Vec<bool>); 3],
     interfaces: Vec<u32>,
 }
 
 /// One row of [`RecordLayers`].
 struct RecordRow<'a> {
-    vectors: [&'a mut [Vec3]; 7],
+    vectors: [&'a mut [Vec3]; 8],
     flags: [&'a mut [bool]; 3],
     interfaces: &'a mut [u32],
 }
@@ -333,6 +378,7 @@ impl RecordLayers {
                 v(Aov::P2),
                 v(Aov::N2),
                 v(Aov::T2),
+                v(Aov::TOut),
                 v(Aov::PGeom),
             ],
             flags: [f(Aov::Covered), f(Aov::Tir), f(Aov::TirFirstExit)],
@@ -375,7 +421,7 @@ impl RecordLayers {
 impl RecordRow<'_> {
     /// Pixel `x` of the row; the order is [`RecordLayers::new`]'s.
     fn write(&mut self, x: usize, r: &PathRecord) {
-        let vectors = [r.p1, r.n1, r.t1, r.p2, r.n2, r.t2, r.p_geom];
+        let vectors = [r.p1, r.n1, r.t1, r.p2, r.n2, r.t2, r.t_out, r.p_geom];
         for (layer, v) in self.vectors.iter_mut().zip(vectors) {
             layer[x] = v;
         }
@@ -384,5 +430,48 @@ impl RecordRow<'_> {
             layer[x] = f;
         }
         self.interfaces[x] = r.interfaces;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hit where the geometric and the shading side disagree (a smooth normal tilted past the
+    /// ray): the geometric rule says "entering", Mitsuba's shading rule says "leaving", with the
+    /// index ratio and radiance factor of its side.
+    #[test]
+    fn interface_rules_decide_the_side_differently_where_normals_disagree() {
+        let hit = Hit {
+            t: 1.0,
+            triangle: 0,
+            barycentrics: Vec2::ZERO,
+            geometric_normal: Vec3::Z,
+            shading_normal: Vec3::new(1.0, 0.0, 0.2).normalize(),
+        };
+        let dir = Vec3::new(0.8, 0.0, -0.6);
+        assert!(-dir.dot(hit.geometric_normal) > 0.0 && -dir.dot(hit.shading_normal) < 0.0);
+        let ior = 1.5;
+        let geometric = Interface::at(dir, &hit, ior, InterfaceRule::GeometricNormal);
+        assert!(geometric.entering);
+        assert_eq!(
+            (geometric.eta, geometric.transmitted_radiance),
+            (1.0 / ior, 1.0)
+        );
+        let shading = Interface::at(dir, &hit, ior, InterfaceRule::ShadingNormal);
+        assert!(!shading.entering);
+        assert_eq!(
+            (shading.eta, shading.transmitted_radiance),
+            (ior, ior * ior)
+        );
+        assert!(
+            shading.facing.dot(-dir) > 0.0,
+            "the oriented normal faces the ray"
+        );
+        // Where they agree, the shading rule scales a refraction into glass by 1/n².
+        let head_on = Interface::at(Vec3::NEG_Z, &hit, ior, InterfaceRule::ShadingNormal);
+        assert!(
+            head_on.entering && (head_on.transmitted_radiance - 1.0 / (ior * ior)).abs() < 1e-7
+        );
     }
 }

@@ -349,7 +349,13 @@ impl ImageSpaceTargets {
                 Aov::ExitNormalSource => fill(frame.count_mut(aov), &pixels, |p| {
                     p.n2_source.map_or(0, exit_normal_source_code)
                 }),
-                Aov::P1 | Aov::N1 | Aov::T1 | Aov::PGeom | Aov::Interfaces | Aov::TirFirstExit => {
+                Aov::P1
+                | Aov::N1
+                | Aov::T1
+                | Aov::TOut
+                | Aov::PGeom
+                | Aov::Interfaces
+                | Aov::TirFirstExit => {
                     unreachable!("the image-space kernels do not compute {}", aov.name())
                 }
             }
