@@ -226,9 +226,9 @@ fn gpu_latlong_lookups_match_the_cpu() {
         let ours = render(&mut gpu, &scene, &cam, &method(id));
         let covered = cpu.flag(Aov::Covered).expect("covered");
         let (mut background, mut inside) = (0, 0);
-        for i in 0..cpu.pixel_count() {
+        for (i, &covered) in covered.iter().enumerate() {
             let d = (cpu.color[i] - ours.color[i]).abs().max_element();
-            if covered[i] {
+            if covered {
                 inside += usize::from(d > 1e-3);
             } else {
                 assert!(
