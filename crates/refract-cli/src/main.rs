@@ -11,7 +11,9 @@ use refract_scene::{BUILTIN_SCENES, MethodId, MethodParams, REGISTRY};
 
 mod backends;
 mod bench;
+mod claims;
 mod compare;
+mod export;
 mod images;
 mod info;
 mod render;
@@ -42,6 +44,10 @@ enum Command {
     Scenes,
     /// List the methods: id, paper and section, parameters (defaults, ranges), AOVs, backends.
     Methods,
+    /// Measure the seed papers' claims on named scenes and write docs/claims.md with verdicts.
+    Claims(claims::ClaimsArgs),
+    /// Write a scene as refract renders it (OBJ meshes with normals, scene.json) for other renderers.
+    Export(export::ExportArgs),
     /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
     Info(info::InfoArgs),
 }
@@ -227,6 +233,8 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Info(args)) => info::run(&args),
+        Some(Command::Export(args)) => export::run(&args),
+        Some(Command::Claims(args)) => claims::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -357,3 +357,52 @@ fn info_lists_adapters_and_mesh_facts() {
     let output = refract(&["info", "missing.obj"], dir.path());
     assert!(!output.status.success() && stderr(&output).contains("missing.obj"));
 }
+
+/// `refract export` writes the meshes as refract renders them (positions with normals) and a
+/// scene.json another renderer can build the same scene from.
+#[test]
+fn export_writes_meshes_and_scene_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(&["export", "lens", "--out", "ex"], dir.path());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let obj = std::fs::read_to_string(dir.path().join("ex/refractor.obj")).expect("obj");
+    let count = |prefix: &str| obj.lines().filter(|l| l.starts_with(prefix)).count();
+    assert!(count("v ") > 100 && count("v ") == count("vn ") && count("f ") > 100);
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("ex/scene.json")).expect("json"),
+    )
+    .expect("valid json");
+    assert_eq!(json["camera"]["eye"][2], 3.0);
+    assert_eq!(json["environment"]["kind"], "procedural");
+    assert!((json["ior"].as_f64().expect("ior") - 1.5).abs() < 1e-6);
+}
+
+/// `refract claims` measures the Wyman 2005a claims and writes them with verdicts.
+#[test]
+fn claims_are_measured_and_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let output = refract(
+        &[
+            "claims",
+            "--res",
+            "48",
+            "--data",
+            data,
+            "--out",
+            "c/claims.md",
+        ],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let md = std::fs::read_to_string(dir.path().join("c/claims.md")).expect("claims.md");
+    assert!(md.contains("Written by `refract claims`"), "{md}");
+    for claim in ["Two interfaces", "beats `d_V` alone", "beats `d_N` alone"] {
+        assert!(
+            md.lines()
+                .any(|l| l.contains(claim) && l.contains("| sphere |")),
+            "{claim}: {md}"
+        );
+    }
+    assert!(md.contains("**confirmed**"), "{md}");
+}

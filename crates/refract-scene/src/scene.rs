@@ -320,6 +320,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Distant lighting.
     pub environment: Environment,
+    /// The file the lat-long environment was loaded from, when it was (for exporters).
+    pub environment_file: Option<std::path::PathBuf>,
     /// The light of the opaque objects.
     pub light: DirectionalLight,
 }
@@ -333,6 +335,7 @@ impl Scene {
             refractor,
             objects: Vec::new(),
             environment,
+            environment_file: None,
             light: DirectionalLight::default(),
         }
     }

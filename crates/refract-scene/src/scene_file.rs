@@ -208,10 +208,12 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         ));
     }
 
+    let mut environment_file = None;
     let environment = match &file.environment.file {
         None => Environment::Procedural,
         Some(env) => {
             let path = base.join(env);
+            environment_file = Some(path.canonicalize().unwrap_or_else(|_| path.clone()));
             let (map, report) = load_latlong(&path)?;
             if report.negative_clamped + report.non_finite_replaced > 0 {
                 warnings.push(format!(
@@ -264,6 +266,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     let mut scene = Scene::new(name, refractor, environment);
     scene.objects = objects;
     scene.camera = camera;
+    scene.environment_file = environment_file;
     Ok(LoadedScene { scene, warnings })
 }
 

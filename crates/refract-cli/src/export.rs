@@ -1,0 +1,142 @@
+//! `refract export SCENE --out DIR`: the scene exactly as refract renders it (meshes after
+//! loading, normalisation and transforms, with refract's vertex normals), for other renderers:
+//! `refractor.obj`, `object-K.obj`, `environment.exr` (the lat-long map as sampled) and
+//! `scene.json` (camera, IOR, environment). The Mitsuba 3
+//! cross-check (`scripts/mitsuba-cross-check.py`) renders from these files.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use refract_geometry::Mesh;
+use refract_scene::atomic_write::write_text_atomically;
+use refract_scene::{Environment, Frame, load_scene};
+use serde::Serialize;
+
+/// Arguments of `refract export`.
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    /// A built-in scene or a .toml scene file.
+    pub scene: String,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Serialize)]
+struct CameraJson {
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: [f32; 3],
+    fov_y_deg: f32,
+}
+
+#[derive(Serialize)]
+struct EnvironmentJson {
+    /// `latlong`, `constant` or `procedural`.
+    kind: &'static str,
+    /// `environment.exr` beside scene.json: the map as refract samples it (lat-long only).
+    file: Option<PathBuf>,
+    /// The file the scene loaded it from.
+    source: Option<PathBuf>,
+    intensity: f32,
+    constant: Option<[f32; 3]>,
+}
+
+#[derive(Serialize)]
+struct SceneJson {
+    name: String,
+    camera: CameraJson,
+    ior: f32,
+    refractor: String,
+    objects: Vec<String>,
+    environment: EnvironmentJson,
+}
+
+/// A mesh as OBJ with per-vertex normals (`f a//a b//b c//c`, 1-based).
+fn obj(mesh: &Mesh) -> String {
+    let mut text = format!("# {} exported by refract\n", mesh.name);
+    for p in &mesh.positions {
+        let _ = writeln!(text, "v {:e} {:e} {:e}", p.x, p.y, p.z);
+    }
+    for n in &mesh.normals {
+        let _ = writeln!(text, "vn {:e} {:e} {:e}", n.x, n.y, n.z);
+    }
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        let _ = writeln!(text, "f {a}//{a} {b}//{b} {c}//{c}");
+    }
+    text
+}
+
+/// Runs `refract export`.
+pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    let loaded = load_scene(&args.scene)?;
+    let scene = loaded.scene;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the directory", args.out.display()))?;
+    write_text_atomically(
+        &args.out.join("refractor.obj"),
+        &obj(scene.refractor.mesh()),
+    )?;
+    let mut objects = Vec::new();
+    for (k, object) in scene.objects.iter().enumerate() {
+        let name = format!("object-{k}.obj");
+        write_text_atomically(&args.out.join(&name), &obj(object.mesh()))?;
+        objects.push(name);
+    }
+    let environment = match &scene.environment {
+        Environment::LatLong { map, intensity } => {
+            // The map as refract samples it (negative and non-finite texels already clamped to
+            // 0), so that the other renderer sees the same radiance.
+            let path = args.out.join("environment.exr");
+            let mut texels = Frame::new(map.width, map.height);
+            texels.color.clone_from(&map.texels);
+            texels.write_exr(&path)?;
+            EnvironmentJson {
+                kind: "latlong",
+                file: Some(path.canonicalize().unwrap_or(path)),
+                source: scene.environment_file.clone(),
+                intensity: *intensity,
+                constant: None,
+            }
+        }
+        Environment::Constant(c) => EnvironmentJson {
+            kind: "constant",
+            file: None,
+            source: None,
+            intensity: 1.0,
+            constant: Some(c.to_array()),
+        },
+        Environment::Procedural => EnvironmentJson {
+            kind: "procedural",
+            file: None,
+            source: None,
+            intensity: 1.0,
+            constant: None,
+        },
+    };
+    let c = &scene.camera;
+    let json = SceneJson {
+        name: scene.name.clone(),
+        camera: CameraJson {
+            eye: c.eye.to_array(),
+            target: c.target.to_array(),
+            up: c.up.to_array(),
+            fov_y_deg: c.fov_y.to_degrees(),
+        },
+        ior: scene.refractor.ior(),
+        refractor: "refractor.obj".into(),
+        objects,
+        environment,
+    };
+    let text = serde_json::to_string_pretty(&json).context("serialising scene.json")?;
+    write_text_atomically(&args.out.join("scene.json"), &text)?;
+    println!(
+        "{}: {} triangles -> {}",
+        scene.name,
+        scene.refractor.mesh().triangles.len(),
+        args.out.display()
+    );
+    Ok(())
+}
