@@ -354,3 +354,36 @@ fn nearby_geometry_is_shaded_and_recorded() {
     );
     assert!(through.iter().all(|p| (p.y + 1.2).abs() < 1e-4));
 }
+
+/// `T2` is the direction leaving the first exit; `Tout` the direction the path finally leaves
+/// in. On a convex sphere they are the same ray; through a torus seen across its ring, paths
+/// leave the tube, cross the hole and re-enter, and there they differ.
+#[test]
+fn t2_is_the_first_exit_direction_and_tout_the_last() {
+    let differing = |scene: &Scene| {
+        let frame = render(scene, &small_camera(64), &TraceSettings::default());
+        let (t2, t_out) = (
+            frame.vec3(Aov::T2).expect("T2"),
+            frame.vec3(Aov::TOut).expect("Tout"),
+        );
+        let covered = frame.flag(Aov::Covered).expect("covered");
+        let differ = (0..frame.pixel_count())
+            .filter(|&i| covered[i] && !t2[i].is_nan() && t2[i].angle_between(t_out[i]) > 1e-3)
+            .count();
+        (differ, covered.iter().filter(|c| **c).count())
+    };
+    let sphere = fine_sphere_tracer_scene(1.5);
+    assert_eq!(
+        differing(&sphere).0,
+        0,
+        "one exit on a sphere (TIR-free at 1.5)"
+    );
+    let torus = Scene::new(
+        "torus",
+        Refractor::new(shapes::torus(0.7, 0.3, 48, 24).expect("torus"), 1.33).expect("ior"),
+        Environment::Procedural,
+    );
+    let (differ, covered) = differing(&torus);
+    println!("torus: T2 ≠ Tout on {differ} of {covered} refractor pixels");
+    assert!(differ > 50, "{differ} of {covered}");
+}
