@@ -48,10 +48,7 @@ fn cpu_methods(c: &mut Criterion) {
                 });
             }
             // The two-step path, stage by stage (memory reused as in a frame).
-            let back = match params {
-                MethodParams::TwoInterface(p) => Some(p.back),
-                _ => None,
-            };
+            let back = params.back_surface();
             let kernel = params
                 .image_space_kernel(scene.refractor.ior())
                 .expect("an image-space method")

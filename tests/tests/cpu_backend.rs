@@ -430,10 +430,7 @@ fn reusing_renderer_matches_fresh_frames() {
 
 /// The two-step path: buffers stored whole, then the kernel.
 fn two_step(scene: &Scene, cam: &Camera, params: &MethodParams) -> Frame {
-    let back = match params {
-        MethodParams::TwoInterface(p) => Some(p.back),
-        _ => None,
-    };
+    let back = params.back_surface();
     let kernel = params
         .image_space_kernel(scene.refractor.ior())
         .expect("an image-space method")

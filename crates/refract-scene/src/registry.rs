@@ -531,6 +531,14 @@ impl MethodParams {
         )
     }
 
+    /// The back surface the method rasterises, `None` for methods without one.
+    pub fn back_surface(&self) -> Option<BackSurface> {
+        match self {
+            MethodParams::TwoInterface(p) => Some(p.back),
+            MethodParams::Single | MethodParams::Reference(_) => None,
+        }
+    }
+
     /// `name=value` of every parameter, for reports.
     pub fn describe(&self) -> String {
         self.id()
