@@ -15,9 +15,17 @@ pub struct InfoArgs {
     /// Keep the file's coordinates instead of centring and scaling into the unit sphere.
     #[arg(long)]
     pub no_normalize: bool,
-    /// Merge vertices closer than this fraction of the bounding radius before computing normals.
-    #[arg(long, value_name = "EPSILON")]
+    /// Merge vertices closer than this fraction of the bounding radius before computing normals
+    /// (a finite number from 0 to 0.1).
+    #[arg(long, value_name = "EPSILON", value_parser = parse_weld)]
     pub weld: Option<f32>,
+}
+
+fn parse_weld(text: &str) -> Result<f32, String> {
+    text.parse::<f32>()
+        .ok()
+        .filter(|v| v.is_finite() && (0.0..=0.1).contains(v))
+        .ok_or_else(|| format!("`{text}`: expected a finite number from 0 to 0.1"))
 }
 
 /// Lists the GPU adapters; with a mesh, loads it, builds the BVH and d_N, and prints facts and

@@ -145,7 +145,14 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
+        (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
+        (
+            &[
+                "render", "sphere", "--ior", "1e20", "--res", "8", "--out", "x.png",
+            ],
+            "ior",
+        ),
         (&["compare", "sphere", "--methods", "wyman,magic"], "magic"),
         (
             &["compare", "sphere", "--methods", "reference", "--res", "8"],
@@ -405,4 +412,46 @@ fn claims_are_measured_and_written() {
         );
     }
     assert!(md.contains("**confirmed**"), "{md}");
+}
+
+/// A write that fails at the final flush (here: the file-size limit) is an error, and leaves
+/// neither a truncated file under the final name nor a temporary (before: exit 0 and a 4 KiB
+/// truncated PNG).
+#[cfg(unix)]
+#[test]
+fn a_failed_flush_is_an_error_and_leaves_no_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = format!(
+        "ulimit -f 4; trap '' XFSZ; exec '{}' render sphere --res 64 --out o.png",
+        env!("CARGO_BIN_EXE_refract")
+    );
+    let output = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(dir.path())
+        .output()
+        .expect("sh");
+    assert!(
+        !output.status.success(),
+        "a failed write must fail the command"
+    );
+    assert!(stderr(&output).contains("o.png"), "{}", stderr(&output));
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("dir")
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    // An --out that names a directory: the rename fails, the temporary is removed.
+    std::fs::create_dir(dir.path().join("d.png")).expect("mkdir");
+    let output = refract(
+        &["render", "sphere", "--res", "8", "--out", "d.png"],
+        dir.path(),
+    );
+    assert!(!output.status.success());
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("dir")
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(left, ["d.png"], "only the directory itself");
 }

@@ -244,3 +244,53 @@ fn broken_gltf_files_give_errors_naming_the_file() {
         Err(GeometryError::NoTriangles { .. })
     ));
 }
+
+/// glTF node hierarchies that are not trees, primitives naming missing accessors, and very deep
+/// (valid) hierarchies: clear errors, never a panic or a stack overflow (before: exit 134 and a
+/// panic inside gltf-json).
+#[test]
+fn malformed_gltf_hierarchies_and_accessors_are_errors_not_crashes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asset = r#""asset":{"version":"2.0"}"#;
+    let missing = write(
+        dir.path(),
+        "missing.gltf",
+        format!(r#"{{{asset},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}]}}"#)
+            .as_bytes(),
+    );
+    let err = load_mesh(&missing, &raw()).expect_err("missing accessor");
+    assert!(
+        err.to_string().contains("missing.gltf") && err.to_string().contains("accessor 0"),
+        "{err}"
+    );
+    let cycle = write(
+        dir.path(),
+        "cycle.gltf",
+        format!(r#"{{{asset},"scenes":[{{"nodes":[0]}}],"nodes":[{{"children":[0]}}]}}"#)
+            .as_bytes(),
+    );
+    let err = load_mesh(&cycle, &raw()).expect_err("cycle");
+    assert!(err.to_string().contains("reached twice"), "{err}");
+    // An acyclic chain 50,000 nodes deep: walked without recursion; it has no mesh.
+    let n = 50_000;
+    let nodes: Vec<String> = (0..n)
+        .map(|i| {
+            if i + 1 < n {
+                format!(r#"{{"children":[{}]}}"#, i + 1)
+            } else {
+                "{}".to_owned()
+            }
+        })
+        .collect();
+    let deep = write(
+        dir.path(),
+        "deep.gltf",
+        format!(
+            r#"{{{asset},"scenes":[{{"nodes":[0]}}],"nodes":[{}]}}"#,
+            nodes.join(",")
+        )
+        .as_bytes(),
+    );
+    let err = load_mesh(&deep, &raw()).expect_err("no triangles");
+    assert!(err.to_string().contains("deep.gltf"), "{err}");
+}

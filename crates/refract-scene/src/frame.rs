@@ -319,7 +319,19 @@ impl Frame {
             }
         }
         let size = (self.width as usize, self.height as usize);
-        let image = Image::from_channels(size, AnyChannels::sort(channels.into()));
+        // Chunks in increasing line order, not in the order parallel compression finishes
+        // them: the same frame always gives the same bytes.
+        let encoding = Encoding {
+            line_order: LineOrder::Increasing,
+            ..Encoding::default()
+        };
+        let layer = Layer::new(
+            size,
+            LayerAttributes::default(),
+            encoding,
+            AnyChannels::sort(channels.into()),
+        );
+        let image = Image::from_layer(layer);
         write_atomically(path, "the EXR", |w| image.write().to_buffered(w))
     }
 
@@ -407,6 +419,38 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The same frame written twice gives the same bytes (chunks in a fixed order), also when
+    /// it has many chunks compressed in parallel.
+    #[test]
+    fn exr_files_are_byte_identical_between_runs() {
+        let mut frame = Frame::new(300, 257);
+        for (i, c) in frame.color.iter_mut().enumerate() {
+            *c = Vec3::new((i % 7) as f32, (i % 13) as f32 * 0.1, (i as f32).sin());
+        }
+        frame
+            .vec3_mut(Aov::T2)
+            .iter_mut()
+            .enumerate()
+            .for_each(|(i, v)| {
+                *v = Vec3::splat((i as f32).cos());
+            });
+        let dir = tempfile::tempdir().expect("tempdir");
+        let bytes: Vec<Vec<u8>> = (0..4)
+            .map(|k| {
+                let path = dir.path().join(format!("f{k}.exr"));
+                frame.write_exr(&path).expect("write");
+                std::fs::read(&path).expect("read")
+            })
+            .collect();
+        assert!(bytes.windows(2).all(|w| w[0] == w[1]));
+        assert_eq!(
+            Frame::read_exr(&dir.path().join("f0.exr"))
+                .expect("read")
+                .color,
+            frame.color
+        );
+    }
 
     #[test]
     fn layers_round_trip_through_exr() {

@@ -20,8 +20,12 @@ pub struct Refractor {
     ior: f32,
 }
 
-/// The range of an index of refraction: finite and greater than 0.
-pub const IOR_EXPECTED: &str = "a finite index of refraction greater than 0";
+/// The largest index of refraction accepted (beyond any material; the kernels stay finite up
+/// to it, `docs/methods.md`).
+pub const MAX_IOR: f32 = 1000.0;
+
+/// The range of an index of refraction.
+pub const IOR_EXPECTED: &str = "an index of refraction greater than 0 and at most 1000";
 
 impl Refractor {
     /// A refractor of index `ior` (the outside is 1): builds the BVH and `d_N` (Wyman 2005a §3.1,
@@ -109,8 +113,9 @@ impl Refractor {
     }
 }
 
-fn check_ior(ior: f32) -> Result<(), SceneError> {
-    if ior > 0.0 && ior.is_finite() {
+/// `ior` in `(0, MAX_IOR]`.
+pub(crate) fn check_ior(ior: f32) -> Result<(), SceneError> {
+    if ior > 0.0 && ior <= MAX_IOR {
         Ok(())
     } else {
         Err(SceneError::field("refractor", "ior", ior, IOR_EXPECTED))

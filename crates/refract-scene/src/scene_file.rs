@@ -167,11 +167,126 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
     build(&name, &text, &base, &path.display().to_string())
 }
 
+/// The largest magnitude of a coordinate (`translate`, `eye`, `target`), documented in
+/// `docs/scenes.md`: the refractor is normalised into the unit sphere, so a million units
+/// away is already far beyond any useful scene, and `f32` keeps its precision.
+pub const MAX_COORDINATE: f32 = 1e6;
+/// The range of `scale`.
+pub const SCALE_RANGE: (f32, f32) = (1e-6, 1e6);
+/// The largest magnitude of a `rotate_deg` angle.
+pub const MAX_ANGLE_DEG: f32 = 3600.0;
+/// The largest environment `intensity`.
+pub const MAX_INTENSITY: f32 = 1e6;
+
+/// `value` in `lo..=hi` (finite), or a [`SceneError::Field`] naming the file and key.
+fn check_range(origin: &str, field: &str, value: f32, lo: f32, hi: f32) -> Result<(), SceneError> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(SceneError::field(
+            origin,
+            field,
+            value,
+            format!("a finite number from {lo} to {hi}"),
+        ))
+    }
+}
+
+fn check_vector(
+    origin: &str,
+    field: &str,
+    v: [f32; 3],
+    lo: f32,
+    hi: f32,
+) -> Result<(), SceneError> {
+    for (axis, value) in ["x", "y", "z"].iter().zip(v) {
+        check_range(origin, &format!("{field}.{axis}"), value, lo, hi)?;
+    }
+    Ok(())
+}
+
+/// The ranges of a placement (`translate`, `scale`, `rotate_deg`) of `[section]`.
+fn check_placement(
+    origin: &str,
+    section: &str,
+    translate: [f32; 3],
+    scale: f32,
+    rotate_deg: [f32; 3],
+) -> Result<(), SceneError> {
+    let m = MAX_COORDINATE;
+    check_vector(origin, &format!("{section} translate"), translate, -m, m)?;
+    let (lo, hi) = SCALE_RANGE;
+    check_range(origin, &format!("{section} scale"), scale, lo, hi)?;
+    let a = MAX_ANGLE_DEG;
+    check_vector(origin, &format!("{section} rotate_deg"), rotate_deg, -a, a)
+}
+
+/// The camera keys one by one, so that each fault names its key.
+fn check_camera(origin: &str, c: &CameraSection) -> Result<(), SceneError> {
+    let m = MAX_COORDINATE;
+    check_vector(origin, "[camera] eye", c.eye, -m, m)?;
+    check_vector(origin, "[camera] target", c.target, -m, m)?;
+    check_vector(origin, "[camera] up", c.up, -m, m)?;
+    if !(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0) {
+        return Err(SceneError::field(
+            origin,
+            "[camera] fov_y_deg",
+            c.fov_y_deg,
+            "a vertical field of view strictly between 0 and 180 degrees",
+        ));
+    }
+    let (eye, target, up) = (Vec3::from(c.eye), Vec3::from(c.target), Vec3::from(c.up));
+    if (target - eye).length() <= 1e-6 * (1.0 + eye.abs().max_element()) {
+        return Err(SceneError::field(
+            origin,
+            "[camera] target",
+            format!("{target}"),
+            "a point different from the eye",
+        ));
+    }
+    let look = (target - eye).normalize();
+    if up.length() == 0.0 || look.cross(up.normalize()).length() < 1e-6 {
+        return Err(SceneError::field(
+            origin,
+            "[camera] up",
+            format!("{up}"),
+            "a non-zero direction not parallel to target − eye",
+        ));
+    }
+    Ok(())
+}
+
 fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScene, SceneError> {
     let file: SceneFile = toml::from_str(text).map_err(|err| SceneError::Parse {
         origin: origin.to_owned(),
         message: err.to_string().trim_end().to_owned(),
     })?;
+    check_camera(origin, &file.camera)?;
+    let r = &file.refractor;
+    check_placement(origin, "[refractor]", r.translate, r.scale, r.rotate_deg)?;
+    crate::scene::check_ior(r.ior).map_err(|_| {
+        SceneError::field(origin, "[refractor] ior", r.ior, crate::scene::IOR_EXPECTED)
+    })?;
+    check_range(
+        origin,
+        "[environment] intensity",
+        file.environment.intensity,
+        0.0,
+        MAX_INTENSITY,
+    )?;
+    for (k, object) in file.objects.iter().enumerate() {
+        let section = format!("objects[{k}]");
+        check_placement(
+            origin,
+            &section,
+            object.translate,
+            object.scale,
+            object.rotate_deg,
+        )?;
+        if let Some(color) = object.color {
+            check_vector(origin, &format!("{section} color"), color, 0.0, 1.0)?;
+        }
+    }
     let mut warnings = Vec::new();
     let (mesh, glass_ior) = load_mesh_spec(
         &file.refractor.mesh,
@@ -181,20 +296,11 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         &mut warnings,
     )?;
     let mut mesh = mesh;
-    let r = &file.refractor;
     mesh.transform(&affine(r.translate, r.scale, r.rotate_deg));
     let ior = file.refractor.ior;
     if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
         warnings.push(format!(
             "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
-        ));
-    }
-    if !(ior > 0.0 && ior.is_finite()) {
-        return Err(SceneError::field(
-            origin,
-            "[refractor] ior",
-            ior,
-            crate::scene::IOR_EXPECTED,
         ));
     }
     let refractor = Refractor::new(mesh, ior)?;
@@ -366,6 +472,90 @@ mod tests {
             .expect_err("unknown")
             .to_string();
         assert!(err.contains("sphere, torus, lens"), "{err}");
+    }
+
+    /// Every numeric field has a range checked where the file is parsed; each fault is one
+    /// error naming the file and the key (before: panics inside obvhs for non-finite or huge
+    /// transforms, NaN images for a NaN intensity, a misleading "open mesh" for scale 0).
+    #[test]
+    fn out_of_range_numbers_are_errors_naming_file_and_key() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let cases = [
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nscale = nan\n",
+                "scale",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nscale = 0.0\n",
+                "scale",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nscale = 1e21\n",
+                "scale",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\ntranslate = [inf, 0.0, 0.0]\n",
+                "translate.x",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\ntranslate = [0.0, 1e39, 0.0]\n",
+                "translate",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nrotate_deg = [0.0, 0.0, nan]\n",
+                "rotate_deg.z",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nior = 1e20\n",
+                "ior",
+            ),
+            (
+                "[environment]\nintensity = nan\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "intensity",
+            ),
+            (
+                "[environment]\nintensity = -1.0\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "intensity",
+            ),
+            (
+                "[environment]\nintensity = inf\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "intensity",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\n[[objects]]\nmesh = \"builtin:plane\"\nscale = inf\n",
+                "objects[0] scale",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\n[[objects]]\nmesh = \"builtin:plane\"\ncolor = [nan, 0.5, 0.5]\n",
+                "objects[0] color.x",
+            ),
+            (
+                "[camera]\nfov_y_deg = 0.0\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "fov_y_deg",
+            ),
+            (
+                "[camera]\neye = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] target",
+            ),
+            (
+                "[camera]\nup = [0.0, 0.0, 1.0]\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] up",
+            ),
+            (
+                "[camera]\neye = [nan, 0.0, 3.0]\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] eye.x",
+            ),
+        ];
+        for (k, (text, key)) in cases.iter().enumerate() {
+            let path = dir.path().join(format!("case{k}.toml"));
+            std::fs::write(&path, text).expect("write");
+            let err = load_scene(&path.display().to_string()).expect_err(text);
+            let message = err.to_string();
+            assert!(
+                message.contains(&format!("case{k}.toml")) && message.contains(key),
+                "{text}: {message}"
+            );
+        }
     }
 
     #[test]

@@ -28,8 +28,18 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
         path: path.to_owned(),
         message,
     };
+    let bytes = std::fs::read(path).map_err(|source| GeometryError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    // Parsed without gltf's validation first: its primitive hook indexes `accessors` without a
+    // bounds check and panics on a primitive naming a missing accessor. Those indices are
+    // checked here, then the document is validated.
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::open(path).map_err(|err| error(err.to_string()))?;
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|err| error(err.to_string()))?;
+    let json = document.into_json();
+    check_accessor_indices(&json).map_err(error)?;
+    let document = gltf::Document::from_json(json).map_err(|err| error(err.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|err| error(format!("cannot load its buffers: {err}")))?;
 
@@ -38,11 +48,7 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
         .default_scene()
         .or_else(|| document.scenes().next())
     {
-        Some(scene) => {
-            for node in scene.nodes() {
-                collector.visit(&node, Mat4::IDENTITY, &buffers, &error)?;
-            }
-        }
+        Some(scene) => collector.visit_tree(&document, scene, &buffers, &error)?,
         None => {
             for mesh in document.meshes() {
                 collector.add_mesh(&mesh, Mat4::IDENTITY, &buffers, &error)?;
@@ -110,20 +116,63 @@ impl Default for Collector {
     }
 }
 
+/// Every accessor a mesh primitive names (attributes, indices, morph targets) exists.
+fn check_accessor_indices(json: &gltf::json::Root) -> Result<(), String> {
+    let count = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let targets = primitive
+                .targets
+                .iter()
+                .flatten()
+                .flat_map(|t| [t.positions, t.normals, t.tangents].into_iter().flatten());
+            let named = primitive
+                .attributes
+                .values()
+                .copied()
+                .chain(primitive.indices)
+                .chain(targets);
+            for index in named {
+                if index.value() >= count {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{p}] names accessor {}, but the file has {count} accessors",
+                        index.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Collector {
-    fn visit(
+    /// The scene's node trees, depth first with an explicit stack (no recursion: a chain of
+    /// 50,000 nodes is fine), each node's transform composed with its parent's. A node
+    /// reached twice (a cycle, or a child shared by two parents, both invalid glTF) is an error.
+    fn visit_tree(
         &mut self,
-        node: &gltf::Node<'_>,
-        parent: Mat4,
+        document: &gltf::Document,
+        scene: gltf::Scene<'_>,
         buffers: &[gltf::buffer::Data],
         error: &impl Fn(String) -> GeometryError,
     ) -> Result<(), GeometryError> {
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            self.add_mesh(&mesh, world, buffers, error)?;
-        }
-        for child in node.children() {
-            self.visit(&child, world, buffers, error)?;
+        let mut seen = vec![false; document.nodes().len()];
+        let mut stack: Vec<(gltf::Node<'_>, Mat4)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(error(format!(
+                    "node {} is reached twice: node hierarchies must be trees (a cycle or a shared child)",
+                    node.index()
+                )));
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if let Some(mesh) = node.mesh() {
+                self.add_mesh(&mesh, world, buffers, error)?;
+            }
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world)));
         }
         Ok(())
     }
