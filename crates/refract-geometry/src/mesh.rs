@@ -127,8 +127,9 @@ impl Mesh {
 
     /// Removes triangles with a repeated index or no area at `f32` precision: a height below
     /// `1e-7` of the longest edge, `‖(b − a) × (c − a)‖ ≤ 1e-7 · max‖e‖²` (slivers that thin
-    /// have no usable normal, and scanned meshes such as the bunny have a few). Returns how many
-    /// were removed; an error when none is left.
+    /// have no usable normal, and scanned meshes such as the bunny have a few), evaluated in
+    /// `f64` so that the test is scale-free from `1e-30` to `1e38`. Returns how many were
+    /// removed; an error when none is left.
     pub fn remove_degenerate_triangles(&mut self) -> Result<usize, GeometryError> {
         let before = self.triangles.len();
         let positions = &self.positions;
@@ -137,9 +138,9 @@ impl Mesh {
                 return false;
             }
             let (pa, pb, pc) = (
-                positions[a as usize],
-                positions[b as usize],
-                positions[c as usize],
+                positions[a as usize].as_dvec3(),
+                positions[b as usize].as_dvec3(),
+                positions[c as usize].as_dvec3(),
             );
             let longest = (pb - pa)
                 .length_squared()
@@ -157,6 +158,22 @@ impl Mesh {
         Ok(removed)
     }
 
+    /// Removes coincident duplicates: triangles whose three corner positions (bit for bit, in
+    /// any order or winding) are those of an earlier triangle, keeping the first. Real scans
+    /// contain such duplicates, and each stack of coincident triangles makes BVH builds and
+    /// `d_N` rays quadratic. Linear time (a hash set); returns how many were removed.
+    pub fn remove_duplicate_triangles(&mut self) -> usize {
+        let before = self.triangles.len();
+        let positions = &self.positions;
+        let mut seen = std::collections::HashSet::with_capacity(self.triangles.len());
+        self.triangles.retain(|tri| {
+            let mut key = tri.map(|i| positions[i as usize].to_array().map(f32::to_bits));
+            key.sort_unstable();
+            seen.insert(key)
+        });
+        before - self.triangles.len()
+    }
+
     /// Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each triangle adds its unit
     /// face normal weighted by its interior angle at the vertex, `N_v = normalize(Σ α_f n_f)`.
     /// Insensitive to how a surface is triangulated, unlike area weighting. Vertices at the same
@@ -165,16 +182,17 @@ impl Mesh {
     pub fn compute_vertex_normals(&mut self) {
         let ids = self.position_ids();
         let mut sums = vec![Vec3::ZERO; self.positions.len()];
+        // In f64: edge cross products of meshes at 1e-30 underflow in f32, at 1e38 overflow.
         for &tri in &self.triangles {
-            let p = tri.map(|i| self.positions[i as usize]);
+            let p = tri.map(|i| self.positions[i as usize].as_dvec3());
             let Some(face) = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() else {
                 continue;
             };
             for corner in 0..3 {
                 let e1 = p[(corner + 1) % 3] - p[corner];
                 let e2 = p[(corner + 2) % 3] - p[corner];
-                let angle = refract_core::vector::angle_between(e1, e2);
-                sums[ids[tri[corner] as usize] as usize] += angle * face;
+                let angle = e1.cross(e2).length().atan2(e1.dot(e2));
+                sums[ids[tri[corner] as usize] as usize] += (angle * face).as_vec3();
             }
         }
         self.normals = ids
@@ -312,13 +330,17 @@ impl Mesh {
     /// The sphere centred on the bounding box centre through the furthest vertex.
     pub fn bounding_sphere(&self) -> BoundingSphere {
         let (min, max) = self.bounds();
-        let center = 0.5 * (min + max);
+        let center = 0.5 * (min.as_dvec3() + max.as_dvec3());
+        // Distances in f64: squared lengths of meshes at 1e38 overflow f32, at 1e-30 underflow.
         let radius = self
             .positions
             .iter()
-            .map(|p| p.distance(center))
-            .fold(0.0_f32, f32::max);
-        BoundingSphere { center, radius }
+            .map(|p| p.as_dvec3().distance(center))
+            .fold(0.0_f64, f64::max);
+        BoundingSphere {
+            center: center.as_vec3(),
+            radius: radius as f32,
+        }
     }
 
     /// Signed volume by the divergence theorem, `V = Σ a · (b × c) / 6` (positive when closed

@@ -294,3 +294,51 @@ fn malformed_gltf_hierarchies_and_accessors_are_errors_not_crashes() {
     let err = load_mesh(&deep, &raw()).expect_err("no triangles");
     assert!(err.to_string().contains("deep.gltf"), "{err}");
 }
+
+/// Coincident duplicated triangles (as real scans have) are removed on load with a warning, so
+/// that 80,000 copies of a tetrahedron's faces load as the tetrahedron (before: quadratic BVH
+/// and `d_N` work, minutes for 64k duplicates).
+#[test]
+fn coincident_duplicate_triangles_are_removed_with_a_warning() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut obj = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n");
+    for _ in 0..20_000 {
+        obj.push_str("f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    }
+    let path = write(dir.path(), "dup.obj", obj.as_bytes());
+    let loaded = load_mesh(&path, &raw()).expect("loads");
+    assert_eq!(loaded.mesh.triangles.len(), 4);
+    assert_eq!(loaded.report.duplicates_removed, 79_996);
+    assert!(
+        loaded
+            .report
+            .warnings
+            .iter()
+            .any(|w| w.contains("79996 coincident duplicate")),
+        "{:?}",
+        loaded.report.warnings
+    );
+}
+
+/// A well-shaped tetrahedron is not degenerate at any scale `f32` can hold (before: called
+/// degenerate at 1e38, where squared lengths overflow, and at 1e-30, where they underflow).
+#[test]
+fn tiny_and_huge_meshes_are_not_degenerate() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for scale in [1e38f32, 1e-30] {
+        let obj = format!(
+            "v 0 0 0\nv {s:e} 0 0\nv 0 {s:e} 0\nv 0 0 {s:e}\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+            s = scale
+        );
+        let path = write(dir.path(), "tet.obj", obj.as_bytes());
+        let loaded = load_mesh(&path, &LoadOptions::default()).expect("loads");
+        assert_eq!(loaded.report.degenerate_removed, 0, "scale {scale}");
+        assert_eq!(loaded.mesh.triangles.len(), 4);
+        let sphere = loaded.mesh.bounding_sphere();
+        assert!(
+            (sphere.radius - 1.0).abs() < 1e-4,
+            "normalised: {}",
+            sphere.radius
+        );
+    }
+}

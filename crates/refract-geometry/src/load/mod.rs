@@ -50,6 +50,8 @@ pub struct LoadReport {
     pub source_triangles: usize,
     /// Degenerate triangles removed.
     pub degenerate_removed: usize,
+    /// Coincident duplicate triangles removed ([`Mesh::remove_duplicate_triangles`]).
+    pub duplicates_removed: usize,
     /// Vertices merged by welding.
     pub welded: usize,
     /// Where the normals came from.
@@ -145,6 +147,12 @@ pub(crate) fn prepare(
     if degenerate_removed > 0 {
         warnings.push(format!("removed {degenerate_removed} degenerate triangles"));
     }
+    let duplicates_removed = mesh.remove_duplicate_triangles();
+    if duplicates_removed > 0 {
+        warnings.push(format!(
+            "removed {duplicates_removed} coincident duplicate triangles"
+        ));
+    }
     if non_unit_normals > 0 {
         warnings.push(format!(
             "normalised {non_unit_normals} file normals that were not unit length"
@@ -190,6 +198,7 @@ pub(crate) fn prepare(
         source_vertices,
         source_triangles,
         degenerate_removed,
+        duplicates_removed,
         welded,
         normal_source: if has_file_normals {
             NormalSource::File
