@@ -342,3 +342,37 @@ fn tiny_and_huge_meshes_are_not_degenerate() {
         );
     }
 }
+
+/// OBJ errors say what and where (before: just `read error`), and comments may hold any bytes.
+#[test]
+fn obj_errors_say_what_and_where_and_comments_may_be_any_bytes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let folder = dir.path().join("folder.obj");
+    std::fs::create_dir(&folder).expect("mkdir");
+    let err = load_mesh(&folder, &raw()).expect_err("directory");
+    assert!(format!("{err}: {:?}", std::error::Error::source(&err)).contains("folder.obj"));
+    let bytes: Vec<u8> = (0..2000u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
+    let random = write(dir.path(), "random.obj", &bytes);
+    let err = load_mesh(&random, &raw())
+        .expect_err("random bytes")
+        .to_string();
+    assert!(err.contains("random.obj") && err.contains("line"), "{err}");
+    let malformed = write(
+        dir.path(),
+        "bad.obj",
+        b"v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    let err = load_mesh(&malformed, &raw())
+        .expect_err("malformed")
+        .to_string();
+    assert!(err.contains("line 2") && err.contains("v 1 x 0"), "{err}");
+    let latin1 = write(
+        dir.path(),
+        "latin1.obj",
+        b"# caf\xe9 cr\xe8me\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    let loaded = load_mesh(&latin1, &raw()).expect("a non-UTF-8 comment is fine");
+    assert_eq!(loaded.mesh.triangles.len(), 1);
+}

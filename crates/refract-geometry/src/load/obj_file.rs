@@ -16,12 +16,25 @@ pub(super) fn read(path: &Path) -> Result<RawMesh, GeometryError> {
         ignore_points: true,
         ignore_lines: true,
     };
-    // Materials (.mtl) are irrelevant to a refractor; a missing .mtl is not an error.
-    let (models, _materials) =
-        tobj::load_obj(path, &options).map_err(|err| GeometryError::Obj {
-            path: path.to_owned(),
-            message: err.to_string(),
-        })?;
+    let bytes = std::fs::read(path).map_err(|source| GeometryError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let obj_error = |message: String| GeometryError::Obj {
+        path: path.to_owned(),
+        message,
+    };
+    let text = utf8_text(&bytes).map_err(obj_error)?;
+    // Materials (.mtl) are irrelevant to a refractor; they are not even opened.
+    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|err| {
+        obj_error(match first_malformed_line(&text) {
+            Some((line, content)) => format!("line {line}: cannot read `{content}` ({err})"),
+            None => err.to_string(),
+        })
+    })?;
 
     let all_have_normals = models
         .iter()
@@ -83,5 +96,53 @@ pub(super) fn read(path: &Path) -> Result<RawMesh, GeometryError> {
         mesh,
         has_file_normals,
         non_unit_normals,
+    })
+}
+
+/// The file as text: comments (`#` lines) may hold any bytes (they are replaced), other lines
+/// must be UTF-8; the first that is not is named by its number.
+fn utf8_text(bytes: &[u8]) -> Result<String, String> {
+    let mut text = String::with_capacity(bytes.len());
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        match std::str::from_utf8(line) {
+            Ok(line) => text.push_str(line),
+            Err(_) if line.trim_ascii_start().starts_with(b"#") => {
+                text.push_str(&String::from_utf8_lossy(line));
+            }
+            Err(_) => {
+                return Err(format!(
+                    "line {}: not UTF-8 text; expected an OBJ file",
+                    k + 1
+                ));
+            }
+        }
+        text.push('\n');
+    }
+    Ok(text)
+}
+
+/// The first `v`/`vn`/`vt`/`f` line whose fields do not parse, for error messages.
+fn first_malformed_line(text: &str) -> Option<(usize, String)> {
+    text.lines().enumerate().find_map(|(k, line)| {
+        let mut fields = line.split_whitespace();
+        let ok = match fields.next() {
+            Some("v" | "vn" | "vt") => {
+                let values: Vec<_> = fields.collect();
+                !values.is_empty() && values.iter().all(|v| v.parse::<f32>().is_ok())
+            }
+            Some("f") => {
+                let corners: Vec<_> = fields.collect();
+                corners.len() >= 3
+                    && corners.iter().all(|c| {
+                        c.split('/')
+                            .all(|i| i.is_empty() || i.parse::<i64>().is_ok())
+                    })
+            }
+            _ => true,
+        };
+        (!ok).then(|| {
+            let shown: String = line.chars().take(60).collect();
+            (k + 1, shown)
+        })
     })
 }
