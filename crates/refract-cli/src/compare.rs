@@ -53,6 +53,13 @@ fn bar(len: u64, message: &str) -> ProgressBar {
 
 /// Runs the comparison and writes everything into `options.out`; returns the records.
 pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
+    crate::memory::check(
+        "this comparison",
+        options.res,
+        options.res,
+        crate::memory::COMPARE_BYTES_PER_PIXEL,
+        &options.backends,
+    )?;
     std::fs::create_dir_all(&options.out).with_context(|| {
         format!(
             "{}: cannot create the output directory",

@@ -16,6 +16,7 @@ mod compare;
 mod export;
 mod images;
 mod info;
+mod memory;
 mod render;
 mod report;
 mod timing;

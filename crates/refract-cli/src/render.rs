@@ -117,6 +117,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let (width, height) = parse_res(&args.res)?;
     let method = method_params(args)?;
+    let (per_pixel, backends) = if method.id() == MethodId::Reference {
+        (
+            crate::memory::RENDER_REFERENCE_BYTES_PER_PIXEL,
+            vec![BackendId::Trace],
+        )
+    } else {
+        (crate::memory::RENDER_METHOD_BYTES_PER_PIXEL, vec![backend])
+    };
+    crate::memory::check("this render", width, height, per_pixel, &backends)?;
     let loaded = load_scene(&args.scene)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");

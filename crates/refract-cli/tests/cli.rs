@@ -455,3 +455,31 @@ fn a_failed_flush_is_an_error_and_leaves_no_file() {
         .collect();
     assert_eq!(left, ["d.png"], "only the directory itself");
 }
+
+/// A job that cannot fit is refused before it starts, with the estimate and the limit (before:
+/// `--res 16384x16384` was accepted and needed ~38 GB). On a machine with more memory than the
+/// job needs the refusal would not happen, so the test says so and checks only the estimate.
+#[test]
+fn jobs_that_cannot_fit_are_refused_up_front() {
+    let available_gib = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            let line = t.lines().find(|l| l.starts_with("MemAvailable:"))?.to_owned();
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map(|kib| kib / f64::from(1u32 << 20));
+    let dir = tempfile::tempdir().expect("tempdir");
+    match available_gib {
+        Some(gib) if gib < 30.0 => {
+            let output = refract(
+                &["render", "sphere", "--res", "16384x16384", "--out", "big.png"],
+                dir.path(),
+            );
+            let err = stderr(&output);
+            assert!(!output.status.success(), "refused");
+            assert!(err.contains("GiB") && err.contains("16384x16384"), "{err}");
+            assert!(!dir.path().join("big.png").exists());
+        }
+        other => println!("skipped: {other:?} GiB available, enough for the 16384² render"),
+    }
+}
