@@ -116,7 +116,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     } else {
         args.scenes.clone()
     };
-    std::fs::create_dir_all(&args.out)
+    crate::cleanup::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
     anyhow::ensure!(
         !args.methods.contains(&MethodId::Reference),

@@ -140,7 +140,7 @@ pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
     }
     let md = document(args, &measured, &notes, cow_fps);
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
+        crate::cleanup::create_dir(dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
     }
     write_text_atomically(&args.out, &md)?;

@@ -60,7 +60,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         crate::memory::COMPARE_BYTES_PER_PIXEL,
         &options.backends,
     )?;
-    std::fs::create_dir_all(&options.out).with_context(|| {
+    crate::cleanup::create_dir(&options.out).with_context(|| {
         format!(
             "{}: cannot create the output directory",
             options.out.display()
@@ -93,7 +93,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
     for scene in &scenes {
         let camera = scene.camera(w, h)?;
         let dir = options.out.join(&scene.name);
-        std::fs::create_dir_all(&dir)
+        crate::cleanup::create_dir(&dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
 
         reference.prepare(scene)?;

@@ -73,7 +73,7 @@ fn obj(mesh: &Mesh) -> String {
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let loaded = load_scene(&args.scene)?;
     let scene = loaded.scene;
-    std::fs::create_dir_all(&args.out)
+    crate::cleanup::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the directory", args.out.display()))?;
     write_text_atomically(
         &args.out.join("refractor.obj"),

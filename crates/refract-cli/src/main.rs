@@ -12,6 +12,7 @@ use refract_scene::{BUILTIN_SCENES, MethodId, MethodParams, REGISTRY};
 mod backends;
 mod bench;
 mod claims;
+mod cleanup;
 mod compare;
 mod export;
 mod images;
@@ -213,6 +214,7 @@ fn print_methods() {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    cleanup::install_signal_handler();
     let result = match cli.command {
         None => default_job(),
         Some(Command::Compare(args)) => compare_options(args).and_then(|options| {
@@ -238,8 +240,13 @@ fn main() -> ExitCode {
         Some(Command::Claims(args)) => claims::run(&args),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => {
+            cleanup::keep_created();
+            ExitCode::SUCCESS
+        }
         Err(err) => {
+            // Nothing half-made: directories this run created go with the failure.
+            cleanup::remove_created();
             eprintln!("error: {err:#}");
             ExitCode::FAILURE
         }

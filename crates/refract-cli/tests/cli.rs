@@ -464,7 +464,10 @@ fn jobs_that_cannot_fit_are_refused_up_front() {
     let available_gib = std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|t| {
-            let line = t.lines().find(|l| l.starts_with("MemAvailable:"))?.to_owned();
+            let line = t
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_owned();
             line.split_whitespace().nth(1)?.parse::<f64>().ok()
         })
         .map(|kib| kib / f64::from(1u32 << 20));
@@ -472,7 +475,14 @@ fn jobs_that_cannot_fit_are_refused_up_front() {
     match available_gib {
         Some(gib) if gib < 30.0 => {
             let output = refract(
-                &["render", "sphere", "--res", "16384x16384", "--out", "big.png"],
+                &[
+                    "render",
+                    "sphere",
+                    "--res",
+                    "16384x16384",
+                    "--out",
+                    "big.png",
+                ],
                 dir.path(),
             );
             let err = stderr(&output);
@@ -482,4 +492,66 @@ fn jobs_that_cannot_fit_are_refused_up_front() {
         }
         other => println!("skipped: {other:?} GiB available, enough for the 16384² render"),
     }
+}
+
+/// A failed or interrupted comparison leaves no half-made output directory and no temporary
+/// files (before: an empty scene directory, `*.partial` files after SIGINT/SIGTERM).
+#[cfg(unix)]
+#[test]
+fn failed_or_interrupted_runs_leave_nothing_half_made() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        "[refractor]\nmesh = \"nowhere.obj\"\n",
+    )
+    .expect("write");
+    let output = refract(
+        &["compare", "sphere", "bad.toml", "--out", "failed"],
+        dir.path(),
+    );
+    assert!(!output.status.success());
+    assert!(
+        !dir.path().join("failed").exists(),
+        "the failed run's directory is removed"
+    );
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_refract"))
+        .args([
+            "compare",
+            "sphere",
+            "torus",
+            "--res",
+            "256",
+            "--frames",
+            "2000",
+            "--backends",
+            "cpu",
+            "--out",
+            "cut",
+        ])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    // Wait until the run has written into its output directory, then interrupt it.
+    let started = std::time::Instant::now();
+    while !dir.path().join("cut/sphere/reference.exr").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "the run never started writing"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let status = child.wait().expect("wait");
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    let left: Vec<_> = walk(dir.path());
+    assert!(
+        left.iter().all(|p| p.ends_with("bad.toml")),
+        "left behind: {left:?}"
+    );
 }

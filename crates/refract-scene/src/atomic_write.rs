@@ -5,9 +5,54 @@
 use std::fmt::Display;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use crate::error::SceneError;
+
+/// The temporary files being written right now, for [`remove_temporaries`].
+static LIVE_TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file a write in progress has open: what a program's SIGINT/SIGTERM
+/// handler calls before exiting, so that an interrupted write leaves nothing behind (error paths
+/// remove their temporaries themselves). Returns how many were removed.
+pub fn remove_temporaries() -> usize {
+    let live = match LIVE_TEMPORARIES.lock() {
+        Ok(live) => live.clone(),
+        Err(poisoned) => poisoned.into_inner().clone(),
+    };
+    live.iter()
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count()
+}
+
+/// The temporary files being written right now.
+pub fn live_temporaries() -> Vec<PathBuf> {
+    match LIVE_TEMPORARIES.lock() {
+        Ok(live) => live.clone(),
+        Err(poisoned) => poisoned.into_inner().clone(),
+    }
+}
+
+/// Registers a temporary path for the lifetime of the guard.
+struct LiveTemporary(PathBuf);
+
+impl LiveTemporary {
+    fn new(path: &Path) -> Self {
+        if let Ok(mut live) = LIVE_TEMPORARIES.lock() {
+            live.push(path.to_owned());
+        }
+        Self(path.to_owned())
+    }
+}
+
+impl Drop for LiveTemporary {
+    fn drop(&mut self) {
+        if let Ok(mut live) = LIVE_TEMPORARIES.lock() {
+            live.retain(|p| p != &self.0);
+        }
+    }
+}
 
 /// Writes `path` through `write`, atomically: `write` gets a buffered writer on a temporary
 /// file in the same directory; the buffer is flushed (a failed flush is an error, e.g. a full
@@ -37,6 +82,7 @@ pub fn write_atomically<E: Display>(
         path: path.to_owned(),
         message,
     };
+    let _live = LiveTemporary::new(temporary.path());
     {
         let mut writer = BufWriter::new(temporary.as_file_mut());
         write(&mut writer).map_err(|err| format(format!("cannot write {what}: {err}")))?;
@@ -89,6 +135,26 @@ mod tests {
         write_text_atomically(&path, "hello").expect("write");
         assert_eq!(std::fs::read_to_string(&path).expect("read"), "hello");
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+
+    /// A write in progress is listed for signal handlers ([`remove_temporaries`]), and no
+    /// longer once it is done. (Removing them here would race the other tests' writes.)
+    #[test]
+    fn temporaries_in_progress_are_listed_for_signal_handlers() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("slow.txt");
+        let mine = |live: Vec<PathBuf>| {
+            live.into_iter()
+                .filter(|p| p.starts_with(dir.path()))
+                .count()
+        };
+        write_atomically(&path, "the text", |w| {
+            w.write_all(b"half")?;
+            assert_eq!(mine(live_temporaries()), 1);
+            std::io::Result::Ok(())
+        })
+        .expect("write");
+        assert_eq!(mine(live_temporaries()), 0);
     }
 
     #[test]
