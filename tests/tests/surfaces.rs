@@ -21,7 +21,7 @@ fn scene() -> Arc<Scene> {
     let albedo = refract_scene::Albedo::Constant(Vec3::splat(0.5));
     Arc::make_mut(&mut scene)
         .objects
-        .push(Object::new(plane, Material::Diffuse(albedo)));
+        .push(Object::new(plane, Material::Diffuse(albedo)).expect("object"));
     scene
 }
 

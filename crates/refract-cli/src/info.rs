@@ -59,7 +59,7 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     };
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
-    let bvh = MeshBvh::build(&mesh);
+    let bvh = MeshBvh::try_build(&mesh)?;
     let bvh_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let d_n = normal_distances(&mesh, &bvh);

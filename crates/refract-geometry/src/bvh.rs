@@ -11,6 +11,7 @@ use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use obvhs::triangle::Triangle;
 use refract_core::Ray;
 
+use crate::error::GeometryError;
 use crate::mesh::Mesh;
 
 /// A ray-triangle hit.
@@ -41,9 +42,35 @@ pub struct MeshBvh {
     original: Vec<u32>,
 }
 
+/// The largest coordinate magnitude [`MeshBvh::try_build`] accepts: obvhs's builder overflows
+/// (and panics) on surface areas of coordinates from about 1e19 on; 1e18 leaves a margin.
+pub const MAX_BVH_COORDINATE: f32 = 1e18;
+
 impl MeshBvh {
+    /// [`MeshBvh::build`] for meshes of any scale: an error, not a panic inside obvhs, when a
+    /// coordinate's magnitude reaches [`MAX_BVH_COORDINATE`].
+    pub fn try_build(mesh: &Mesh) -> Result<Self, GeometryError> {
+        let magnitude = mesh
+            .positions
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0f32, f32::max);
+        if magnitude >= MAX_BVH_COORDINATE || magnitude.is_nan() {
+            return Err(GeometryError::CoordinatesTooLarge {
+                source_name: mesh.name.clone(),
+                magnitude,
+                limit: MAX_BVH_COORDINATE,
+            });
+        }
+        Ok(Self::build(mesh))
+    }
+
     /// Builds the BVH with obvhs's `medium_build` preset (no pre-splits: every triangle is
     /// referenced once, so all-hits queries need no deduplication).
+    ///
+    /// # Panics
+    /// Inside obvhs when a coordinate's magnitude is [`MAX_BVH_COORDINATE`] or more: use
+    /// [`MeshBvh::try_build`] for meshes of unknown scale.
     pub fn build(mesh: &Mesh) -> Self {
         let triangles: Vec<Triangle> = (0..mesh.triangles.len())
             .map(|i| {

@@ -71,6 +71,18 @@ pub enum GeometryError {
         /// The value found.
         value: [f32; 3],
     },
+    /// Coordinates too large for the BVH builder.
+    #[error(
+        "{source_name}: a vertex coordinate of magnitude {magnitude:e}; the BVH needs magnitudes below {limit:e} (normalise the mesh or scale it down)"
+    )]
+    CoordinatesTooLarge {
+        /// The mesh.
+        source_name: String,
+        /// The largest coordinate magnitude found.
+        magnitude: f32,
+        /// The limit.
+        limit: f32,
+    },
     /// Attribute arrays of different lengths.
     #[error("{source_name}: {attribute} has {found} entries for {vertex_count} vertices")]
     AttributeLength {

@@ -376,3 +376,25 @@ fn obj_errors_say_what_and_where_and_comments_may_be_any_bytes() {
     let loaded = load_mesh(&latin1, &raw()).expect("a non-UTF-8 comment is fine");
     assert_eq!(loaded.mesh.triangles.len(), 1);
 }
+
+/// An accessor that reads past its buffer view is reported as such (before: "a primitive
+/// without POSITION").
+#[test]
+fn gltf_accessor_overruns_name_the_accessor_and_view() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let glb = tetrahedron_glb(None);
+    let (from, to) = (br#""count":4,"type":"VEC3""#, br#""count":9,"type":"VEC3""#);
+    let at = glb
+        .windows(from.len())
+        .position(|w| w == from)
+        .expect("the position accessor");
+    let mut short = glb.clone();
+    short[at..at + from.len()].copy_from_slice(to);
+    let path = write(dir.path(), "short.glb", &short);
+    let err = load_mesh(&path, &raw()).expect_err("overrun").to_string();
+    assert!(
+        err.contains("short.glb")
+            && err.contains("accessor 0 needs 108 bytes of buffer view 0, which has 48"),
+        "{err}"
+    );
+}

@@ -32,7 +32,7 @@ impl Refractor {
     /// one BVH ray per vertex along `−N`).
     pub fn new(mesh: Mesh, ior: f32) -> Result<Self, SceneError> {
         check_ior(ior)?;
-        let bvh = MeshBvh::build(&mesh);
+        let bvh = try_bvh(&mesh)?;
         let normal_distances = normal_distances(&mesh, &bvh);
         Ok(Self {
             mesh,
@@ -66,7 +66,7 @@ impl Refractor {
                 "finite distances ≥ 0",
             ));
         }
-        let bvh = MeshBvh::build(&mesh);
+        let bvh = try_bvh(&mesh)?;
         Ok(Self {
             mesh,
             bvh,
@@ -111,6 +111,14 @@ impl Refractor {
     pub fn diameter(&self) -> f32 {
         2.0 * self.mesh.bounding_sphere().radius
     }
+}
+
+/// The mesh's BVH, or an error for coordinates too large for it.
+fn try_bvh(mesh: &Mesh) -> Result<MeshBvh, SceneError> {
+    MeshBvh::try_build(mesh).map_err(|source| SceneError::Geometry {
+        origin: format!("mesh {}", mesh.name),
+        source,
+    })
 }
 
 /// `ior` in `(0, MAX_IOR]`.
@@ -211,14 +219,14 @@ pub struct Object {
 }
 
 impl Object {
-    /// An object of `mesh`; builds its BVH.
-    pub fn new(mesh: Mesh, material: Material) -> Self {
-        let bvh = MeshBvh::build(&mesh);
-        Self {
+    /// An object of `mesh`; builds its BVH (an error for coordinates too large for it).
+    pub fn new(mesh: Mesh, material: Material) -> Result<Self, SceneError> {
+        let bvh = try_bvh(&mesh)?;
+        Ok(Self {
             mesh,
             bvh,
             material,
-        }
+        })
     }
 
     /// Its mesh.

@@ -358,7 +358,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
                 ));
             }
         };
-        objects.push(Object::new(mesh, Material::Diffuse(albedo)));
+        objects.push(Object::new(mesh, Material::Diffuse(albedo))?);
     }
 
     let c = &file.camera;
@@ -555,6 +555,34 @@ mod tests {
                 message.contains(&format!("case{k}.toml")) && message.contains(key),
                 "{text}: {message}"
             );
+        }
+    }
+
+    /// A mesh kept at its file's scale (`normalize = false`) with coordinates of 1e30 is an
+    /// error naming the limit, not a panic inside the BVH builder (exit 101 before).
+    #[test]
+    fn huge_unnormalised_meshes_are_errors() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        std::fs::write(
+            dir.path().join("huge.obj"),
+            "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+        )
+        .expect("write");
+        for section in [
+            "[refractor]",
+            "[refractor]\nmesh = \"builtin:sphere\"\n[[objects]]",
+        ] {
+            let path = dir.path().join("scene.toml");
+            std::fs::write(
+                &path,
+                format!("{section}\nmesh = \"huge.obj\"\nnormalize = false\n"),
+            )
+            .expect("write");
+            let err = format!(
+                "{:#}",
+                load_scene(&path.display().to_string()).expect_err("huge")
+            );
+            assert!(err.contains("huge.obj") && err.contains("1e18"), "{err}");
         }
     }
 

@@ -317,7 +317,7 @@ fn nearby_geometry_is_shaded_and_recorded() {
     };
     scene
         .objects
-        .push(Object::new(plane, Material::Diffuse(albedo.clone())));
+        .push(Object::new(plane, Material::Diffuse(albedo.clone())).expect("object"));
     let light = DirectionalLight::default();
     scene.light = light;
     let cam = Camera::new(CameraDesc {

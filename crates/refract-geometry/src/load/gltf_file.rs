@@ -42,6 +42,7 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
     let document = gltf::Document::from_json(json).map_err(|err| error(err.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|err| error(format!("cannot load its buffers: {err}")))?;
+    check_accessor_bounds(&document, &buffers).map_err(error)?;
 
     let mut collector = Collector::default();
     match document
@@ -137,6 +138,55 @@ fn check_accessor_indices(json: &gltf::json::Root) -> Result<(), String> {
                     return Err(format!(
                         "meshes[{m}].primitives[{p}] names accessor {}, but the file has {count} accessors",
                         index.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every accessor a triangle primitive reads fits its buffer view, and every such view its
+/// buffer, so that a short file is reported as such (not as a missing POSITION or a wrong
+/// triangle count, which is what the gltf reader's silent `None` turned into).
+fn check_accessor_bounds(
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    for mesh in document.meshes() {
+        for (p, primitive) in mesh.primitives().enumerate() {
+            let accessors = primitive
+                .attributes()
+                .map(|(semantic, a)| (format!("{semantic:?}"), a))
+                .chain(primitive.indices().map(|a| ("indices".to_owned(), a)));
+            for (what, accessor) in accessors {
+                let Some(view) = accessor.view() else {
+                    continue; // sparse or zero-filled: nothing to overrun
+                };
+                let count = accessor.count();
+                let size = accessor.size();
+                let stride = view.stride().unwrap_or(size);
+                let needed = if count == 0 {
+                    0
+                } else {
+                    accessor.offset() + stride * (count - 1) + size
+                };
+                let mesh_name = mesh.name().unwrap_or("?");
+                if needed > view.length() {
+                    return Err(format!(
+                        "mesh `{mesh_name}` primitive {p} {what}: accessor {} needs {needed} bytes of buffer view {}, which has {}",
+                        accessor.index(),
+                        view.index(),
+                        view.length()
+                    ));
+                }
+                let buffer_length = buffers.get(view.buffer().index()).map_or(0, |b| b.0.len());
+                if view.offset() + view.length() > buffer_length {
+                    return Err(format!(
+                        "buffer view {} ends at byte {}, but buffer {} has {buffer_length} bytes",
+                        view.index(),
+                        view.offset() + view.length(),
+                        view.buffer().index()
                     ));
                 }
             }
