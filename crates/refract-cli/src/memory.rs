@@ -6,10 +6,14 @@
 use refract_scene::BackendId;
 
 /// Measured peak resident bytes per pixel (`/usr/bin/time -f %M`, 1024² vs 2048², release):
-/// `refract render` of an image-space method on the CPU.
-pub const RENDER_METHOD_BYTES_PER_PIXEL: u64 = 130;
-/// `refract render --method reference`.
-pub const RENDER_REFERENCE_BYTES_PER_PIXEL: u64 = 120;
+/// `refract render` of an image-space method on the CPU to a PNG (colour-only frames).
+pub const RENDER_METHOD_PNG_BYTES_PER_PIXEL: u64 = 46;
+/// `refract render` of an image-space method to an EXR (colour and AOV layers).
+pub const RENDER_METHOD_EXR_BYTES_PER_PIXEL: u64 = 182;
+/// `refract render --method reference` to a PNG.
+pub const RENDER_REFERENCE_PNG_BYTES_PER_PIXEL: u64 = 120;
+/// `refract render --method reference` to an EXR.
+pub const RENDER_REFERENCE_EXR_BYTES_PER_PIXEL: u64 = 234;
 /// `refract compare` on the CPU (the reference, every method's frame and error maps).
 pub const COMPARE_BYTES_PER_PIXEL: u64 = 330;
 /// What the GPU backend adds (targets, output and readback buffers: host memory on lavapipe).
@@ -80,7 +84,7 @@ mod tests {
         );
         assert_eq!(cpu, BASE_BYTES + (1 << 20) * 330);
         assert_eq!(both - cpu, (1 << 20) * GPU_BYTES_PER_PIXEL);
-        // 16384² of `wyman` is about 35 GB.
+        // 16384² of `wyman` to an EXR is about 46 GiB.
         let huge = estimate(
             16384 * 16384,
             RENDER_METHOD_BYTES_PER_PIXEL,

@@ -117,13 +117,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let (width, height) = parse_res(&args.res)?;
     let method = method_params(args)?;
-    let (per_pixel, backends) = if method.id() == MethodId::Reference {
-        (
-            crate::memory::RENDER_REFERENCE_BYTES_PER_PIXEL,
+    let exr = extension.as_deref() == Some("exr");
+    let (per_pixel, backends) = match (method.id() == MethodId::Reference, exr) {
+        (true, true) => (
+            crate::memory::RENDER_REFERENCE_EXR_BYTES_PER_PIXEL,
             vec![BackendId::Trace],
-        )
-    } else {
-        (crate::memory::RENDER_METHOD_BYTES_PER_PIXEL, vec![backend])
+        ),
+        (true, false) => (
+            crate::memory::RENDER_REFERENCE_PNG_BYTES_PER_PIXEL,
+            vec![BackendId::Trace],
+        ),
+        (false, true) => (
+            crate::memory::RENDER_METHOD_EXR_BYTES_PER_PIXEL,
+            vec![backend],
+        ),
+        (false, false) => (
+            crate::memory::RENDER_METHOD_PNG_BYTES_PER_PIXEL,
+            vec![backend],
+        ),
     };
     crate::memory::check("this render", width, height, per_pixel, &backends)?;
     let loaded = load_scene(&args.scene)?;
@@ -146,8 +157,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     backends::check_supported(std::slice::from_ref(&renderer), &[method])?;
     let start = Instant::now();
     renderer.prepare(&scene)?;
+    // A PNG holds the colour only: the AOV layers (most of a frame's memory) are not computed.
+    let outputs = match extension.as_deref() {
+        Some("exr") => FrameOutputs::ColorAndAovs,
+        _ => FrameOutputs::Color,
+    };
     let mut frame = Frame::default();
-    renderer.render(&camera, &method, FrameOutputs::ColorAndAovs, &mut frame)?;
+    renderer.render(&camera, &method, outputs, &mut frame)?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
     match extension.as_deref() {
         Some("exr") => frame.write_exr(&args.out)?,

@@ -457,8 +457,8 @@ fn a_failed_flush_is_an_error_and_leaves_no_file() {
 }
 
 /// A job that cannot fit is refused before it starts, with the estimate and the limit (before:
-/// `--res 16384x16384` was accepted and needed ~38 GB). On a machine with more memory than the
-/// job needs the refusal would not happen, so the test says so and checks only the estimate.
+/// `--res 16384x16384` was accepted and needed ~38 GB; to an EXR it needs ~46 GiB). On a
+/// machine with more memory than that the refusal would not happen, and the test says so.
 #[test]
 fn jobs_that_cannot_fit_are_refused_up_front() {
     let available_gib = std::fs::read_to_string("/proc/meminfo")
