@@ -5,7 +5,7 @@
 //!
 //! The scan conversion keeps only what the depth test needs per pixel (window depth and a
 //! triangle id, 8 bytes); the attributes of the surviving fragment are interpolated when a
-//! pixel is read ([`SurfaceBuffer::texel`], [`Band::texel`]), so overdraw costs an edge test
+//! pixel is read ([`SurfaceBuffer::texel`], [`Band::texels_x8`]), so overdraw costs an edge test
 //! and a depth compare, never an interpolation. A renderer can run its per-pixel work band by
 //! band right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
 
