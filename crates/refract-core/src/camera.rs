@@ -285,6 +285,20 @@ impl Camera {
     /// of view, aspect 1, looking along [`CubeFace::forward`] with [`CubeFace::up`], mirrored, so
     /// that pixel `(s·size, t·size)` sees the direction that [`CubeFace::of_direction`] (and a
     /// wgpu `texture_cube` lookup) maps to `(face, s, t)`.
+    ///
+    /// # Example
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use refract_core::{Camera, CubeFace};
+    /// let dir = Vec3::new(0.2, -0.3, 1.0);
+    /// let (face, st) = CubeFace::of_direction(dir).expect("a direction");
+    /// assert_eq!(face, CubeFace::PosZ);
+    /// let camera = Camera::cube_face(Vec3::ZERO, face, 128, 0.01, 10.0)?;
+    /// let px = camera.world_to_pixel(dir).expect("in front");
+    /// assert!((px.truncate() - st * 128.0).length() < 1e-3);
+    /// # Ok::<(), refract_core::CameraError>(())
+    /// ```
     pub fn cube_face(
         center: Vec3,
         face: CubeFace,

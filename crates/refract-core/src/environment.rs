@@ -42,6 +42,17 @@ impl Atan2 for Exact {
 /// `u = atan2(d.x, −d.z) / 2π` wrapped to `[0, 1)`, `v = acos(d.y) / π` (`v = 0` straight up),
 /// with `acos(d.y)` evaluated as `atan2(√(d.x² + d.z²), d.y)`, which keeps its digits at the
 /// poles.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::environment::{Exact, direction_to_latlong};
+/// // −z is the map's left edge (u = 0) on the horizon (v = ½); +x a quarter across; +y the top.
+/// assert!((direction_to_latlong::<Exact>(Vec3::NEG_Z) - glam::Vec2::new(0.0, 0.5)).length() < 1e-6);
+/// assert!((direction_to_latlong::<Exact>(Vec3::X).x - 0.25).abs() < 1e-6);
+/// assert!(direction_to_latlong::<Exact>(Vec3::Y).y.abs() < 1e-6);
+/// ```
 #[inline]
 pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
     let u = A::atan2(dir.x, -dir.z) / TAU;
@@ -66,6 +77,17 @@ pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
 /// columns have their centres at half-integers and wrap, `x = u·W − ½`; rows sit on the poles,
 /// `y = v·(H − 1)` (row 0 is the zenith, row `H − 1` the nadir), clamped to `[0, H − 1]`.
 /// `L(d) = bilerp(map, x(u), y(v))`.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::environment::{Polynomial, sample_latlong_bilinear};
+/// // A 2 × 3 map: rows 0 (zenith), 1 (horizon), 2 (nadir) in 0, 1, 2.
+/// let texels = [0.0, 0.0, 1.0, 1.0, 2.0, 2.0].map(Vec3::splat);
+/// let horizon = sample_latlong_bilinear::<Polynomial>(&texels, 2, 3, Vec3::X);
+/// assert!((horizon - Vec3::ONE).length() < 1e-5); // y = v (H − 1) = 1: row 1 exactly
+/// ```
 #[inline]
 pub fn sample_latlong_bilinear<A: Atan2>(
     texels: &[Vec3],

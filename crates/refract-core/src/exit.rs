@@ -36,6 +36,15 @@ pub enum ExitNormalSource {
 /// squared length).
 ///
 /// When `T1 ∥ L` the projection vanishes; the result is then `T1` itself (normal exit).
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::exit::exit_normal_outside_silhouette;
+/// let look = Vec3::NEG_Z;
+/// let t1 = Vec3::new(0.6, 0.0, -0.8);
+/// // T1 with its component along L removed: +x, unit length.
+/// assert!((exit_normal_outside_silhouette(t1, look) - Vec3::X).length() < 1e-6);
+/// ```
 #[inline]
 pub fn exit_normal_outside_silhouette(t1: Vec3, look_dir: Vec3) -> Vec3 {
     (t1 - look_dir.dot(t1) * look_dir)
@@ -60,6 +69,19 @@ pub struct ExitRefraction {
 /// turned with [`face_forward_shading_normal`], the same fix as at the entry point. The
 /// refracted direction is renormalised: with indices far beyond physical ones (`n ≳ 10³`)
 /// `f32` rounding in Snell's formula no longer keeps `|T2| = 1` by itself.
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::exit::{TirPolicy, refract_exit};
+/// // Leaving a slab head-on: straight through.
+/// let straight = refract_exit(Vec3::NEG_Z, Vec3::NEG_Z, 1.5, TirPolicy::ClampToCritical);
+/// assert!(!straight.tir && (straight.t2 - Vec3::NEG_Z).length() < 1e-6);
+/// // 60° inside glass is beyond the critical angle: clamped to leave tangent to the surface.
+/// let t1 = Vec3::new((0.75f32).sqrt(), 0.0, -0.5);
+/// let clamped = refract_exit(t1, Vec3::NEG_Z, 1.5, TirPolicy::ClampToCritical);
+/// assert!(clamped.tir && clamped.t2.z.abs() < 1e-3);
+/// assert_eq!(refract_exit(t1, Vec3::NEG_Z, 1.5, TirPolicy::Black).t2, Vec3::ZERO);
+/// ```
 #[inline]
 pub fn refract_exit(t1: Vec3, n2: Vec3, ior: f32, policy: TirPolicy) -> ExitRefraction {
     let inward = face_forward_shading_normal(-n2, t1);

@@ -12,6 +12,14 @@
 /// and `F = (r_s² + r_p²) / 2`. At normal incidence `F = ((1 − η)/(1 + η))²`.
 ///
 /// `cos_i` is clamped to `[0, 1]`.
+///
+/// ```
+/// // Air to glass at normal incidence: ((1 − 1.5)/(1 + 1.5))² = 0.04.
+/// let r = refract_core::fresnel::fresnel_dielectric(1.0, 1.0 / 1.5);
+/// assert!((r - 0.04).abs() < 1e-6);
+/// // Beyond the critical angle inside glass: everything is reflected.
+/// assert_eq!(refract_core::fresnel::fresnel_dielectric(0.5, 1.5), 1.0);
+/// ```
 #[inline]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     let cos_i = cos_i.clamp(0.0, 1.0);
@@ -34,12 +42,24 @@ pub fn f0_dielectric(eta: f32) -> f32 {
 
 /// Reflectance at normal incidence of a conductor with complex index `n + ik` seen from a medium
 /// of index 1 (Umenhoffer et al. 2007 §17.3): `F_p = ((n − 1)² + k²) / ((n + 1)² + k²)`.
+///
+/// ```
+/// // n = 0.18, k = 3.42 (gold's red channel): ((n − 1)² + k²)/((n + 1)² + k²) ≈ 0.945.
+/// let f0 = refract_core::fresnel::f0_conductor(0.18, 3.42);
+/// assert!((f0 - 0.944_99).abs() < 1e-4);
+/// ```
 #[inline]
 pub fn f0_conductor(n: f32, k: f32) -> f32 {
     ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k)
 }
 
 /// Schlick's approximation, `F = F0 + (1 − F0)(1 − cos θ)⁵`, with `cos θ` clamped to `[0, 1]`.
+///
+/// ```
+/// use refract_core::fresnel::schlick;
+/// assert_eq!(schlick(1.0, 0.04), 0.04); // normal incidence: F0
+/// assert_eq!(schlick(0.0, 0.04), 1.0); // grazing: everything reflects
+/// ```
 #[inline]
 pub fn schlick(cos_theta: f32, f0: f32) -> f32 {
     let m = 1.0 - cos_theta.clamp(0.0, 1.0);

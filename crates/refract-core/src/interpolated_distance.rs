@@ -53,6 +53,15 @@ pub fn angle_ratio(theta_i: f32, theta_t: f32, eta: f32) -> f32 {
 }
 
 /// Wyman 2005a §3.1: `d~ = (θt/θi)·d_V + (1 − θt/θi)·d_N`, with `θt/θi` from [`angle_ratio`].
+///
+/// ```
+/// use refract_core::interpolated_distance::interpolated_distance;
+/// // θt/θi = 0.5: halfway between d_V = 2 and d_N = 1.
+/// assert!((interpolated_distance(0.4, 0.2, 1.0 / 1.5, 2.0, 1.0) - 1.5).abs() < 1e-6);
+/// // Normal incidence: the ratio's limit η = 1/1.5 weighs d_V.
+/// let d = interpolated_distance(0.0, 0.0, 1.0 / 1.5, 2.0, 1.0);
+/// assert!((d - (2.0 / 1.5 + 1.0 / 3.0)).abs() < 1e-6);
+/// ```
 #[inline]
 pub fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f32) -> f32 {
     let w = angle_ratio(theta_i, theta_t, eta);
@@ -77,6 +86,12 @@ pub fn approximate_distance(
 }
 
 /// Wyman 2005a §3.1: the approximate exit point `P~2 = P1 + d~ T1`.
+///
+/// ```
+/// use glam::Vec3;
+/// let p2 = refract_core::interpolated_distance::exit_point(Vec3::Z, Vec3::NEG_Z, 2.0);
+/// assert_eq!(p2, Vec3::NEG_Z);
+/// ```
 #[inline]
 pub fn exit_point(p1: Vec3, t1: Vec3, d_tilde: f32) -> Vec3 {
     p1 + d_tilde * t1

@@ -29,6 +29,43 @@ pub struct BackFaceSample {
 }
 
 /// Reads the back-face buffer (Wyman 2005a §3.2, "BackfaceNormals" and "BackfaceZBuf").
+///
+/// # Example
+///
+/// A sampler over an analytic sphere, driving [`two_interface`]:
+///
+/// ```
+/// use glam::{Vec2, Vec3};
+/// use refract_core::kernel::{BackFaceSample, BackFaceSampler, FrontSurface, ImageSpaceParams};
+/// use refract_core::{Camera, CameraDesc, DistanceMode, TirPolicy};
+///
+/// /// Your renderer's back-face buffer; here the far side of a unit sphere, exactly.
+/// struct SphereBackFaces(Camera);
+///
+/// impl BackFaceSampler for SphereBackFaces {
+///     fn back_face(&self, uv_px: Vec2) -> Option<BackFaceSample> {
+///         let ray = self.0.pixel_ray(uv_px);
+///         let b = ray.origin.dot(ray.dir);
+///         let disc = b * b - (ray.origin.length_squared() - 1.0);
+///         (disc >= 0.0).then(|| {
+///             let t = -b + disc.sqrt();
+///             BackFaceSample { n_ws: ray.at(t), distance: t }
+///         })
+///     }
+/// }
+///
+/// let camera = Camera::new(CameraDesc { width: 64, height: 64, ..CameraDesc::default() })?;
+/// let uv = Camera::pixel_center(40, 32);
+/// // Your rasteriser's front-face buffer at that pixel: P1, N1 and the interpolated d_N.
+/// let ray = camera.pixel_ray(uv);
+/// let b = ray.origin.dot(ray.dir);
+/// let p1 = ray.at(-b - (b * b - (ray.origin.length_squared() - 1.0)).sqrt());
+/// let front = FrontSurface { p1_ws: p1, n1_ws: p1, d_n: 2.0 };
+/// let params = ImageSpaceParams::new(1.5, DistanceMode::Interpolated, TirPolicy::ClampToCritical)?;
+/// let path = refract_core::kernel::two_interface(&camera, uv, &front, &SphereBackFaces(camera), &params)?;
+/// assert!(path.n2_source == refract_core::ExitNormalSource::BackFace);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub trait BackFaceSampler {
     /// The back surface seen through pixel position `uv_px` (pixels, origin top-left, `y` down,
     /// pixel `(x, y)` covering `[x, x+1) × [y, y+1)`), or `None` where the buffer is empty
@@ -177,6 +214,21 @@ fn entry_frame(camera: &Camera, front: &FrontSurface) -> Result<(Vec3, Vec3), De
 ///
 /// `V = normalize(P1 − eye)`. Unnormalised or back-facing normals are normalised and turned
 /// toward the viewer; zero or non-finite ones are reported, never turned into NaN.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::kernel::{FrontSurface, ImageSpaceParams, one_interface};
+/// use refract_core::{Camera, CameraDesc, DistanceMode, TirPolicy};
+/// let camera = Camera::new(CameraDesc::default())?; // eye at (0, 0, 3) looking at the origin
+/// // Looking straight at a surface facing the eye: the ray goes straight on.
+/// let front = FrontSurface { p1_ws: Vec3::new(0.0, 0.0, 1.0), n1_ws: Vec3::Z, d_n: 2.0 };
+/// let params = ImageSpaceParams::new(1.5, DistanceMode::Interpolated, TirPolicy::default())?;
+/// let path = one_interface(&camera, &front, &params)?;
+/// assert!((path.t1 - Vec3::NEG_Z).length() < 1e-6 && !path.tir_entry);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[inline]
 pub fn one_interface(
     camera: &Camera,
@@ -215,6 +267,45 @@ pub fn one_interface(
 /// `uv_px` is the pixel position of `P1` (its pixel centre when rasterised). Every finite input
 /// gives either a path whose vectors are all finite and unit (or `T2 = 0` for
 /// [`TirPolicy::Black`]) or a [`DegenerateInput`].
+///
+/// # Example
+///
+/// On a unit sphere the exact exit distance is `2 cos θt`; `d~` lands within a few percent:
+///
+/// ```
+/// use glam::{Vec2, Vec3};
+/// use refract_core::kernel::{BackFaceSample, BackFaceSampler, FrontSurface, ImageSpaceParams};
+/// use refract_core::{Camera, CameraDesc, DistanceMode, TirPolicy};
+///
+/// /// Your renderer's back-face buffer; here the far side of a unit sphere, exactly.
+/// struct SphereBackFaces(Camera);
+///
+/// impl BackFaceSampler for SphereBackFaces {
+///     fn back_face(&self, uv_px: Vec2) -> Option<BackFaceSample> {
+///         let ray = self.0.pixel_ray(uv_px);
+///         let b = ray.origin.dot(ray.dir);
+///         let disc = b * b - (ray.origin.length_squared() - 1.0);
+///         (disc >= 0.0).then(|| {
+///             let t = -b + disc.sqrt();
+///             BackFaceSample { n_ws: ray.at(t), distance: t }
+///         })
+///     }
+/// }
+///
+/// let camera = Camera::new(CameraDesc { width: 64, height: 64, ..CameraDesc::default() })?;
+/// let uv = Camera::pixel_center(40, 32);
+/// // Your rasteriser's front-face buffer at that pixel: P1, N1 and the interpolated d_N.
+/// let ray = camera.pixel_ray(uv);
+/// let b = ray.origin.dot(ray.dir);
+/// let p1 = ray.at(-b - (b * b - (ray.origin.length_squared() - 1.0)).sqrt());
+/// let front = FrontSurface { p1_ws: p1, n1_ws: p1, d_n: 2.0 };
+/// let params = ImageSpaceParams::new(1.5, DistanceMode::Interpolated, TirPolicy::ClampToCritical)?;
+/// let path = refract_core::kernel::two_interface(&camera, uv, &front, &SphereBackFaces(camera), &params)?;
+/// let theta_t = refract_core::interpolated_distance::transmission_angle(path.entry.t1, path.entry.n1);
+/// assert!((path.d_tilde - 2.0 * theta_t.cos()).abs() < 0.05 * 2.0 * theta_t.cos());
+/// assert!((path.t2.length() - 1.0).abs() < 1e-5 && !path.tir_exit);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn two_interface<S: BackFaceSampler + ?Sized>(
     camera: &Camera,
     uv_px: Vec2,

@@ -15,6 +15,21 @@ use glam::Vec3;
 ///
 /// `incident` and `normal` must be unit length with `normal · incident ≤ 0`; the result is then
 /// unit length (up to rounding). A WGSL twin must use the same form, not the builtin `refract`.
+///
+/// # Example
+///
+/// Snell's law at a glass surface (`η = 1/1.5`), 30° incidence: `sin θt = sin θi / 1.5`.
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::optics::refract;
+/// let incident = Vec3::new(0.5, -(0.75f32).sqrt(), 0.0); // 30° from the normal +y
+/// let t = refract(incident, Vec3::Y, 1.0 / 1.5);
+/// assert!((t.x - 0.5 / 1.5).abs() < 1e-6 && t.y < 0.0 && (t.length() - 1.0).abs() < 1e-6);
+/// // Leaving the glass at 60° is total internal reflection: the zero vector.
+/// let grazing = Vec3::new((0.75f32).sqrt(), -0.5, 0.0);
+/// assert_eq!(refract(grazing, Vec3::Y, 1.5), Vec3::ZERO);
+/// ```
 #[inline]
 pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
     let n_dot_i = normal.dot(incident);
@@ -37,6 +52,12 @@ pub fn is_total_internal_reflection(incident: Vec3, normal: Vec3, eta: f32) -> b
 }
 
 /// Mirror reflection, as WGSL's `reflect`: `R = I − 2 (N·I) N`.
+///
+/// ```
+/// use glam::Vec3;
+/// let r = refract_core::optics::reflect(Vec3::new(1.0, -1.0, 0.0), Vec3::Y);
+/// assert_eq!(r, Vec3::new(1.0, 1.0, 0.0));
+/// ```
 #[inline]
 pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
     incident - 2.0 * normal.dot(incident) * normal
@@ -48,6 +69,13 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
 /// (where `asin` of a number near 1 loses its digits).
 ///
 /// For `η ≤ 1` no incidence angle below grazing is reflected totally, and the result is `π/2`.
+///
+/// ```
+/// // Glass to air: θc = asin(1/1.5) ≈ 41.8°.
+/// let theta_c = refract_core::optics::critical_angle(1.5);
+/// assert!((theta_c.to_degrees() - 41.810_314).abs() < 1e-4);
+/// assert_eq!(refract_core::optics::critical_angle(0.8), core::f32::consts::FRAC_PI_2);
+/// ```
 #[inline]
 pub fn critical_angle(eta: f32) -> f32 {
     if eta <= 1.0 {
@@ -67,6 +95,16 @@ pub const FACE_FORWARD_EPSILON: f32 = 1e-4;
 /// `N` along `I` that is too much and keep the normal just past grazing,
 /// `N' = normalize(N − (N·I + ε) I)` with `ε = 1e-4`, so that `N' · I = −ε/‖…‖ < 0`.
 /// Normals already facing the incident side are returned unchanged.
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::optics::face_forward_shading_normal;
+/// let incident = Vec3::NEG_Y;
+/// // Facing the viewer already: unchanged. Facing away: turned just past grazing.
+/// assert_eq!(face_forward_shading_normal(Vec3::Y, incident), Vec3::Y);
+/// let turned = face_forward_shading_normal(Vec3::new(0.6, -0.8, 0.0), incident);
+/// assert!(turned.dot(incident) < 0.0 && (turned.length() - 1.0).abs() < 1e-6);
+/// ```
 #[inline]
 pub fn face_forward_shading_normal(normal: Vec3, incident: Vec3) -> Vec3 {
     let n_dot_i = normal.dot(incident);

@@ -28,6 +28,18 @@ const STRIPE_HUES: [Vec3; 4] = [
 ///   warm sun disc.
 /// - Ground (`d.y < 0`): a black-and-white checkerboard on the plane `y = −1` (squares of 0.5),
 ///   fading into the horizon colour far away so that it does not alias.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::environment::Exact;
+/// use refract_core::procedural_sky::procedural_radiance;
+/// let zenith = procedural_radiance::<Exact>(Vec3::Y);
+/// assert!(zenith.z > zenith.x); // a blue sky
+/// let ground = procedural_radiance::<Exact>(Vec3::new(0.1, -1.0, 0.2).normalize());
+/// assert!(ground.x == ground.y && ground.y == ground.z); // a grey checkerboard
+/// ```
 pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
     if dir.y >= 0.0 {
         let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());

@@ -17,6 +17,16 @@ pub const UNIT_TOLERANCE: f32 = 10.0 * f32::EPSILON;
 /// length overflows or underflows `f32` (components above ~1.8e19 or below ~1e-15) are still
 /// normalised: `v` is first scaled by its largest absolute component,
 /// `v̂ = (v / max|vᵢ|) / ‖v / max|vᵢ|‖`.
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::vector::robust_normalize;
+/// assert_eq!(robust_normalize(Vec3::new(0.0, 3.0, 4.0)), Some(Vec3::new(0.0, 0.6, 0.8)));
+/// assert_eq!(robust_normalize(Vec3::ZERO), None);
+/// // Components near f32::MAX: length² overflows, the direction does not.
+/// let huge = robust_normalize(Vec3::splat(f32::MAX)).expect("finite");
+/// assert!((huge.length() - 1.0).abs() < 1e-6);
+/// ```
 #[inline]
 pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
     let length_squared = v.length_squared();
@@ -44,6 +54,12 @@ fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {
 ///
 /// Well conditioned everywhere, unlike `acos(a · b)`, which loses most of its digits near 0 and
 /// π. Wyman 2005a §3.1 needs `θt/θi` near normal incidence, where `acos` would be useless.
+///
+/// ```
+/// use glam::Vec3;
+/// let a = refract_core::vector::angle_between(Vec3::X, Vec3::new(1.0, 1e-4, 0.0));
+/// assert!((a - 1e-4).abs() < 1e-9); // small angles keep their digits (acos would not)
+/// ```
 #[inline]
 pub fn angle_between(a: Vec3, b: Vec3) -> f32 {
     atan2(a.cross(b).length(), a.dot(b))
