@@ -17,6 +17,7 @@
 //! * [`procedural_sky`]: the built-in procedural environment, scalar and eight lanes.
 //! * [`gpu`]: the `#[repr(C)]` uniform block and enum codes shared with the WGSL twin.
 //! * [`vector`]: robust normalisation and well-conditioned angles.
+//! * [`wgsl`]: the WGSL twin of these functions, to prepend to your own shaders.
 //!
 //! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
 //! directions point *toward* the surface; normals point *outward* from the refractor;
@@ -39,6 +40,7 @@ pub mod lanes;
 pub mod optics;
 pub mod procedural_sky;
 pub mod vector;
+pub mod wgsl;
 
 pub use back_surface::BackSurface;
 pub use camera::{Camera, CameraDesc, CameraError, CubeFace, Ray};

@@ -3,13 +3,11 @@
 
 use refract_core::gpu::wgsl_constants;
 
-/// Every `.wgsl` file of `shaders/`, by name.
+/// Every `.wgsl` file, by name: the core twin from `refract_core::wgsl`, the passes and
+/// methods from `shaders/`.
 pub const FILES: [(&str, &str); 7] = [
-    ("core.wgsl", include_str!("../../../shaders/core.wgsl")),
-    (
-        "procedural_sky.wgsl",
-        include_str!("../../../shaders/procedural_sky.wgsl"),
-    ),
+    ("core.wgsl", refract_core::wgsl::CORE),
+    ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY),
     ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
     (
         "environment.wgsl",

@@ -28,13 +28,17 @@ fn every_module_parses_and_validates() {
 
 #[test]
 fn every_wgsl_file_is_in_a_validated_module() {
-    let on_disk: Vec<String> =
-        std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders"))
-            .expect("shaders/")
-            .flatten()
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| n.ends_with(".wgsl"))
-            .collect();
+    let dirs = [
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../refract-core/wgsl"),
+    ];
+    let on_disk: Vec<String> = dirs
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).expect("a shader directory"))
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".wgsl"))
+        .collect();
     for file in &on_disk {
         assert!(
             FILES.iter().any(|(name, _)| name == file),

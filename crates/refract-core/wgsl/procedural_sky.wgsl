@@ -1,7 +1,7 @@
-// The procedural default environment of refract-trace in WGSL (no bindings): the twin of
-// refract_trace::environment::procedural_radiance.
+// The procedural default environment in WGSL (no bindings): the twin of
+// refract_core::procedural_sky::procedural_radiance (with the GPU's built-in atan2).
 
-// environment.rs: procedural_radiance.
+// procedural_sky.rs: procedural_radiance.
 fn procedural_radiance(dir: vec3<f32>) -> vec3<f32> {
     let horizon = vec3<f32>(0.85, 0.88, 0.92);
     let zenith = vec3<f32>(0.12, 0.3, 0.75);
