@@ -123,3 +123,61 @@ fn the_reference_uses_exact_math_only() {
         "the tracer looks the environment up exactly"
     );
 }
+
+/// refract-core builds without std (`--no-default-features --features libm`): the crate is
+/// `#![no_std]` then, so any `std::` that creeps back fails this build. When the
+/// `thumbv7em-none-eabihf` target is installed (`rustup target add thumbv7em-none-eabihf`) it
+/// is also built for that target, which has no std at all.
+#[test]
+fn the_core_builds_without_std() {
+    let root = refract_tests::workspace_root();
+    let target_dir = root.join("target/no-std-check");
+    let build = |target: Option<&str>| {
+        let mut command = Command::new(env!("CARGO"));
+        command
+            .args([
+                "build",
+                "--offline",
+                "-p",
+                "refract-core",
+                "--no-default-features",
+                "--features",
+                "libm",
+            ])
+            .arg("--target-dir")
+            .arg(&target_dir)
+            .current_dir(&root);
+        if let Some(target) = target {
+            command.args(["--target", target]);
+        }
+        let output = command.output().expect("cargo build");
+        assert!(
+            output.status.success(),
+            "refract-core without std ({target:?}):\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    };
+    build(None);
+    // Installed when the target's sysroot has its `libcore`.
+    let installed = Command::new("rustc")
+        .args([
+            "--print",
+            "target-libdir",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ])
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .and_then(|dir| std::fs::read_dir(dir.trim()).ok())
+        .is_some_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.file_name().to_string_lossy().starts_with("libcore"))
+        });
+    if installed {
+        build(Some("thumbv7em-none-eabihf"));
+    } else {
+        println!("note: thumbv7em-none-eabihf is not installed; built for the host without std");
+    }
+}

@@ -208,7 +208,7 @@ impl fmt::Display for CameraError {
     }
 }
 
-impl std::error::Error for CameraError {}
+impl core::error::Error for CameraError {}
 
 /// A validated pinhole camera with its matrices precomputed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -260,7 +260,7 @@ impl Camera {
         let view_to_clip = Mat4::from_scale(Vec3::new(mirror, 1.0, 1.0))
             * perspective(desc.fov_y, aspect, desc.near, desc.far);
         let world_to_clip = view_to_clip * world_to_view;
-        let tan_half_fov_y = (0.5 * desc.fov_y).tan();
+        let tan_half_fov_y = crate::math::tan(0.5 * desc.fov_y);
         Ok(Self {
             desc,
             world_to_view,

@@ -34,7 +34,7 @@ pub struct Exact;
 impl Atan2 for Exact {
     #[inline]
     fn atan2(y: f32, x: f32) -> f32 {
-        y.atan2(x)
+        crate::math::atan2(y, x)
     }
 }
 
@@ -59,7 +59,7 @@ pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
     let u = if u < 0.0 { u + 1.0 } else { u };
     // `u + 1` can round to exactly 1 for tiny negative u.
     let u = if u >= 1.0 { 0.0 } else { u };
-    let theta = A::atan2((dir.x * dir.x + dir.z * dir.z).sqrt(), dir.y);
+    let theta = A::atan2(crate::math::sqrt(dir.x * dir.x + dir.z * dir.z), dir.y);
     Vec2::new(u, theta / PI)
 }
 
@@ -67,8 +67,8 @@ pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
 /// `θ = π v`, `φ = 2π u`, `d = (sin θ sin φ, cos θ, −sin θ cos φ)`.
 #[inline]
 pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
-    let (sin_theta, cos_theta) = (PI * uv.y).sin_cos();
-    let (sin_phi, cos_phi) = (TAU * uv.x).sin_cos();
+    let (sin_theta, cos_theta) = crate::math::sin_cos(PI * uv.y);
+    let (sin_phi, cos_phi) = crate::math::sin_cos(TAU * uv.x);
     Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
 }
 
@@ -98,7 +98,7 @@ pub fn sample_latlong_bilinear<A: Atan2>(
     let uv = direction_to_latlong::<A>(dir);
     let x = uv.x * width as f32 - 0.5;
     let y = (uv.y * (height - 1) as f32).clamp(0.0, (height - 1) as f32);
-    let (x0, y0) = (x.floor(), y.floor());
+    let (x0, y0) = (crate::math::floor(x), crate::math::floor(y));
     let (fx, fy) = (x - x0, y - y0);
     let w = i64::from(width);
     let wrap = |x: i64| x.rem_euclid(w) as usize;

@@ -27,7 +27,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     if sin2_t >= 1.0 {
         return 1.0;
     }
-    let cos_t = (1.0 - sin2_t).sqrt();
+    let cos_t = crate::math::sqrt(1.0 - sin2_t);
     let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     (0.5 * (r_s * r_s + r_p * r_p)).clamp(0.0, 1.0)
@@ -89,7 +89,7 @@ pub fn schlick_dielectric(cos_i: f32, eta: f32) -> f32 {
     if sin2_t >= 1.0 {
         return 1.0;
     }
-    schlick((1.0 - sin2_t).sqrt(), f0)
+    schlick(crate::math::sqrt(1.0 - sin2_t), f0)
 }
 
 /// Schlick's approximation for a conductor, `F = F_p + (1 − F_p)(1 − cos θ)⁵` with `F_p` from

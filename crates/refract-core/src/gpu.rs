@@ -3,6 +3,9 @@
 //! from [`wgsl_constants`], and its tests compare [`FrameUniforms`]' offsets with the WGSL
 //! struct's (as naga lays it out).
 
+use alloc::format;
+use alloc::string::String;
+
 use bytemuck::{Pod, Zeroable};
 
 use crate::exit::{ExitNormalSource, TirPolicy};

@@ -98,7 +98,7 @@ impl fmt::Display for InvalidIor {
     }
 }
 
-impl std::error::Error for InvalidIor {}
+impl core::error::Error for InvalidIor {}
 
 /// Parameters of the image-space methods.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,7 +162,7 @@ impl fmt::Display for DegenerateInput {
     }
 }
 
-impl std::error::Error for DegenerateInput {}
+impl core::error::Error for DegenerateInput {}
 
 /// The result of [`one_interface`] (method `single`, Wyman 2005a Table 1 "1-sided").
 #[derive(Clone, Copy, Debug, PartialEq)]

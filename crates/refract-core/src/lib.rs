@@ -24,7 +24,18 @@
 //! `eta = n_i / n_t`; `refract` returns the zero vector on total internal reflection (TIR),
 //! exactly like WGSL's and glam's `refract`.
 //!
-//! The crate has no I/O, no threads, no GPU and allocates nothing.
+//! The crate has no I/O, no threads, no GPU and allocates nothing in its per-pixel paths. It is
+//! `#![no_std]` (with `alloc`, for the WGSL constant header) without its default `std`
+//! feature: `--no-default-features --features libm` takes the `f32` math from the `libm`
+//! crate, e.g. for embedded or `rust-gpu` targets (`tests/tests/dependency_rule.rs` builds it
+//! so, for `thumbv7em-none-eabihf` when that target is installed).
+
+#![cfg_attr(not(feature = "std"), no_std)]
+
+extern crate alloc;
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("refract-core needs its `std` feature (the default) or, without std, `libm`");
 
 pub mod arctangent;
 pub mod back_surface;
@@ -37,6 +48,7 @@ pub mod interpolated_distance;
 pub mod kernel;
 pub mod kernel_x8;
 pub mod lanes;
+mod math;
 pub mod optics;
 pub mod procedural_sky;
 pub mod vector;

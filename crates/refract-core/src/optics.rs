@@ -38,7 +38,7 @@ pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
     if k < 0.0 {
         Vec3::ZERO
     } else {
-        eta * incident - (eta * n_dot_i + k.sqrt()) * normal
+        eta * incident - (eta * n_dot_i + crate::math::sqrt(k)) * normal
     }
 }
 
@@ -81,7 +81,7 @@ pub fn critical_angle(eta: f32) -> f32 {
     if eta <= 1.0 {
         core::f32::consts::FRAC_PI_2
     } else {
-        1.0f32.atan2(((eta - 1.0) * (eta + 1.0)).sqrt())
+        crate::math::atan2(1.0, crate::math::sqrt((eta - 1.0) * (eta + 1.0)))
     }
 }
 

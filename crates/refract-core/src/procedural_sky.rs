@@ -42,12 +42,12 @@ const STRIPE_HUES: [Vec3; 4] = [
 /// ```
 pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
     if dir.y >= 0.0 {
-        let mut sky = HORIZON.lerp(ZENITH, dir.y.sqrt());
+        let mut sky = HORIZON.lerp(ZENITH, crate::math::sqrt(dir.y));
         // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
         // wraps it (the same number as `rem_euclid(12)`, without a call to fmodf).
         let signed = A::atan2(dir.x, -dir.z) * (6.0 / core::f32::consts::PI);
         let stripe = if signed < 0.0 { signed + 12.0 } else { signed };
-        let nearest = (stripe + 0.5).floor(); // stripe ≥ 0: rounds halves up, as `round` does
+        let nearest = crate::math::floor(stripe + 0.5); // stripe ≥ 0: rounds halves up, as `round` does
         // Meridians converge at the zenith: stop them below it.
         if (stripe - nearest).abs() < 0.06 && dir.y < 0.85 {
             sky = STRIPE_HUES[(nearest as usize) % 4];
@@ -59,8 +59,8 @@ pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
     } else {
         let p = dir * (-dir.y).recip(); // hit on the plane y = −1
         // Parity of an integer-valued float, a − 2⌊a/2⌋ (exact; equal to `rem_euclid(2)`).
-        let cells = (p.x * 2.0).floor() + (p.z * 2.0).floor();
-        let check = cells - 2.0 * (cells * 0.5).floor();
+        let cells = crate::math::floor(p.x * 2.0) + crate::math::floor(p.z * 2.0);
+        let check = cells - 2.0 * crate::math::floor(cells * 0.5);
         let tile = if check < 1.0 {
             Vec3::splat(0.9)
         } else {

@@ -35,7 +35,7 @@ pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
     }
     // Also false for NaN. Below 1e-30 the squares of small components would lose digits.
     if (1e-30..=f32::MAX).contains(&length_squared) {
-        return Some(v * length_squared.sqrt().recip());
+        return Some(v * crate::math::sqrt(length_squared).recip());
     }
     robust_normalize_scaled(v)
 }

@@ -25,6 +25,9 @@
 //! sources). In wgpu: `ShaderSource::Wgsl(format!("{}{your_source}", library()).into())`; in
 //! Bevy, register the same string as a shader asset and `#import` nothing: prepend it.
 
+use alloc::format;
+use alloc::string::String;
+
 /// The core functions (`wgsl/core.wgsl`): vectors, optics, Fresnel, `d~`, exit normals.
 pub const CORE: &str = include_str!("../wgsl/core.wgsl");
 

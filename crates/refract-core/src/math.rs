@@ -1,0 +1,53 @@
+//! The `f32` functions core's `f32` lacks, from std or, without it, from the `libm` crate (the
+//! same IEEE results for `sqrt` and `floor`; the transcendental ones may differ by an ulp from
+//! the platform's libm).
+
+#[cfg(feature = "std")]
+mod imp {
+    #[inline]
+    pub fn sqrt(x: f32) -> f32 {
+        x.sqrt()
+    }
+    #[inline]
+    pub fn floor(x: f32) -> f32 {
+        x.floor()
+    }
+    #[inline]
+    pub fn tan(x: f32) -> f32 {
+        x.tan()
+    }
+    #[inline]
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        x.sin_cos()
+    }
+    #[inline]
+    pub fn atan2(y: f32, x: f32) -> f32 {
+        y.atan2(x)
+    }
+}
+
+#[cfg(not(feature = "std"))]
+mod imp {
+    #[inline]
+    pub fn sqrt(x: f32) -> f32 {
+        libm::sqrtf(x)
+    }
+    #[inline]
+    pub fn floor(x: f32) -> f32 {
+        libm::floorf(x)
+    }
+    #[inline]
+    pub fn tan(x: f32) -> f32 {
+        libm::tanf(x)
+    }
+    #[inline]
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        libm::sincosf(x)
+    }
+    #[inline]
+    pub fn atan2(y: f32, x: f32) -> f32 {
+        libm::atan2f(y, x)
+    }
+}
+
+pub(crate) use imp::{atan2, floor, sin_cos, sqrt, tan};
