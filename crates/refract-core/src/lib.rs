@@ -19,6 +19,10 @@
 //! * [`vector`]: robust normalisation and well-conditioned angles.
 //! * [`wgsl`]: the WGSL twin of these functions, to prepend to your own shaders.
 //!
+//! Public on purpose and stable: `optics`, `fresnel`, `interpolated_distance`, `exit`, `kernel`,
+//! `camera`, `environment`, `procedural_sky`, `back_surface`, `vector`, `wgsl`. Public for the
+//! refract backends and subject to change: `kernel_x8`, `lanes`, `arctangent`, `gpu`.
+//!
 //! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
 //! directions point *toward* the surface; normals point *outward* from the refractor;
 //! `eta = n_i / n_t`; `refract` returns the zero vector on total internal reflection (TIR),
