@@ -110,6 +110,26 @@ fn entry(camera: &Camera, p1: Vec3x8, n1: Vec3x8, eta: F32x8) -> Entry {
 }
 
 /// [`one_interface`] for eight pixels: lane `i` is `one_interface(camera, &front[i], params)`.
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::kernel::{FrontSurface, ImageSpaceParams, one_interface};
+/// use refract_core::kernel_x8::one_interface_x8;
+/// use refract_core::{Camera, CameraDesc, DistanceMode, TirPolicy};
+/// let camera = Camera::new(CameraDesc::default())?;
+/// let params = ImageSpaceParams::new(1.33, DistanceMode::Interpolated, TirPolicy::default())?;
+/// let front: [FrontSurface; 8] = core::array::from_fn(|i| FrontSurface {
+///     p1_ws: Vec3::new(0.1 * i as f32, 0.0, 1.0),
+///     n1_ws: Vec3::new(0.05 * i as f32, 0.0, 1.0),
+///     d_n: 1.0,
+/// });
+/// let lanes = one_interface_x8(&camera, &front, &params);
+/// for (lane, surface) in lanes.iter().zip(&front) {
+///     let scalar = one_interface(&camera, surface, &params);
+///     assert_eq!(format!("{lane:?}"), format!("{scalar:?}"));
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn one_interface_x8(
     camera: &Camera,
     front: &[FrontSurface; LANES],
@@ -258,6 +278,47 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
 
 /// [`two_interface`] for eight pixels: lane `i` is
 /// `two_interface(camera, uv_px[i], &front[i], back, params)`, bit for bit.
+///
+/// # Example
+///
+/// Eight pixels of a slab facing the camera, each lane bit for bit the scalar kernel's:
+///
+/// ```
+/// use glam::{Vec2, Vec3};
+/// use refract_core::kernel::{
+///     BackFaceSample, BackFaceSampler, FrontSurface, ImageSpaceParams, two_interface,
+/// };
+/// use refract_core::kernel_x8::two_interface_x8;
+/// use refract_core::{Camera, CameraDesc, DistanceMode, TirPolicy};
+///
+/// /// The slab's back face, the plane z = −0.2, seen through every pixel.
+/// struct SlabBack(Camera);
+/// impl BackFaceSampler for SlabBack {
+///     fn back_face(&self, uv_px: Vec2) -> Option<BackFaceSample> {
+///         let ray = self.0.pixel_ray(uv_px);
+///         let t = (-0.2 - ray.origin.z) / ray.dir.z;
+///         Some(BackFaceSample { n_ws: Vec3::NEG_Z, distance: t })
+///     }
+/// }
+///
+/// let camera = Camera::new(CameraDesc { width: 16, height: 16, ..CameraDesc::default() })?;
+/// let params = ImageSpaceParams::new(1.5, DistanceMode::Interpolated, TirPolicy::default())?;
+/// let uv: [Vec2; 8] = core::array::from_fn(|i| Camera::pixel_center(4 + i as u32, 8));
+/// let front: [FrontSurface; 8] = core::array::from_fn(|i| {
+///     let ray = camera.pixel_ray(uv[i]);
+///     let t = (0.2 - ray.origin.z) / ray.dir.z; // the front face, z = 0.2
+///     FrontSurface { p1_ws: ray.at(t), n1_ws: Vec3::Z, d_n: 0.4 }
+/// });
+/// let back = SlabBack(camera);
+/// let lanes = two_interface_x8(&camera, &uv, &front, &back, &params);
+/// for i in 0..8 {
+///     let scalar = two_interface(&camera, uv[i], &front[i], &back, &params)?;
+///     assert_eq!(format!("{:?}", lanes[i]), format!("{:?}", Ok::<_, ()>(scalar)));
+///     // Parallel faces: the ray leaves in the direction it came.
+///     assert!((scalar.t2 - camera.pixel_ray(uv[i]).dir).length() < 1e-5);
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     camera: &Camera,
     uv_px: &[Vec2; LANES],
