@@ -55,6 +55,13 @@ where
 /// The angle of the point `(x, y)` from the positive `x` axis, in `[−π, π]`, like
 /// [`f32::atan2`]: `atan2(±0, x ≥ +0) = ±0`, `atan2(±0, x ≤ −0) = ±π`, NaN in, NaN out.
 /// Meant for finite arguments (two infinities give NaN, where libm gives a multiple of π/4).
+///
+/// # Example
+///
+/// ```
+/// let a = refract_core::arctangent::atan2(1.0, -1.0);
+/// assert!((a - 3.0 * core::f32::consts::FRAC_PI_4).abs() < 1e-6);
+/// ```
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());

@@ -65,6 +65,15 @@ pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
 
 /// The unit direction of lat-long coordinates, the inverse of [`direction_to_latlong`]:
 /// `θ = π v`, `φ = 2π u`, `d = (sin θ sin φ, cos θ, −sin θ cos φ)`.
+///
+/// # Example
+///
+/// ```
+/// use glam::{Vec2, Vec3};
+/// use refract_core::environment::latlong_to_direction;
+/// assert!((latlong_to_direction(Vec2::new(0.25, 0.5)) - Vec3::X).length() < 1e-6);
+/// assert!((latlong_to_direction(Vec2::new(0.0, 0.0)) - Vec3::Y).length() < 1e-6);
+/// ```
 #[inline]
 pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
     let (sin_theta, cos_theta) = crate::math::sin_cos(PI * uv.y);

@@ -25,12 +25,29 @@ pub enum DistanceMode {
 }
 
 /// Incidence angle `θi`, between `−V` and `N1` (Wyman 2005a §2), in `[0, π]`.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// let theta_i = refract_core::interpolated_distance::incidence_angle(Vec3::NEG_Z, Vec3::Z);
+/// assert_eq!(theta_i, 0.0); // looking straight at the surface
+/// ```
 #[inline]
 pub fn incidence_angle(view: Vec3, n1: Vec3) -> f32 {
     angle_between(-view, n1)
 }
 
 /// Transmission angle `θt`, between `T1` and `−N1` (Wyman 2005a §2), in `[0, π]`.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// let t1 = Vec3::new(0.6, 0.0, -0.8);
+/// let theta_t = refract_core::interpolated_distance::transmission_angle(t1, Vec3::Z);
+/// assert!((theta_t - 0.6f32.asin()).abs() < 1e-6);
+/// ```
 #[inline]
 pub fn transmission_angle(t1: Vec3, n1: Vec3) -> f32 {
     angle_between(t1, -n1)
@@ -42,6 +59,14 @@ pub fn transmission_angle(t1: Vec3, n1: Vec3) -> f32 {
 /// For a refractor denser than its surroundings (`η < 1`) the ratio lies in `(0, η]` and the
 /// clamp never acts; it keeps `d~` between `d_V` and `d_N` when `η > 1` (our departure from the
 /// paper, which only considers `n_t > n_i`; see `docs/methods.md`).
+///
+/// # Example
+///
+/// ```
+/// use refract_core::interpolated_distance::angle_ratio;
+/// assert_eq!(angle_ratio(0.4, 0.2, 1.0 / 1.5), 0.5);
+/// assert_eq!(angle_ratio(0.0, 0.0, 1.0 / 1.5), 1.0 / 1.5); // the limit at normal incidence
+/// ```
 #[inline]
 pub fn angle_ratio(theta_i: f32, theta_t: f32, eta: f32) -> f32 {
     let ratio = if theta_i > NORMAL_INCIDENCE_ANGLE {
@@ -69,6 +94,17 @@ pub fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n
 }
 
 /// `d~` for a [`DistanceMode`]: the interpolation, or one of its ablations.
+///
+/// # Example
+///
+/// ```
+/// use refract_core::DistanceMode;
+/// use refract_core::interpolated_distance::approximate_distance;
+/// let (theta_i, theta_t, eta, d_v, d_n) = (0.4, 0.2, 1.0 / 1.5, 2.0, 1.0);
+/// assert_eq!(approximate_distance(DistanceMode::ViewOnly, theta_i, theta_t, eta, d_v, d_n), 2.0);
+/// assert_eq!(approximate_distance(DistanceMode::NormalOnly, theta_i, theta_t, eta, d_v, d_n), 1.0);
+/// assert_eq!(approximate_distance(DistanceMode::Interpolated, theta_i, theta_t, eta, d_v, d_n), 1.5);
+/// ```
 #[inline]
 pub fn approximate_distance(
     mode: DistanceMode,

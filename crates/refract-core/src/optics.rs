@@ -44,6 +44,16 @@ pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
 
 /// True when [`refract`] reports total internal reflection: `η² (1 − (N·I)²) > 1`, i.e.
 /// `η sin θi > 1`.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::optics::is_total_internal_reflection;
+/// let at_60_degrees = Vec3::new((0.75f32).sqrt(), -0.5, 0.0);
+/// assert!(is_total_internal_reflection(at_60_degrees, Vec3::Y, 1.5)); // glass to air
+/// assert!(!is_total_internal_reflection(at_60_degrees, Vec3::Y, 1.0 / 1.5)); // air to glass
+/// ```
 #[inline]
 pub fn is_total_internal_reflection(incident: Vec3, normal: Vec3, eta: f32) -> bool {
     let n_dot_i = normal.dot(incident);

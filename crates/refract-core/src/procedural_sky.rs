@@ -73,6 +73,20 @@ pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
 
 /// [`procedural_radiance`] with the polynomial `atan2` for eight directions at once: both branches evaluated and selected
 /// per lane, with the same operations, so each lane has the scalar function's bits.
+///
+/// # Example
+///
+/// ```
+/// use glam::Vec3;
+/// use refract_core::environment::Polynomial;
+/// use refract_core::lanes::Vec3x8;
+/// use refract_core::procedural_sky::{procedural_radiance, procedural_radiance_x8};
+/// let dirs: [Vec3; 8] = core::array::from_fn(|i| Vec3::new(0.3 * i as f32 - 1.0, 0.4 - 0.1 * i as f32, -1.0).normalize());
+/// let lanes = procedural_radiance_x8(Vec3x8::from_lanes(&dirs)).to_lanes();
+/// for (lane, d) in lanes.iter().zip(dirs) {
+///     assert_eq!(lane.to_array(), procedural_radiance::<Polynomial>(d).to_array());
+/// }
+/// ```
 pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
     // Neighbouring pixels mostly see the same half: only the halves some lane needs are
     // evaluated.
