@@ -94,3 +94,19 @@ fn test_procedural_sky(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= arrayLength(&out_v) { return; }
     out_v[i] = vec4<f32>(procedural_radiance(in_a[i].xyz), 0.0);
 }
+
+// a = plane (n, d), b = (dir, _), origin 0 -> (plane_intersect, _, _)
+@compute @workgroup_size(64)
+fn test_plane(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(plane_intersect(in_a[i], vec3<f32>(0.0), in_b[i].xyz), 0.0, 0.0);
+}
+
+// a = (s, w0, w1, _) -> (screen_fraction_to_segment, _, _, _)
+@compute @workgroup_size(64)
+fn test_seed_fraction(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(screen_fraction_to_segment(in_a[i].x, in_a[i].y, in_a[i].z), 0.0, 0.0, 0.0);
+}

@@ -132,33 +132,39 @@ fn shade_single(@builtin(global_invocation_id) id: vec3<u32>) {
     write_aovs(px.index, vec4<f32>(entry.t1, select(0.0, 1.0, entry.tir)), vec4<f32>(0.0), vec4<f32>(0.0));
 }
 
-// Methods `wyman`, `wyman-dv`, `wyman-dn` (kernel.rs: two_interface): the environment along T2.
-@compute @workgroup_size(8, 8)
-fn shade_two_interface(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.width || id.y >= frame.height {
-        return;
-    }
-    let px = front_pixel(id);
-    let i = px.index;
-    if !px.covered {
-        write_background(px);
-        return;
-    }
+// The two-interface path of a covered pixel (kernel.rs: two_interface), shared by the
+// `wyman` family and the nearby-geometry methods. `t2` is zero when the TIR policy absorbed the
+// ray; a TIR at the entry gives P~2 = P1, N2 = N1 and the reflected T1.
+struct TwoPath {
+    valid: bool,
+    p2: vec3<f32>,
+    t2: vec3<f32>,
+    n2: vec3<f32>,
+    source: u32,
+    tir: bool,
+}
+
+fn two_interface_path(px: FrontPixel) -> TwoPath {
+    var path: TwoPath;
+    path.valid = false;
     let entry = one_interface(px.p1, px.n1);
     if !entry.valid || !(px.d_n >= 0.0 && px.d_n <= F32_MAX) {
-        write_degenerate(i);
-        return;
+        return path;
     }
     let p1 = px.p1;
     let t1 = entry.t1;
+    if entry.tir {
+        path.valid = true;
+        path.p2 = p1;
+        path.t2 = t1;
+        path.n2 = entry.n1;
+        path.source = EXIT_NORMAL_FALLBACK;
+        path.tir = true;
+        return path;
+    }
     let back = back_face(px.uv);
     let d_v = back.w - length(p1 - frame.eye.xyz);
     let has_d_v = back.w >= 0.0 && d_v >= 0.0 && d_v <= F32_MAX;
-    if entry.tir {
-        out_color[i] = vec4<f32>(environment_radiance(t1), f32(COVERAGE_PATH));
-        write_aovs(i, vec4<f32>(t1, 1.0), vec4<f32>(p1, f32(EXIT_NORMAL_FALLBACK)), vec4<f32>(entry.n1, 1.0));
-        return;
-    }
     let eta_in = 1.0 / frame.ior;
     let theta_i = angle_between(-entry.view, entry.n1);
     let theta_t = angle_between(t1, -entry.n1);
@@ -180,13 +186,43 @@ fn shade_two_interface(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let exit = refract_exit(t1, n2, frame.ior, frame.tir_policy);
     if !(is_finite3(p2) && abs(d_tilde) <= F32_MAX && is_finite3(exit.xyz)) {
+        return path;
+    }
+    path.valid = true;
+    path.p2 = p2;
+    path.t2 = exit.xyz;
+    path.n2 = n2;
+    path.source = source;
+    path.tir = exit.w > 0.5;
+    return path;
+}
+
+// The AOVs of a two-interface path: T2 (w: TIR), P~2 (w: exit-normal code), N2 (w: valid).
+fn write_path_aovs(i: u32, path: TwoPath) {
+    write_aovs(i, vec4<f32>(path.t2, select(0.0, 1.0, path.tir)), vec4<f32>(path.p2, f32(path.source)), vec4<f32>(path.n2, 1.0));
+}
+
+// Methods `wyman`, `wyman-dv`, `wyman-dn` (kernel.rs: two_interface): the environment along T2.
+@compute @workgroup_size(8, 8)
+fn shade_two_interface(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.width || id.y >= frame.height {
+        return;
+    }
+    let px = front_pixel(id);
+    let i = px.index;
+    if !px.covered {
+        write_background(px);
+        return;
+    }
+    let path = two_interface_path(px);
+    if !path.valid {
         write_degenerate(i);
         return;
     }
     var color = vec3<f32>(0.0);
-    if any(exit.xyz != vec3<f32>(0.0)) {
-        color = environment_radiance(exit.xyz);
+    if any(path.t2 != vec3<f32>(0.0)) {
+        color = environment_radiance(path.t2);
     }
     out_color[i] = vec4<f32>(color, f32(COVERAGE_PATH));
-    write_aovs(i, vec4<f32>(exit.xyz, select(0.0, 1.0, exit.w > 0.5)), vec4<f32>(p2, f32(source)), vec4<f32>(n2, 1.0));
+    write_path_aovs(i, path);
 }

@@ -91,6 +91,7 @@ fn method_params(args: &RenderArgs) -> anyhow::Result<MethodParams> {
             settings.spp = args.spp;
         }
         MethodParams::TwoInterface(p) => p.tir = args.tir.into(),
+        MethodParams::NearbyGeometry(p) => p.two.tir = args.tir.into(),
         MethodParams::Single => {}
     }
     for assignment in &args.params {

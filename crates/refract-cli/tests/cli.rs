@@ -46,8 +46,8 @@ fn compare_writes_metrics_images_and_reports() {
     }
     assert_eq!(
         records.len(),
-        2 * (1 + 4 * backends.len()),
-        "reference + 4 methods per backend per scene"
+        2 * (1 + 8 * backends.len()),
+        "reference + 8 methods per backend per scene"
     );
     let fields = [
         "scene",
@@ -159,7 +159,13 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
             "reference",
         ),
         (
-            &["compare", "sphere", "--param", "seeds=7", "--res", "8"],
+            &["compare", "sphere", "--param", "secant=7", "--res", "8"],
+            "secant",
+        ),
+        (
+            &[
+                "compare", "sphere", "--methods", "wyman", "--param", "seeds=7", "--res", "8",
+            ],
             "seeds",
         ),
         (

@@ -10,6 +10,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::exit::{ExitNormalSource, TirPolicy};
 use crate::interpolated_distance::{DistanceMode, NORMAL_INCIDENCE_ANGLE};
+use crate::nearby_geometry::{MAX_PLANES, NearbyLookup, SeedSpacing};
 use crate::optics::FACE_FORWARD_EPSILON;
 use crate::vector::UNIT_TOLERANCE;
 
@@ -50,6 +51,62 @@ pub struct FrameUniforms {
     pub environment_intensity: f32,
     /// Padding to a multiple of 16 bytes.
     pub _padding: [u32; 2],
+}
+
+/// Uniforms of the nearby-geometry pass (`shaders/nearby_geometry.wgsl`,
+/// `struct NearbyUniforms`): the NG camera, the light of the opaque objects, the planes of the
+/// ray-plane lookup and the lookup's counts.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct NearbyUniforms {
+    /// The NG camera's `world_to_clip`.
+    pub world_to_clip: [[f32; 4]; 4],
+    /// The NG camera's eye, `w` unused.
+    pub eye: [f32; 4],
+    /// The NG camera's unit look direction, `w` unused.
+    pub look_dir: [f32; 4],
+    /// Unit direction toward the light, `w` unused.
+    pub light_direction: [f32; 4],
+    /// Light radiance, `w` unused.
+    pub light_radiance: [f32; 4],
+    /// Ambient term, `w` unused.
+    pub light_ambient: [f32; 4],
+    /// Planes `(n, d)` with `n · x = d`; the first `plane_count` are used.
+    pub planes: [[f32; 4]; MAX_PLANES],
+    /// NG texture width.
+    pub width: u32,
+    /// NG texture height.
+    pub height: u32,
+    /// Guard band in texels, `x`.
+    pub pad_x: u32,
+    /// Guard band in texels, `y`.
+    pub pad_y: u32,
+    /// Planes used.
+    pub plane_count: u32,
+    /// Iterations of the iterative lookups.
+    pub iterations: u32,
+    /// Seeds `K`.
+    pub seeds: u32,
+    /// [`seed_spacing_code`].
+    pub spacing: u32,
+}
+
+/// The `LOOKUP` override constant of a nearby-geometry pipeline.
+pub const fn lookup_code(lookup: NearbyLookup) -> u32 {
+    match lookup {
+        NearbyLookup::KayGreenberg => 0,
+        NearbyLookup::RayPlane => 1,
+        NearbyLookup::Iterative { .. } => 2,
+        NearbyLookup::Seeded { .. } => 3,
+    }
+}
+
+/// `NearbyUniforms::spacing` of a seed spacing.
+pub const fn seed_spacing_code(spacing: SeedSpacing) -> u32 {
+    match spacing {
+        SeedSpacing::Screen => 0,
+        SeedSpacing::World => 1,
+    }
 }
 
 /// `environment_kind` of the procedural environment.
@@ -155,6 +212,34 @@ pub fn wgsl_constants() -> String {
             "const EXIT_NORMAL_FALLBACK: u32 = {}u;",
             exit_normal_source_code(ExitNormalSource::SilhouetteFallback)
         ),
+        format!(
+            "const LOOKUP_KAY_GREENBERG: u32 = {}u;",
+            lookup_code(NearbyLookup::KayGreenberg)
+        ),
+        format!(
+            "const LOOKUP_RAY_PLANE: u32 = {}u;",
+            lookup_code(NearbyLookup::RayPlane)
+        ),
+        format!(
+            "const LOOKUP_ITERATIVE: u32 = {}u;",
+            lookup_code(NearbyLookup::Iterative { iterations: 1 })
+        ),
+        format!(
+            "const LOOKUP_SEEDED: u32 = {}u;",
+            lookup_code(NearbyLookup::Seeded {
+                iterations: 0,
+                seeds: 1,
+                spacing: SeedSpacing::Screen
+            })
+        ),
+        format!(
+            "const SPACING_SCREEN: u32 = {}u;",
+            seed_spacing_code(SeedSpacing::Screen)
+        ),
+        format!(
+            "const SPACING_WORLD: u32 = {}u;",
+            seed_spacing_code(SeedSpacing::World)
+        ),
     ]
     .join("\n")
         + "\n"
@@ -174,6 +259,13 @@ mod tests {
             core::mem::offset_of!(FrameUniforms, environment_intensity),
             212
         );
+    }
+
+    #[test]
+    fn nearby_uniforms_are_16_byte_aligned() {
+        assert_eq!(core::mem::size_of::<NearbyUniforms>(), 304);
+        assert_eq!(core::mem::offset_of!(NearbyUniforms, planes), 144);
+        assert_eq!(core::mem::offset_of!(NearbyUniforms, width), 272);
     }
 
     #[test]

@@ -52,6 +52,7 @@ pub mod interpolated_distance;
 pub mod kernel;
 pub mod kernel_x8;
 pub mod lanes;
+pub mod nearby_geometry;
 mod math;
 pub mod optics;
 pub mod procedural_sky;

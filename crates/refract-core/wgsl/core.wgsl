@@ -197,3 +197,17 @@ fn direction_to_latlong(dir: vec3<f32>) -> vec2<f32> {
     let theta = atan2(sqrt(dir.x * dir.x + dir.z * dir.z), dir.y);
     return vec2<f32>(u, theta / PI);
 }
+
+// nearby_geometry.rs: Plane::intersect. plane = (n, d); x = t, y = 1 when hit (t > 0, finite).
+fn plane_intersect(plane: vec4<f32>, origin: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
+    let denom = dot(plane.xyz, dir);
+    let t = (plane.w - dot(plane.xyz, origin)) / denom;
+    let hit = denom != 0.0 && t > 0.0 && abs(t) <= F32_MAX;
+    return vec2<f32>(select(0.0, t, hit), select(0.0, 1.0, hit));
+}
+
+// nearby_geometry.rs: screen_fraction_to_segment.
+fn screen_fraction_to_segment(s: f32, w0: f32, w1: f32) -> f32 {
+    let denom = (1.0 - s) * w1 + s * w0;
+    return select(s, s * w0 / denom, denom > 0.0);
+}

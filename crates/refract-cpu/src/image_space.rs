@@ -239,6 +239,9 @@ fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
             | Aov::T1
             | Aov::TOut
             | Aov::PGeom
+            | Aov::NgTexel
+            | Aov::Iterations
+            | Aov::Converged
             | Aov::Interfaces
             | Aov::TirFirstExit => {
                 unreachable!("the image-space kernels do not compute {}", aov.name())

@@ -9,12 +9,15 @@
 //!
 //! * [`image_space`]: Wyman 2005a, `single`, `wyman`, `wyman-dv`, `wyman-dn` (each band of
 //!   rows shaded right after it is rasterised).
+//! * [`nearby_geometry`]: Wyman 2005b, `kay-greenberg`, `ray-plane`, `iterative`,
+//!   `iterative-seeded` (the NG texture of the opaque objects, then the lookups per pixel).
 //!
 //! [`surfaces`] rasterises any mesh of the scene from any camera (cube-map faces included) with
 //! its uv and object id.
 
 pub mod buffers;
 pub mod image_space;
+pub mod nearby_geometry;
 mod pixel_group;
 pub mod raster;
 pub mod renderer;

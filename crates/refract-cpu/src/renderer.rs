@@ -11,6 +11,7 @@ use refract_scene::{
 };
 
 use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
+use crate::nearby_geometry::{NearbyMethod, NearbyPasses};
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
 /// resolution a colour-only frame allocates nothing.
@@ -18,6 +19,7 @@ use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
 pub struct CpuRenderer {
     scene: Option<Arc<Scene>>,
     image_space: ImageSpacePasses,
+    nearby: NearbyPasses,
 }
 
 impl CpuRenderer {
@@ -35,7 +37,9 @@ impl Renderer for CpuRenderer {
     fn supports(&self, method: MethodId) -> bool {
         match MethodParams::defaults(method) {
             MethodParams::Reference(_) => false,
-            MethodParams::Single | MethodParams::TwoInterface(_) => true,
+            MethodParams::Single
+            | MethodParams::TwoInterface(_)
+            | MethodParams::NearbyGeometry(_) => true,
         }
     }
 
@@ -62,14 +66,35 @@ impl Renderer for CpuRenderer {
             backend: BackendId::Cpu,
             method: method.id(),
         };
+        let kernel = method
+            .image_space_kernel(refractor.ior())
+            .ok_or_else(unsupported)??;
         let image_space = match method {
             MethodParams::Reference(_) => return Err(unsupported()),
             MethodParams::Single => ImageSpaceMethod::Single,
             MethodParams::TwoInterface(p) => ImageSpaceMethod::TwoInterface { back: p.back },
+            MethodParams::NearbyGeometry(p) => {
+                let planes = scene.nearby_planes(camera.look_dir());
+                self.nearby.render(
+                    scene,
+                    &planes,
+                    camera,
+                    &kernel,
+                    NearbyMethod {
+                        back: p.two.back,
+                        lookup: p.lookup,
+                        guard_band_percent: p.guard_band_percent,
+                    },
+                    method.id(),
+                    outputs,
+                    frame,
+                )?;
+                return Ok(FrameTiming {
+                    ms: start.elapsed().as_secs_f64() * 1e3,
+                    source: TimingSource::Wall,
+                });
+            }
         };
-        let kernel = method
-            .image_space_kernel(refractor.ior())
-            .ok_or_else(unsupported)??;
         self.image_space.render(
             refractor,
             &scene.environment,

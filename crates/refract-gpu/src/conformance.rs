@@ -9,7 +9,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::shaders::module_source;
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 10] = [
+pub const ENTRY_POINTS: [&str; 12] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
@@ -20,6 +20,8 @@ pub const ENTRY_POINTS: [&str; 10] = [
     "test_normalize",
     "test_latlong",
     "test_procedural_sky",
+    "test_plane",
+    "test_seed_fraction",
 ];
 
 /// Evaluates `entry` on `a[i], b[i]` for every row and returns one `Vec4` per row.

@@ -6,14 +6,16 @@ use std::time::Instant;
 
 use refract_core::Camera;
 use refract_core::kernel::ImageSpaceParams;
+use refract_core::nearby_geometry::guard_band_camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
-    Scene, SceneMesh, SurfaceTexel, TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, NearbyParams,
+    RenderError, Renderer, Scene, SceneMesh, SurfaceTexel, TimingSource,
 };
 
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines, ImageSpaceTargets};
+use crate::methods::nearby_geometry::{NearbyFrame, NearbyPipelines, NearbyTargets};
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
@@ -31,9 +33,11 @@ pub struct GpuRenderer {
     context: GpuContext,
     raster: RasterPipelines,
     image_space: ImageSpacePipelines,
+    nearby: NearbyPipelines,
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     targets: Option<ImageSpaceTargets>,
+    nearby_targets: Option<NearbyTargets>,
 }
 
 impl GpuRenderer {
@@ -44,10 +48,11 @@ impl GpuRenderer {
 
     /// Compiles the pipelines on `context`.
     pub fn with_context(context: GpuContext) -> Result<Self, GpuError> {
-        let (raster, image_space) = context.checked(|| {
+        let (raster, image_space, nearby) = context.checked(|| {
             (
                 RasterPipelines::new(&context.device),
                 ImageSpacePipelines::new(&context.device),
+                NearbyPipelines::new(&context.device),
             )
         })?;
         let timestamps = Timestamps::new(&context);
@@ -55,9 +60,11 @@ impl GpuRenderer {
             context,
             raster,
             image_space,
+            nearby,
             timestamps,
             scene: None,
             targets: None,
+            nearby_targets: None,
         })
     }
 
@@ -151,11 +158,22 @@ impl GpuRenderer {
             self.timestamps.as_ref(),
             &mut encoder,
         );
+        let timing = self.submit(encoder, start)?;
+        targets.read(&self.context, id, outputs, frame)?;
+        Ok(timing)
+    }
+
+    /// Submits a frame's commands, waits for them and reads its timing.
+    fn submit(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        start: Instant,
+    ) -> Result<FrameTiming, RenderError> {
         self.context
             .checked(|| self.context.queue.submit([encoder.finish()]))?;
         self.context.wait()?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let timing = match &self.timestamps {
+        Ok(match &self.timestamps {
             Some(timestamps) => FrameTiming {
                 ms: timestamps.read_ms(&self.context)?,
                 source: TimingSource::GpuTimestamps,
@@ -164,7 +182,77 @@ impl GpuRenderer {
                 ms: wall_ms,
                 source: TimingSource::Wall,
             },
+        })
+    }
+
+    /// One frame of a nearby-geometry method (Wyman 2005b).
+    fn nearby_geometry(
+        &mut self,
+        camera: &Camera,
+        params: &NearbyParams,
+        id: MethodId,
+        kernel: ImageSpaceParams,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        let (scene, gpu_scene) = self
+            .scene
+            .as_ref()
+            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
+        let (ng_desc, pad) = guard_band_camera(camera.desc(), params.guard_band_percent);
+        let ng_camera =
+            Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
+        let size = (camera.width(), camera.height());
+        let ng_size = (ng_camera.width(), ng_camera.height());
+        if !self
+            .nearby_targets
+            .as_ref()
+            .is_some_and(|t| t.fits(size, ng_size))
+        {
+            self.nearby_targets = None;
+            self.nearby_targets = Some(NearbyTargets::new(
+                &self.context,
+                &self.raster,
+                &self.nearby,
+                gpu_scene,
+                size,
+                ng_size,
+            )?);
+        }
+        let Some(targets) = &self.nearby_targets else {
+            unreachable!("allocated above")
         };
+        let planes = scene.nearby_planes(camera.look_dir());
+        let nearby = NearbyFrame {
+            ng_camera: &ng_camera,
+            pad,
+            planes: &planes,
+            lookup: params.lookup,
+            light: scene.light,
+        };
+        let uniforms = frame_uniforms(camera, &gpu_scene.environment, kernel.ior(), kernel.tir_policy);
+        let start = Instant::now();
+        let mut encoder =
+            self.context
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("nearby-geometry frame"),
+                });
+        targets.encode(
+            &self.context,
+            &self.raster,
+            &self.nearby,
+            gpu_scene,
+            camera,
+            &uniforms,
+            &nearby,
+            params.two.back,
+            id,
+            outputs,
+            self.timestamps.as_ref(),
+            &mut encoder,
+        );
+        let timing = self.submit(encoder, start)?;
         targets.read(&self.context, id, outputs, frame)?;
         Ok(timing)
     }
@@ -178,7 +266,9 @@ impl Renderer for GpuRenderer {
     fn supports(&self, method: MethodId) -> bool {
         match MethodParams::defaults(method) {
             MethodParams::Reference(_) => false,
-            MethodParams::Single | MethodParams::TwoInterface(_) => true,
+            MethodParams::Single
+            | MethodParams::TwoInterface(_)
+            | MethodParams::NearbyGeometry(_) => true,
         }
     }
 
@@ -187,6 +277,7 @@ impl Renderer for GpuRenderer {
             .context
             .checked(|| GpuScene::new(&self.context.device, scene))?;
         self.targets = None; // bound to the old scene's environment buffer
+        self.nearby_targets = None;
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }
@@ -210,12 +301,15 @@ impl Renderer for GpuRenderer {
             backend: BackendId::Gpu,
             method: id,
         };
+        let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
         let kernel = match method {
             MethodParams::Reference(_) => return Err(unsupported()),
             MethodParams::Single => ImageSpaceKernel::Single,
             MethodParams::TwoInterface(p) => ImageSpaceKernel::TwoInterface { back: p.back },
+            MethodParams::NearbyGeometry(p) => {
+                return self.nearby_geometry(camera, p, id, params, outputs, frame);
+            }
         };
-        let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
         self.image_space(camera, kernel, id, params, outputs, frame)
     }
 }

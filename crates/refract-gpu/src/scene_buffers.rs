@@ -4,7 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use refract_core::gpu::{ENVIRONMENT_CONSTANT, ENVIRONMENT_LATLONG, ENVIRONMENT_PROCEDURAL};
 use refract_geometry::Mesh;
-use refract_scene::{Environment, Scene};
+use glam::Vec3;
+use refract_scene::{Albedo, Environment, Material, Object, Scene};
 use wgpu::util::DeviceExt;
 
 /// One vertex as the raster pass reads it (`shaders/raster.wgsl`, `VertexIn`).
@@ -89,10 +90,53 @@ pub(crate) struct EnvironmentUniforms {
     pub constant: [f32; 4],
 }
 
+/// An opaque object's material as `shaders/nearby_geometry.wgsl` reads it (`struct Material`):
+/// the twin of [`refract_scene::Albedo`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct GpuMaterial {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    /// 0 constant, 1 checker, 2 colour chart, 3 wood.
+    pub kind: u32,
+    /// 1: the mesh has no uvs, world `(x, z)` stand in.
+    pub world_uv: u32,
+    /// Checker squares per unit, or wood rings.
+    pub squares: f32,
+    pub _padding: u32,
+}
+
+const _: () = assert!(core::mem::size_of::<GpuMaterial>() == 48);
+
+impl GpuMaterial {
+    fn new(object: &Object) -> Self {
+        let v = |c: Vec3| c.extend(0.0).to_array();
+        let (kind, a, b, squares) = match &object.material {
+            Material::Diffuse(Albedo::Constant(c)) => (0, v(*c), [0.0; 4], 0.0),
+            Material::Diffuse(Albedo::Checker { a, b, squares }) => (1, v(*a), v(*b), *squares),
+            Material::Diffuse(Albedo::ColorChart) => (2, [0.0; 4], [0.0; 4], 0.0),
+            Material::Diffuse(Albedo::Wood { light, dark, rings }) => {
+                (3, v(*light), v(*dark), *rings)
+            }
+        };
+        Self {
+            a,
+            b,
+            kind,
+            world_uv: u32::from(!object.has_uvs()),
+            squares,
+            _padding: 0,
+        }
+    }
+}
+
 /// A scene on the GPU: the refractor (with `d_N`), every opaque object, the environment.
 pub(crate) struct GpuScene {
     pub refractor: GpuMesh,
     pub objects: Vec<GpuMesh>,
+    /// One [`GpuMaterial`] per object (one zeroed entry when there is none: bindings cannot be
+    /// empty).
+    pub materials: wgpu::Buffer,
     pub environment_texels: wgpu::Buffer,
     pub environment: EnvironmentUniforms,
 }
@@ -107,6 +151,15 @@ impl GpuScene {
             .enumerate()
             .map(|(k, o)| GpuMesh::new(device, &format!("object {k}"), o.mesh(), &[], 1 + k as u32))
             .collect();
+        let mut materials: Vec<GpuMaterial> = scene.objects.iter().map(GpuMaterial::new).collect();
+        if materials.is_empty() {
+            materials.push(GpuMaterial::zeroed());
+        }
+        let materials = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("materials"),
+            contents: bytemuck::cast_slice(&materials),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let (environment, texels) = match &scene.environment {
             Environment::Procedural => (
                 EnvironmentUniforms {
@@ -150,6 +203,7 @@ impl GpuScene {
         Self {
             refractor,
             objects,
+            materials,
             environment_texels,
             environment,
         }

@@ -5,7 +5,7 @@ use refract_core::gpu::wgsl_constants;
 
 /// Every `.wgsl` file, by name: the core twin from `refract_core::wgsl`, the passes and
 /// methods from `shaders/`.
-pub const FILES: [(&str, &str); 7] = [
+pub const FILES: [(&str, &str); 8] = [
     ("core.wgsl", refract_core::wgsl::CORE),
     ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY),
     ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
@@ -17,6 +17,10 @@ pub const FILES: [(&str, &str); 7] = [
     (
         "image_space.wgsl",
         include_str!("../../../shaders/image_space.wgsl"),
+    ),
+    (
+        "nearby_geometry.wgsl",
+        include_str!("../../../shaders/nearby_geometry.wgsl"),
     ),
     (
         "conformance.wgsl",
@@ -31,8 +35,21 @@ fn file(name: &str) -> &'static str {
         .map_or("", |(_, s)| s)
 }
 
+/// `COLOR_CHART`, the 24 patches of [`refract_scene::Albedo::ColorChart`], as a WGSL constant.
+fn color_chart_constant() -> String {
+    let patches: Vec<String> = refract_scene::COLOR_CHART
+        .iter()
+        .map(|[r, g, b]| format!("vec3<f32>({r:?}, {g:?}, {b:?})"))
+        .collect();
+    format!(
+        "const COLOR_CHART = array<vec3<f32>, 24>({});\n",
+        patches.join(", ")
+    )
+}
+
 fn compose(parts: &[&str]) -> String {
     let mut source = wgsl_constants();
+    source.push_str(&color_chart_constant());
     for part in parts {
         source.push_str(&format!("\n// ---- {part} ----\n"));
         source.push_str(file(part));
@@ -41,7 +58,7 @@ fn compose(parts: &[&str]) -> String {
 }
 
 /// The modules the backend compiles: `(name, files it is made of)`.
-pub const MODULES: [(&str, &[&str]); 3] = [
+pub const MODULES: [(&str, &[&str]); 4] = [
     ("raster", &["core.wgsl", "frame.wgsl", "raster.wgsl"]),
     (
         "image_space",
@@ -51,6 +68,17 @@ pub const MODULES: [(&str, &[&str]); 3] = [
             "frame.wgsl",
             "environment.wgsl",
             "image_space.wgsl",
+        ],
+    ),
+    (
+        "nearby_geometry",
+        &[
+            "core.wgsl",
+            "procedural_sky.wgsl",
+            "frame.wgsl",
+            "environment.wgsl",
+            "image_space.wgsl",
+            "nearby_geometry.wgsl",
         ],
     ),
     (

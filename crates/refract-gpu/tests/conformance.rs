@@ -11,6 +11,7 @@ use refract_core::environment::{Polynomial, direction_to_latlong};
 use refract_core::exit::{TirPolicy, exit_normal_outside_silhouette, refract_exit};
 use refract_core::fresnel::{fresnel_dielectric, schlick_conductor, schlick_dielectric};
 use refract_core::gpu::{distance_mode_code, tir_policy_code};
+use refract_core::nearby_geometry::{Plane, screen_fraction_to_segment};
 use refract_core::interpolated_distance::{DistanceMode, angle_ratio, approximate_distance};
 use refract_core::optics::{critical_angle, face_forward_shading_normal, reflect, refract};
 use refract_core::procedural_sky::procedural_radiance;
@@ -172,5 +173,30 @@ proptest! {
         // The sky has hard edges (checker squares, stripes, sun): a direction within rounding of
         // an edge may land on the other side. Allow one such row per batch.
         prop_assert!(sky_mismatch <= 1, "{} sky mismatches", sky_mismatch);
+    }
+
+    /// Wyman 2005b §4.2–4.3 helpers: ray-plane hits and the screen-spaced seed fraction.
+    #[test]
+    fn plane_hits_and_seed_fractions_agree(
+        rows in prop::collection::vec((unit(), -3.0f32..3.0, unit(), 0.0f32..=1.0, 0.05f32..50.0, 0.05f32..50.0), ROWS)
+    ) {
+        let context = gpu_or_skip!();
+        let a: Vec<Vec4> = rows.iter().map(|(n, d, ..)| n.extend(*d)).collect();
+        let b: Vec<Vec4> = rows.iter().map(|(_, _, dir, ..)| dir.extend(0.0)).collect();
+        let hits = evaluate(context, "test_plane", &a, &b).expect("gpu");
+        let fractions: Vec<Vec4> = rows.iter().map(|(.., s, w0, w1)| Vec4::new(*s, *w0, *w1, 0.0)).collect();
+        let lambdas = evaluate(context, "test_seed_fraction", &fractions, &fractions).expect("gpu");
+        for (k, (n, d, dir, s, w0, w1)) in rows.iter().enumerate() {
+            let rust = Plane { normal: *n, offset: *d }.intersect(Vec3::ZERO, *dir);
+            // Grazing rays (|n·dir| tiny) have huge t where rounding decides; skip them.
+            if n.dot(*dir).abs() > 1e-3 {
+                prop_assert_eq!(hits[k].y > 0.5, rust.is_some(), "row {}", k);
+                if let Some(t) = rust {
+                    prop_assert!(close(hits[k].x, t, 1e-5), "{} vs {}", hits[k].x, t);
+                }
+            }
+            let lambda = screen_fraction_to_segment(*s, *w0, *w1);
+            prop_assert!(close(lambdas[k].x, lambda, 1e-5), "{} vs {}", lambdas[k].x, lambda);
+        }
     }
 }

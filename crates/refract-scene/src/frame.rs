@@ -31,8 +31,16 @@ pub enum Aov {
     /// The direction the reference's path finally leaves the refractor in (the environment
     /// lookup direction; differs from `T2` on paths that leave and re-enter).
     TOut,
-    /// Where the escaping ray hit nearby opaque geometry.
+    /// Where the escaping ray hit nearby opaque geometry: exact for the reference, the surface
+    /// stored in the NG texel used for nearby-geometry methods (Wyman 2005b §4).
     PGeom,
+    /// The nearby-geometry texel a method's colour came from: `(x, y)` of the texel in the NG
+    /// texture and the object id (`1 + k`) stored there; NaN for a miss.
+    NgTexel,
+    /// Distance updates of the iterative nearby-geometry lookups (Wyman 2005b §4.3).
+    Iterations,
+    /// The iterative lookup reached a fixed point (the same texel twice in a row).
+    Converged,
     /// Where the exit normal came from, as [`refract_core::gpu::exit_normal_source_code`] (0: none).
     ExitNormalSource,
     /// Interfaces crossed by refraction (TIR bounces not counted).
@@ -56,7 +64,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 13] = [
+    pub const ALL: [Aov; 16] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -66,10 +74,13 @@ impl Aov {
         Aov::T2,
         Aov::TOut,
         Aov::PGeom,
+        Aov::NgTexel,
         Aov::ExitNormalSource,
         Aov::Interfaces,
+        Aov::Iterations,
         Aov::Tir,
         Aov::TirFirstExit,
+        Aov::Converged,
     ];
 
     /// The layer name (EXR channel or channel prefix).
@@ -84,6 +95,9 @@ impl Aov {
             Aov::T2 => "T2",
             Aov::TOut => "Tout",
             Aov::PGeom => "Pgeom",
+            Aov::NgTexel => "ng_texel",
+            Aov::Iterations => "iterations",
+            Aov::Converged => "converged",
             Aov::ExitNormalSource => "n2_source",
             Aov::Interfaces => "interfaces",
             Aov::Tir => "tir",
@@ -94,11 +108,10 @@ impl Aov {
     /// The type of its values.
     pub const fn kind(self) -> AovKind {
         match self {
-            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::TOut | Aov::PGeom => {
-                AovKind::Vec3
-            }
-            Aov::ExitNormalSource | Aov::Interfaces => AovKind::Count,
-            Aov::Covered | Aov::Tir | Aov::TirFirstExit => AovKind::Flag,
+            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::TOut | Aov::PGeom
+            | Aov::NgTexel => AovKind::Vec3,
+            Aov::ExitNormalSource | Aov::Interfaces | Aov::Iterations => AovKind::Count,
+            Aov::Covered | Aov::Tir | Aov::TirFirstExit | Aov::Converged => AovKind::Flag,
         }
     }
 }

@@ -33,10 +33,10 @@ pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
     BackendId, Family, InterfaceRule, MethodId, MethodInfo, MethodParams, REGISTRY, TraceMode,
-    TraceSettings, TwoInterfaceParams,
+    TraceSettings, TwoInterfaceParams, NearbyParams,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{
-    Albedo, DirectionalLight, Material, Object, Refractor, Scene, SceneMesh, SurfaceTexel,
+    Albedo, COLOR_CHART, DirectionalLight, Material, Object, Refractor, Scene, SceneMesh, SurfaceTexel,
 };
 pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene};

@@ -7,6 +7,7 @@
 use core::fmt;
 
 use refract_core::kernel::ImageSpaceParams;
+use refract_core::nearby_geometry::{MAX_ITERATIONS, MAX_SEEDS, NearbyLookup, SeedSpacing};
 use refract_core::{BackSurface, DistanceMode, TirPolicy};
 
 use crate::error::SceneError;
@@ -26,6 +27,14 @@ pub enum MethodId {
     WymanDv,
     /// `wyman-dn`: the ablation `d~ = d_N`.
     WymanDn,
+    /// `kay-greenberg`: Wyman 2005b §4.1, `P~2` projected into the NG texture.
+    KayGreenberg,
+    /// `ray-plane`: Wyman 2005b §4.2, the nearest plane hit projected into the NG texture.
+    RayPlane,
+    /// `iterative`: Wyman 2005b §4.3 (Ohbuchi), the plane hit refined with the NG depth.
+    Iterative,
+    /// `iterative-seeded`: Wyman 2005b §4.3, the best of `K` seeds refined with the NG depth.
+    IterativeSeeded,
 }
 
 /// A family of methods: the methods of one family share their passes.
@@ -35,6 +44,9 @@ pub enum Family {
     Reference,
     /// Wyman 2005a image-space refraction (front/back-face buffers, one kernel per pixel).
     ImageSpace,
+    /// Wyman 2005b: the two-interface kernel, then a lookup in the nearby-geometry (NG)
+    /// texture rendered from the eye.
+    NearbyGeometry,
 }
 
 /// A renderer implementation.
@@ -119,21 +131,78 @@ const TIR_CHOICES: &[&str] = &["clamp", "reflect", "black"];
 const BACK_CHOICES: &[&str] = &["furthest", "second"];
 const MODE_CHOICES: &[&str] = &["transmission", "full"];
 const INTERFACE_CHOICES: &[&str] = &["shading", "geometric"];
+const SPACING_CHOICES: &[&str] = &["screen", "world"];
 
-const TWO_INTERFACE_PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "back",
-        doc: "back surface rasterised: the furthest (depth Greater) or the second (nearest back face), §3.2",
-        kind: ParamKind::Choice(BACK_CHOICES),
-        default: "furthest",
+/// The largest guard band, in percent of the image size added on each side.
+pub const MAX_GUARD_BAND_PERCENT: u32 = 100;
+
+const BACK_PARAM: ParamSpec = ParamSpec {
+    name: "back",
+    doc: "back surface rasterised: the furthest (depth Greater) or the second (nearest back face), §3.2",
+    kind: ParamKind::Choice(BACK_CHOICES),
+    default: "furthest",
+};
+const TIR_PARAM: ParamSpec = ParamSpec {
+    name: "tir",
+    doc: "total internal reflection at the exit: clamp to the critical angle (§3.3), reflect once, or black",
+    kind: ParamKind::Choice(TIR_CHOICES),
+    default: "clamp",
+};
+const GUARD_PARAM: ParamSpec = ParamSpec {
+    name: "guard",
+    doc: "NG guard band: percent of the image width/height added on each side of the NG texture (same texel size, wider view; 0 = the screen, as in the paper)",
+    kind: ParamKind::Integer {
+        min: 0,
+        max: MAX_GUARD_BAND_PERCENT,
     },
-    ParamSpec {
-        name: "tir",
-        doc: "total internal reflection at the exit: clamp to the critical angle (§3.3), reflect once, or black",
-        kind: ParamKind::Choice(TIR_CHOICES),
-        default: "clamp",
+    default: "0",
+};
+const ITERATIONS_PARAM: ParamSpec = ParamSpec {
+    name: "iterations",
+    doc: "distance updates at most (§4.3: \"typically fewer than five\"); stops early when the texel repeats",
+    kind: ParamKind::Integer {
+        min: 1,
+        max: MAX_ITERATIONS,
     },
+    default: "5",
+};
+const SEEDED_ITERATIONS_PARAM: ParamSpec = ParamSpec {
+    name: "iterations",
+    doc: "distance updates after seeding at most (0: the best seed's texel)",
+    kind: ParamKind::Integer {
+        min: 0,
+        max: MAX_ITERATIONS,
+    },
+    default: "5",
+};
+const SEEDS_PARAM: ParamSpec = ParamSpec {
+    name: "seeds",
+    doc: "K, samples P~2 + α T~2 along the part of the ray inside the NG view (§4.3: 7)",
+    kind: ParamKind::Integer {
+        min: 1,
+        max: MAX_SEEDS,
+    },
+    default: "7",
+};
+const SPACING_PARAM: ParamSpec = ParamSpec {
+    name: "spacing",
+    doc: "where the K seeds go: evenly on screen (in 1/depth, Fig. 9's assumption) or evenly in world distance α",
+    kind: ParamKind::Choice(SPACING_CHOICES),
+    default: "screen",
+};
+
+const KAY_GREENBERG_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, GUARD_PARAM];
+const ITERATIVE_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, GUARD_PARAM, ITERATIONS_PARAM];
+const SEEDED_PARAMS: &[ParamSpec] = &[
+    BACK_PARAM,
+    TIR_PARAM,
+    GUARD_PARAM,
+    SEEDED_ITERATIONS_PARAM,
+    SEEDS_PARAM,
+    SPACING_PARAM,
 ];
+
+const TWO_INTERFACE_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM];
 
 const REFERENCE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -171,9 +240,31 @@ const TWO_INTERFACE_AOVS: &[Aov] = &[
     Aov::Tir,
 ];
 const IMAGE_SPACE_BACKENDS: &[BackendId] = &[BackendId::Cpu, BackendId::Gpu];
+const NEARBY_AOVS: &[Aov] = &[
+    Aov::Covered,
+    Aov::P2,
+    Aov::N2,
+    Aov::T2,
+    Aov::ExitNormalSource,
+    Aov::Tir,
+    Aov::PGeom,
+    Aov::NgTexel,
+];
+const ITERATIVE_AOVS: &[Aov] = &[
+    Aov::Covered,
+    Aov::P2,
+    Aov::N2,
+    Aov::T2,
+    Aov::ExitNormalSource,
+    Aov::Tir,
+    Aov::PGeom,
+    Aov::NgTexel,
+    Aov::Iterations,
+    Aov::Converged,
+];
 
 /// Every method, in report order (the reference first).
-pub const REGISTRY: [MethodInfo; 5] = [
+pub const REGISTRY: [MethodInfo; 9] = [
     MethodInfo {
         id: MethodId::Reference,
         name: "reference",
@@ -240,6 +331,50 @@ pub const REGISTRY: [MethodInfo; 5] = [
         summary: "two interfaces with d~ = d_N",
         params: TWO_INTERFACE_PARAMS,
         aovs: TWO_INTERFACE_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
+    MethodInfo {
+        id: MethodId::KayGreenberg,
+        name: "kay-greenberg",
+        paper: "Wyman 2005b",
+        section: "§4.1",
+        family: Family::NearbyGeometry,
+        summary: "wyman's P~2 projected into the nearby-geometry (NG) texture; the environment along T~2 where it is empty",
+        params: KAY_GREENBERG_PARAMS,
+        aovs: NEARBY_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
+    MethodInfo {
+        id: MethodId::RayPlane,
+        name: "ray-plane",
+        paper: "Wyman 2005b",
+        section: "§4.2",
+        family: Family::NearbyGeometry,
+        summary: "P~2 + t T~2 meets one plane per object (its own plane, or through its centre facing the camera); the nearest hit projected into NG",
+        params: KAY_GREENBERG_PARAMS,
+        aovs: NEARBY_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
+    MethodInfo {
+        id: MethodId::Iterative,
+        name: "iterative",
+        paper: "Wyman 2005b",
+        section: "§4.3 (Ohbuchi 2003)",
+        family: Family::NearbyGeometry,
+        summary: "from the plane hit, t <- |S(t) - P~2| with S the NG surface under P~2 + t T~2, until the texel repeats",
+        params: ITERATIVE_PARAMS,
+        aovs: ITERATIVE_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
+    MethodInfo {
+        id: MethodId::IterativeSeeded,
+        name: "iterative-seeded",
+        paper: "Wyman 2005b",
+        section: "§4.3",
+        family: Family::NearbyGeometry,
+        summary: "K seeds along T~2 inside the NG view; the one whose depth best matches NG depth starts the iteration",
+        params: SEEDED_PARAMS,
+        aovs: ITERATIVE_AOVS,
         backends: IMAGE_SPACE_BACKENDS,
     },
 ];
@@ -359,6 +494,19 @@ pub struct TwoInterfaceParams {
     pub tir: TirPolicy,
 }
 
+/// Parameters of the nearby-geometry methods (`kay-greenberg`, `ray-plane`, `iterative`,
+/// `iterative-seeded`): the two-interface kernel (`d~` interpolated, as in Wyman 2005b §3) and
+/// the lookup in the NG texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct NearbyParams {
+    /// The two-interface kernel's back surface and exit TIR policy (`distance` is `Interpolated`).
+    pub two: TwoInterfaceParams,
+    /// The lookup (fixed by the method id; its counts are parameters).
+    pub lookup: NearbyLookup,
+    /// Guard band of the NG texture, percent of the image size added on each side (0..=100).
+    pub guard_band_percent: u32,
+}
+
 /// The parameters of one run of one method: one variant per parameter set, so a backend's
 /// exhaustive `match` decides, at compile time, what it does with every method.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -369,6 +517,8 @@ pub enum MethodParams {
     Single,
     /// `wyman`, `wyman-dv`, `wyman-dn`.
     TwoInterface(TwoInterfaceParams),
+    /// `kay-greenberg`, `ray-plane`, `iterative`, `iterative-seeded`.
+    NearbyGeometry(NearbyParams),
 }
 
 fn choice<T: Copy>(
@@ -416,6 +566,10 @@ const INTERFACE_TABLE: [(&str, InterfaceRule); 2] = [
     ("shading", InterfaceRule::ShadingNormal),
     ("geometric", InterfaceRule::GeometricNormal),
 ];
+const SPACING_TABLE: [(&str, SeedSpacing); 2] = [
+    ("screen", SeedSpacing::Screen),
+    ("world", SeedSpacing::World),
+];
 const MODE_TABLE: [(&str, TraceMode); 2] = [
     ("transmission", TraceMode::Transmission),
     ("full", TraceMode::Full),
@@ -437,12 +591,27 @@ impl MethodParams {
                 ..TwoInterfaceParams::default()
             })
         };
+        let nearby = |lookup| {
+            MethodParams::NearbyGeometry(NearbyParams {
+                two: TwoInterfaceParams::default(),
+                lookup,
+                guard_band_percent: 0,
+            })
+        };
         match id {
             MethodId::Reference => MethodParams::Reference(TraceSettings::default()),
             MethodId::Single => MethodParams::Single,
             MethodId::Wyman => two(DistanceMode::Interpolated),
             MethodId::WymanDv => two(DistanceMode::ViewOnly),
             MethodId::WymanDn => two(DistanceMode::NormalOnly),
+            MethodId::KayGreenberg => nearby(NearbyLookup::KayGreenberg),
+            MethodId::RayPlane => nearby(NearbyLookup::RayPlane),
+            MethodId::Iterative => nearby(NearbyLookup::Iterative { iterations: 5 }),
+            MethodId::IterativeSeeded => nearby(NearbyLookup::Seeded {
+                iterations: 5,
+                seeds: 7,
+                spacing: SeedSpacing::Screen,
+            }),
         }
     }
 
@@ -455,6 +624,12 @@ impl MethodParams {
                 DistanceMode::Interpolated => MethodId::Wyman,
                 DistanceMode::ViewOnly => MethodId::WymanDv,
                 DistanceMode::NormalOnly => MethodId::WymanDn,
+            },
+            MethodParams::NearbyGeometry(p) => match p.lookup {
+                NearbyLookup::KayGreenberg => MethodId::KayGreenberg,
+                NearbyLookup::RayPlane => MethodId::RayPlane,
+                NearbyLookup::Iterative { .. } => MethodId::Iterative,
+                NearbyLookup::Seeded { .. } => MethodId::IterativeSeeded,
             },
         }
     }
@@ -490,6 +665,27 @@ impl MethodParams {
                 "tir" => p.tir = choice(name, value, &TIR_TABLE, origin)?,
                 _ => return Err(unknown(id)),
             },
+            MethodParams::NearbyGeometry(p) => match (name, &mut p.lookup) {
+                ("back", _) => p.two.back = choice(name, value, &BACK_TABLE, origin)?,
+                ("tir", _) => p.two.tir = choice(name, value, &TIR_TABLE, origin)?,
+                ("guard", _) => {
+                    p.guard_band_percent =
+                        integer(name, value, 0, MAX_GUARD_BAND_PERCENT, origin)?;
+                }
+                ("iterations", NearbyLookup::Iterative { iterations }) => {
+                    *iterations = integer(name, value, 1, MAX_ITERATIONS, origin)?;
+                }
+                ("iterations", NearbyLookup::Seeded { iterations, .. }) => {
+                    *iterations = integer(name, value, 0, MAX_ITERATIONS, origin)?;
+                }
+                ("seeds", NearbyLookup::Seeded { seeds, .. }) => {
+                    *seeds = integer(name, value, 1, MAX_SEEDS, origin)?;
+                }
+                ("spacing", NearbyLookup::Seeded { spacing, .. }) => {
+                    *spacing = choice(name, value, &SPACING_TABLE, origin)?;
+                }
+                _ => return Err(unknown(id)),
+            },
         }
         Ok(())
     }
@@ -505,14 +701,30 @@ impl MethodParams {
             }
             (MethodParams::TwoInterface(p), "back") => Some(name_of(&BACK_TABLE, &p.back).into()),
             (MethodParams::TwoInterface(p), "tir") => Some(name_of(&TIR_TABLE, &p.tir).into()),
+            (MethodParams::NearbyGeometry(p), _) => match (name, p.lookup) {
+                ("back", _) => Some(name_of(&BACK_TABLE, &p.two.back).into()),
+                ("tir", _) => Some(name_of(&TIR_TABLE, &p.two.tir).into()),
+                ("guard", _) => Some(p.guard_band_percent.to_string()),
+                ("iterations", NearbyLookup::Iterative { iterations })
+                | ("iterations", NearbyLookup::Seeded { iterations, .. }) => {
+                    Some(iterations.to_string())
+                }
+                ("seeds", NearbyLookup::Seeded { seeds, .. }) => Some(seeds.to_string()),
+                ("spacing", NearbyLookup::Seeded { spacing, .. }) => {
+                    Some(name_of(&SPACING_TABLE, &spacing).into())
+                }
+                _ => None,
+            },
             _ => None,
         }
     }
 
     /// Sets the exit TIR policy where the method has one (no effect elsewhere).
     pub fn with_tir_policy(mut self, tir: TirPolicy) -> Self {
-        if let MethodParams::TwoInterface(p) = &mut self {
-            p.tir = tir;
+        match &mut self {
+            MethodParams::TwoInterface(p) => p.tir = tir,
+            MethodParams::NearbyGeometry(p) => p.two.tir = tir,
+            MethodParams::Reference(_) | MethodParams::Single => {}
         }
         self
     }
@@ -523,6 +735,7 @@ impl MethodParams {
         let (distance, tir) = match self {
             MethodParams::Single => (DistanceMode::Interpolated, TirPolicy::default()),
             MethodParams::TwoInterface(p) => (p.distance, p.tir),
+            MethodParams::NearbyGeometry(p) => (p.two.distance, p.two.tir),
             MethodParams::Reference(_) => return None,
         };
         Some(
@@ -535,6 +748,7 @@ impl MethodParams {
     pub fn back_surface(&self) -> Option<BackSurface> {
         match self {
             MethodParams::TwoInterface(p) => Some(p.back),
+            MethodParams::NearbyGeometry(p) => Some(p.two.back),
             MethodParams::Single | MethodParams::Reference(_) => None,
         }
     }

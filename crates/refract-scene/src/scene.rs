@@ -4,6 +4,7 @@
 
 use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
+use refract_core::nearby_geometry::{MAX_PLANES, Plane};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
 
 use crate::environment::Environment;
@@ -148,10 +149,20 @@ pub enum Albedo {
     /// A 6 × 4 colour chart over the uv square (approximate linear-sRGB values of the 24
     /// patches of the classic ColorChecker), grey elsewhere.
     ColorChart,
+    /// Wood-like rings: with `r = ‖(u − ½, (v − ½)/4)‖` and
+    /// `f = fract(rings · r + 0.15 sin(40 u))`, the albedo `light + (dark − light) f²`.
+    Wood {
+        /// Colour between rings.
+        light: Vec3,
+        /// Colour at the ring edges.
+        dark: Vec3,
+        /// Rings per unit of `r`.
+        rings: f32,
+    },
 }
 
 /// Linear sRGB of the 24 ColorChecker patches, row by row (approximate published values).
-const COLOR_CHART: [[f32; 3]; 24] = [
+pub const COLOR_CHART: [[f32; 3]; 24] = [
     [0.173, 0.085, 0.059],
     [0.554, 0.300, 0.222],
     [0.117, 0.195, 0.335],
@@ -198,8 +209,20 @@ impl Albedo {
                 let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
                 Vec3::from_array(COLOR_CHART[row * 6 + col])
             }
+            Self::Wood { light, dark, rings } => {
+                let r = Vec2::new(uv.x - 0.5, (uv.y - 0.5) * 0.25).length();
+                let f = (rings * r + 0.15 * (40.0 * uv.x).sin()).rem_euclid(1.0);
+                light + (dark - light) * (f * f)
+            }
         }
     }
+
+    /// The albedo of the built-in wood texture.
+    pub const WOOD: Albedo = Albedo::Wood {
+        light: Vec3::new(0.60, 0.36, 0.16),
+        dark: Vec3::new(0.22, 0.10, 0.04),
+        rings: 24.0,
+    };
 }
 
 /// What an opaque object's surface does with light.
@@ -214,6 +237,8 @@ pub enum Material {
 pub struct Object {
     mesh: Mesh,
     bvh: MeshBvh,
+    own_plane: Option<Plane>,
+    center: Vec3,
     /// Its surface.
     pub material: Material,
 }
@@ -222,7 +247,10 @@ impl Object {
     /// An object of `mesh`; builds its BVH (an error for coordinates too large for it).
     pub fn new(mesh: Mesh, material: Material) -> Result<Self, SceneError> {
         let bvh = try_bvh(&mesh)?;
+        let sphere = mesh.bounding_sphere();
         Ok(Self {
+            own_plane: planar(&mesh, 2e-4 * sphere.radius),
+            center: sphere.center,
             mesh,
             bvh,
             material,
@@ -249,12 +277,46 @@ impl Object {
         (1.0 - barycentrics.x - barycentrics.y) * a + barycentrics.x * b + barycentrics.y * c
     }
 
+    /// The plane that stands for this object in the ray-plane and iterative lookups of
+    /// Wyman 2005b §4.2–4.3 (the paper leaves the choice to the user): the object's own plane
+    /// when it is planar ([`Self::own_plane`]), otherwise the plane through its bounding-sphere
+    /// centre facing `look_dir` (the camera's).
+    pub fn stand_in_plane(&self, look_dir: Vec3) -> Plane {
+        self.own_plane
+            .unwrap_or_else(|| Plane::through(self.center, -look_dir))
+    }
+
+    /// The object's plane when every vertex lies within `10⁻⁴` of its bounding-sphere diameter
+    /// from the plane of its first non-degenerate triangle.
+    pub fn own_plane(&self) -> Option<Plane> {
+        self.own_plane
+    }
+
+    /// Whether the mesh has texture coordinates (otherwise [`Self::uv_at`] uses world `x, z`).
+    pub fn has_uvs(&self) -> bool {
+        !self.mesh.uvs.is_empty()
+    }
+
     /// Outgoing radiance at a point with texture coordinates `uv` and unit normal `n`.
     pub fn shade(&self, light: &DirectionalLight, uv: Vec2, n: Vec3) -> Vec3 {
         match &self.material {
             Material::Diffuse(albedo) => light.shade(albedo.at(uv), n),
         }
     }
+}
+
+/// The plane of the first non-degenerate triangle of `mesh` when every vertex lies within
+/// `tolerance` of it.
+fn planar(mesh: &Mesh, tolerance: f32) -> Option<Plane> {
+    let (a, n) = (0..mesh.triangles.len()).find_map(|i| {
+        let [a, b, c] = mesh.triangle_positions(i);
+        Some((a, (b - a).cross(c - a).try_normalize()?))
+    })?;
+    let flat = mesh
+        .positions
+        .iter()
+        .all(|p| (*p - a).dot(n).abs() <= tolerance);
+    flat.then(|| Plane::through(a, n))
 }
 
 /// View-independent lighting of opaque objects: `albedo × (ambient + max(0, N·L) · radiance)`.
@@ -359,6 +421,18 @@ impl Scene {
             SceneMesh::Refractor => Some(self.refractor.mesh()),
             SceneMesh::Object(k) => self.objects.get(k).map(Object::mesh),
         }
+    }
+
+    /// The planes standing for the opaque objects in the ray-plane and iterative lookups
+    /// (Wyman 2005b §4.2) for a camera looking along `look_dir`, one per object
+    /// ([`Object::stand_in_plane`]), at most
+    /// [`MAX_PLANES`] (the first ones).
+    pub fn nearby_planes(&self, look_dir: Vec3) -> Vec<Plane> {
+        self.objects
+            .iter()
+            .take(MAX_PLANES)
+            .map(|o| o.stand_in_plane(look_dir))
+            .collect()
     }
 
     /// The scene's camera at `width × height`.

@@ -13,7 +13,7 @@ use crate::error::SceneError;
 use crate::scene::{Albedo, Material, Object, Refractor, Scene};
 
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 3] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 4] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -29,7 +29,41 @@ pub const BUILTIN_SCENES: [(&str, &str, &str); 3] = [
         "a spade-built biconvex spectacle lens, IOR 1.5, seen along its axis",
         "[camera]\neye = [0.0, 0.3, 3.0]\n\n[refractor]\nmesh = \"builtin:lens\"\nior = 1.5\n",
     ),
+    (
+        "chart",
+        "Wyman 2005b Fig. 5: a glass sphere, IOR 1.5, before a colour chart, on a wood floor",
+        CHART_SCENE,
+    ),
 ];
+
+/// The `chart` scene (Wyman 2005b Fig. 5): a glass sphere of radius 0.8 resting on a wood floor
+/// (`y = −0.8`), a colour chart (5.7 wide) 3.2 behind its centre facing the camera; the far
+/// plane at 12 so the NG texture's depth range fits the scene.
+const CHART_SCENE: &str = r#"[camera]
+eye = [0.0, 0.9, 4.2]
+target = [0.0, -0.15, 0.0]
+fov_y_deg = 40.0
+near = 0.05
+far = 12.0
+
+[refractor]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.8
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "color-chart"
+scale = 4.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.9, -3.2]
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "wood"
+scale = 6.0
+translate = [0.0, -0.8, 0.6]
+"#;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -50,6 +84,8 @@ struct CameraSection {
     target: [f32; 3],
     up: [f32; 3],
     fov_y_deg: f32,
+    near: f32,
+    far: f32,
 }
 
 impl Default for CameraSection {
@@ -60,6 +96,8 @@ impl Default for CameraSection {
             target: d.target.into(),
             up: d.up.into(),
             fov_y_deg: d.fov_y.to_degrees(),
+            near: d.near,
+            far: d.far,
         }
     }
 }
@@ -171,6 +209,10 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
 /// `docs/scenes.md`: the refractor is normalised into the unit sphere, so a million units
 /// away is already far beyond any useful scene, and `f32` keeps its precision.
 pub const MAX_COORDINATE: f32 = 1e6;
+/// The smallest `[camera] near`.
+pub const MIN_NEAR: f32 = 1e-4;
+/// The largest ratio `far / near` (depth precision of a 32-bit float depth buffer stays useful).
+pub const MAX_FAR_OVER_NEAR: f32 = 1e7;
 /// The range of `scale`.
 pub const SCALE_RANGE: (f32, f32) = (1e-6, 1e6);
 /// The largest magnitude of a `rotate_deg` angle.
@@ -233,6 +275,25 @@ fn check_camera(origin: &str, c: &CameraSection) -> Result<(), SceneError> {
             "[camera] fov_y_deg",
             c.fov_y_deg,
             "a vertical field of view strictly between 0 and 180 degrees",
+        ));
+    }
+    if !(c.near >= MIN_NEAR && c.near <= MAX_COORDINATE) {
+        return Err(SceneError::field(
+            origin,
+            "[camera] near",
+            c.near,
+            format!("a near-plane distance from {MIN_NEAR} to {MAX_COORDINATE}"),
+        ));
+    }
+    if !(c.far > c.near && c.far <= MAX_FAR_OVER_NEAR * c.near && c.far <= MAX_COORDINATE) {
+        return Err(SceneError::field(
+            origin,
+            "[camera] far",
+            c.far,
+            format!(
+                "a far-plane distance greater than near ({}), at most {MAX_FAR_OVER_NEAR} × near and at most {MAX_COORDINATE}",
+                c.near
+            ),
         ));
     }
     let (eye, target, up) = (Vec3::from(c.eye), Vec3::from(c.target), Vec3::from(c.up));
@@ -349,12 +410,13 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
                 squares: 8.0,
             },
             Some("color-chart") => Albedo::ColorChart,
+            Some("wood") => Albedo::WOOD,
             Some(other) => {
                 return Err(SceneError::field(
                     origin,
                     format!("objects[{k}].texture"),
                     format!("\"{other}\""),
-                    "\"checker\" or \"color-chart\"",
+                    "\"checker\", \"color-chart\" or \"wood\"",
                 ));
             }
         };
@@ -367,6 +429,8 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         target: Vec3::from(c.target),
         up: Vec3::from(c.up),
         fov_y: c.fov_y_deg.to_radians(),
+        near: c.near,
+        far: c.far,
         ..CameraDesc::default()
     };
     let mut scene = Scene::new(name, refractor, environment);

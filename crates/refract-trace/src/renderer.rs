@@ -54,7 +54,9 @@ impl Renderer for ReferenceRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Trace))?;
         let settings = match method {
             MethodParams::Reference(settings) => settings,
-            MethodParams::Single | MethodParams::TwoInterface(_) => {
+            MethodParams::Single
+            | MethodParams::TwoInterface(_)
+            | MethodParams::NearbyGeometry(_) => {
                 return Err(RenderError::Unsupported {
                     backend: BackendId::Trace,
                     method: method.id(),

@@ -81,7 +81,9 @@ impl ImageSpacePipelines {
                             ("DISTANCE_MODE", f64::from(distance_mode_code(distance))),
                         ],
                     ),
-                    MethodParams::Reference(_) => unreachable!("not an image-space method"),
+                    MethodParams::Reference(_) | MethodParams::NearbyGeometry(_) => {
+                        unreachable!("not an image-space method")
+                    }
                 };
                 let label = format!("{id} ({outputs:?})");
                 let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -110,61 +112,22 @@ impl ImageSpacePipelines {
     }
 }
 
-/// The targets and buffers of image-space frames at one resolution, allocated once and reused
-/// for every camera and method at that size.
-pub(crate) struct ImageSpaceTargets {
-    width: u32,
-    height: u32,
-    uniforms: wgpu::Buffer,
+/// The refractor's passes of one resolution (Wyman 2005a §4): the frame uniforms, the back-face
+/// target, the front-face targets and their depth buffer; shared by the image-space and the
+/// nearby-geometry methods.
+pub(crate) struct RefractorTargets {
+    pub uniforms: wgpu::Buffer,
     raster_group: wgpu::BindGroup,
-    shade_group: wgpu::BindGroup,
-    back: wgpu::TextureView,
-    front_p1: wgpu::TextureView,
-    front_n1: wgpu::TextureView,
+    pub back: wgpu::TextureView,
+    pub front_p1: wgpu::TextureView,
+    pub front_n1: wgpu::TextureView,
     depth: wgpu::TextureView,
-    /// Colour (w: coverage code), T2 (w: TIR), P~2 (w: exit-normal code), N2 (w: valid).
-    outputs: [wgpu::Buffer; 4],
-    readback: [wgpu::Buffer; 4],
 }
 
-impl ImageSpaceTargets {
-    /// Allocates the targets for `width × height`, checking the adapter's limits.
-    pub(crate) fn new(
-        context: &GpuContext,
-        raster: &RasterPipelines,
-        pipelines: &ImageSpacePipelines,
-        scene: &GpuScene,
-        width: u32,
-        height: u32,
-    ) -> Result<Self, GpuError> {
-        let limits = context.device.limits();
-        let too_large = |limit: String| GpuError::ResolutionTooLarge {
-            width,
-            height,
-            adapter: context.info.name.clone(),
-            limit,
-        };
-        if width > limits.max_texture_dimension_2d || height > limits.max_texture_dimension_2d {
-            return Err(too_large(format!(
-                "max texture dimension {}",
-                limits.max_texture_dimension_2d
-            )));
-        }
-        let bytes = u64::from(width) * u64::from(height) * 16;
-        if bytes > limits.max_storage_buffer_binding_size || bytes > limits.max_buffer_size {
-            return Err(too_large(format!(
-                "max storage buffer binding {} bytes",
-                limits.max_storage_buffer_binding_size
-            )));
-        }
-        context.checked(|| Self::allocate(&context.device, raster, pipelines, scene, width, height))
-    }
-
-    fn allocate(
+impl RefractorTargets {
+    pub(crate) fn allocate(
         device: &wgpu::Device,
         raster: &RasterPipelines,
-        pipelines: &ImageSpacePipelines,
-        scene: &GpuScene,
         width: u32,
         height: u32,
     ) -> Self {
@@ -184,60 +147,191 @@ impl ImageSpaceTargets {
             target(device, label, width, height, format)
                 .create_view(&wgpu::TextureViewDescriptor::default())
         };
-        let back = view("back faces", TARGET_FORMAT);
-        let front_p1 = view("front P1, d_N", TARGET_FORMAT);
-        let front_n1 = view("front N1", TARGET_FORMAT);
-        let depth = view("depth", DEPTH_FORMAT);
-        let size = u64::from(width) * u64::from(height) * 16;
+        Self {
+            back: view("back faces", TARGET_FORMAT),
+            front_p1: view("front P1, d_N", TARGET_FORMAT),
+            front_n1: view("front N1", TARGET_FORMAT),
+            depth: view("depth", DEPTH_FORMAT),
+            uniforms,
+            raster_group,
+        }
+    }
+
+    /// Writes the uniforms and encodes the back faces (when `back` is given) and the front
+    /// faces; the first pass writes the frame's start timestamp.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        &self,
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        scene: &GpuScene,
+        camera: &Camera,
+        uniforms: &FrameUniforms,
+        back: Option<BackSurface>,
+        timestamps: Option<&Timestamps>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        context
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
+        let mut first = timestamps.map(Timestamps::begin_render);
+        if let Some(back) = back {
+            raster.encode(
+                encoder,
+                RasterKind::BackFaces(back),
+                camera,
+                &self.raster_group,
+                &[&scene.refractor],
+                &[&self.back],
+                &self.depth,
+                first.take(),
+            );
+        }
+        raster.encode(
+            encoder,
+            RasterKind::FrontFaces,
+            camera,
+            &self.raster_group,
+            &[&scene.refractor],
+            &[&self.front_p1, &self.front_n1],
+            &self.depth,
+            first.take(),
+        );
+    }
+}
+
+/// Storage buffers the kernel writes (16 bytes a pixel each) and their readback twins.
+pub(crate) struct OutputBuffers {
+    pub outputs: Vec<wgpu::Buffer>,
+    readback: Vec<wgpu::Buffer>,
+}
+
+impl OutputBuffers {
+    pub(crate) fn new(device: &wgpu::Device, labels: &[&str], pixels: u64) -> Self {
         let buffer = |label: &str, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size,
+                size: pixels * 16,
                 usage,
                 mapped_at_creation: false,
             })
         };
-        let labels = ["colour", "T2", "P2", "N2"];
-        let outputs = labels.map(|l| {
-            buffer(
-                l,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            )
-        });
-        let readback = labels.map(|l| {
-            buffer(
-                &format!("{l} readback"),
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            )
-        });
+        Self {
+            outputs: labels
+                .iter()
+                .map(|l| buffer(l, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC))
+                .collect(),
+            readback: labels
+                .iter()
+                .map(|l| {
+                    buffer(
+                        &format!("{l} readback"),
+                        wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    )
+                })
+                .collect(),
+        }
+    }
+
+    /// Copies the first `count` outputs to their readback buffers.
+    pub(crate) fn copy(&self, encoder: &mut wgpu::CommandEncoder, count: usize) {
+        for (output, readback) in self.outputs.iter().zip(&self.readback).take(count) {
+            encoder.copy_buffer_to_buffer(output, 0, readback, 0, output.size());
+        }
+    }
+
+    /// Output `i` of the last submitted frame.
+    pub(crate) fn read(&self, context: &GpuContext, i: usize) -> Result<Vec<[f32; 4]>, GpuError> {
+        Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&context.read_buffer(&self.readback[i])?).to_vec())
+    }
+}
+
+/// Checks that `width × height` targets and 16-byte-per-pixel storage buffers fit the adapter.
+pub(crate) fn check_limits(context: &GpuContext, width: u32, height: u32) -> Result<(), GpuError> {
+    let limits = context.device.limits();
+    let too_large = |limit: String| GpuError::ResolutionTooLarge {
+        width,
+        height,
+        adapter: context.info.name.clone(),
+        limit,
+    };
+    if width > limits.max_texture_dimension_2d || height > limits.max_texture_dimension_2d {
+        return Err(too_large(format!(
+            "max texture dimension {}",
+            limits.max_texture_dimension_2d
+        )));
+    }
+    let bytes = u64::from(width) * u64::from(height) * 16;
+    if bytes > limits.max_storage_buffer_binding_size || bytes > limits.max_buffer_size {
+        return Err(too_large(format!(
+            "max storage buffer binding {} bytes",
+            limits.max_storage_buffer_binding_size
+        )));
+    }
+    Ok(())
+}
+
+/// The targets and buffers of image-space frames at one resolution, allocated once and reused
+/// for every camera and method at that size.
+pub(crate) struct ImageSpaceTargets {
+    width: u32,
+    height: u32,
+    refractor: RefractorTargets,
+    shade_group: wgpu::BindGroup,
+    /// Colour (w: coverage code), T2 (w: TIR), P~2 (w: exit-normal code), N2 (w: valid).
+    outputs: OutputBuffers,
+}
+
+impl ImageSpaceTargets {
+    /// Allocates the targets for `width × height`, checking the adapter's limits.
+    pub(crate) fn new(
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &ImageSpacePipelines,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
+        check_limits(context, width, height)?;
+        context.checked(|| Self::allocate(&context.device, raster, pipelines, scene, width, height))
+    }
+
+    fn allocate(
+        device: &wgpu::Device,
+        raster: &RasterPipelines,
+        pipelines: &ImageSpacePipelines,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let refractor = RefractorTargets::allocate(device, raster, width, height);
+        let outputs = OutputBuffers::new(
+            device,
+            &["colour", "T2", "P2", "N2"],
+            u64::from(width) * u64::from(height),
+        );
         let shade_group = bind_group(
             device,
             "image space",
             &pipelines.layout,
             &[
-                uniforms.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&front_p1),
-                wgpu::BindingResource::TextureView(&front_n1),
-                wgpu::BindingResource::TextureView(&back),
+                refractor.uniforms.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&refractor.front_p1),
+                wgpu::BindingResource::TextureView(&refractor.front_n1),
+                wgpu::BindingResource::TextureView(&refractor.back),
                 scene.environment_texels.as_entire_binding(),
-                outputs[0].as_entire_binding(),
-                outputs[1].as_entire_binding(),
-                outputs[2].as_entire_binding(),
-                outputs[3].as_entire_binding(),
+                outputs.outputs[0].as_entire_binding(),
+                outputs.outputs[1].as_entire_binding(),
+                outputs.outputs[2].as_entire_binding(),
+                outputs.outputs[3].as_entire_binding(),
             ],
         );
         Self {
             width,
             height,
-            uniforms,
-            raster_group,
+            refractor,
             shade_group,
-            back,
-            front_p1,
-            front_n1,
-            depth,
             outputs,
-            readback,
         }
     }
 
@@ -263,31 +357,12 @@ impl ImageSpaceTargets {
         timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
     ) {
-        context
-            .queue
-            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
-        let mut first = timestamps.map(Timestamps::begin_render);
-        if let ImageSpaceKernel::TwoInterface { back, .. } = kernel {
-            raster.encode(
-                encoder,
-                RasterKind::BackFaces(back),
-                camera,
-                &self.raster_group,
-                &[&scene.refractor],
-                &[&self.back],
-                &self.depth,
-                first.take(),
-            );
-        }
-        raster.encode(
-            encoder,
-            RasterKind::FrontFaces,
-            camera,
-            &self.raster_group,
-            &[&scene.refractor],
-            &[&self.front_p1, &self.front_n1],
-            &self.depth,
-            first.take(),
+        let back = match kernel {
+            ImageSpaceKernel::TwoInterface { back } => Some(back),
+            ImageSpaceKernel::Single => None,
+        };
+        self.refractor.encode(
+            context, raster, scene, camera, uniforms, back, timestamps, encoder,
         );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -305,9 +380,7 @@ impl ImageSpaceTargets {
             FrameOutputs::ColorAndAovs => 4,
             FrameOutputs::Color => 1,
         };
-        for (output, readback) in self.outputs.iter().zip(&self.readback).take(copies) {
-            encoder.copy_buffer_to_buffer(output, 0, readback, 0, output.size());
-        }
+        self.outputs.copy(encoder, copies);
     }
 
     /// Reads the outputs of the last submitted frame into `frame`: the colour and, with
@@ -320,10 +393,7 @@ impl ImageSpaceTargets {
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), GpuError> {
-        let read = |buffer: &wgpu::Buffer| -> Result<Vec<[f32; 4]>, GpuError> {
-            Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&context.read_buffer(buffer)?).to_vec())
-        };
-        let color = read(&self.readback[0])?;
+        let color = self.outputs.read(context, 0)?;
         frame.resize_for_overwrite(self.width, self.height);
         for (out, c) in frame.color.iter_mut().zip(&color) {
             *out = Vec3::new(c[0], c[1], c[2]);
@@ -332,9 +402,9 @@ impl ImageSpaceTargets {
             return Ok(());
         }
         let (t2, p2, n2) = (
-            read(&self.readback[1])?,
-            read(&self.readback[2])?,
-            read(&self.readback[3])?,
+            self.outputs.read(context, 1)?,
+            self.outputs.read(context, 2)?,
+            self.outputs.read(context, 3)?,
         );
         let pixels: Vec<DecodedPixel> = (0..frame.pixel_count())
             .map(|i| DecodedPixel::new(color[i], t2[i], p2[i], n2[i]))
@@ -354,6 +424,9 @@ impl ImageSpaceTargets {
                 | Aov::T1
                 | Aov::TOut
                 | Aov::PGeom
+                | Aov::NgTexel
+                | Aov::Iterations
+                | Aov::Converged
                 | Aov::Interfaces
                 | Aov::TirFirstExit => {
                     unreachable!("the image-space kernels do not compute {}", aov.name())
@@ -374,18 +447,18 @@ fn fill<T>(out: &mut [T], pixels: &[DecodedPixel], get: impl Fn(&DecodedPixel) -
 /// (`refract_core::gpu::COVERAGE_*`, [`exit_normal_source_from_code`]) into what the CPU
 /// backend writes: NaN vectors where there is no path (background and degenerate pixels).
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct DecodedPixel {
-    covered: bool,
-    t2: Vec3,
-    p2: Vec3,
-    n2: Vec3,
-    n2_source: Option<refract_core::ExitNormalSource>,
-    tir: bool,
+pub(crate) struct DecodedPixel {
+    pub covered: bool,
+    pub t2: Vec3,
+    pub p2: Vec3,
+    pub n2: Vec3,
+    pub n2_source: Option<refract_core::ExitNormalSource>,
+    pub tir: bool,
 }
 
 impl DecodedPixel {
     /// `color.w`: coverage code; `t2.w`: TIR; `p2.w`: exit-normal code; `n2.w`: N2 valid.
-    fn new(color: [f32; 4], t2: [f32; 4], p2: [f32; 4], n2: [f32; 4]) -> Self {
+    pub(crate) fn new(color: [f32; 4], t2: [f32; 4], p2: [f32; 4], n2: [f32; 4]) -> Self {
         let code = color[3].round() as u32;
         let path = !matches!(code, COVERAGE_BACKGROUND | COVERAGE_DEGENERATE);
         let xyz = |v: [f32; 4], valid: bool| {

@@ -1,0 +1,599 @@
+//! Refraction of nearby geometry (Wyman 2005b §4): where the ray `P~2 + t T~2` leaving the
+//! refractor meets the opaque objects that a separate pass rendered from the eye into the
+//! nearby-geometry ("NG") texture. Four lookups, one per method:
+//!
+//! - [`NearbyLookup::KayGreenberg`] (§4.1): project `P~2` itself into the NG texture.
+//! - [`NearbyLookup::RayPlane`] (§4.2): intersect the ray with a few planes that stand for the
+//!   objects and project the nearest hit.
+//! - [`NearbyLookup::Iterative`] (§4.3, Ohbuchi 2003): start at the plane hit and re-estimate the
+//!   distance from the surface the NG texture shows there, a few times.
+//! - [`NearbyLookup::Seeded`] (§4.3): sample the ray at `K` points, start the iteration at the
+//!   sample whose depth best matches the NG depth.
+//!
+//! The NG texture is read through [`NearbyGeometryTexture`] (nearest texel, the surface position
+//! stored per texel, "empty" explicit) and addressed through the camera that rendered it
+//! (the eye's camera, or a wider one with a guard band). Everything here is per pixel and
+//! allocation-free.
+
+use glam::{UVec2, Vec3, Vec4};
+
+use crate::camera::{Camera, CameraDesc};
+use crate::math;
+
+/// The camera of an NG texture with a guard band (beyond Wyman 2005b, which renders the NG
+/// texture with the eye's camera): `percent` of the image's width and height added on each
+/// side, `pad = round(percent/100 · (W, H))`, resolution `(W + 2 pad_x, H + 2 pad_y)` and
+/// `tan(fov'/2) = tan(fov/2) · H'/H`, so the texel size is the pixel size and texel
+/// `(x + pad_x, y + pad_y)` is pixel `(x, y)`. Returns the camera description and `pad`.
+///
+/// ```
+/// use refract_core::CameraDesc;
+/// use refract_core::nearby_geometry::guard_band_camera;
+/// let eye = CameraDesc { width: 200, height: 100, ..CameraDesc::default() };
+/// let (ng, pad) = guard_band_camera(&eye, 10);
+/// assert_eq!((ng.width, ng.height, pad.x, pad.y), (240, 120, 20, 10));
+/// ```
+pub fn guard_band_camera(desc: &CameraDesc, percent: u32) -> (CameraDesc, UVec2) {
+    let fraction = percent as f32 / 100.0;
+    let pad = UVec2::new(
+        (fraction * desc.width as f32).round() as u32,
+        (fraction * desc.height as f32).round() as u32,
+    );
+    if pad == UVec2::ZERO {
+        return (*desc, pad);
+    }
+    let height = desc.height + 2 * pad.y;
+    let scale = height as f32 / desc.height as f32;
+    let tan_half = math::tan(0.5 * desc.fov_y) * scale;
+    let fov_y = 2.0 * math::atan2(tan_half, 1.0);
+    (
+        CameraDesc {
+            width: desc.width + 2 * pad.x,
+            height,
+            fov_y,
+            ..*desc
+        },
+        pad,
+    )
+}
+
+/// The most planes a ray-plane lookup tests (the GPU keeps them in a small uniform array).
+pub const MAX_PLANES: usize = 8;
+/// The most seeds `K` of [`NearbyLookup::Seeded`].
+pub const MAX_SEEDS: u32 = 64;
+/// The most iterations of [`NearbyLookup::Iterative`] and [`NearbyLookup::Seeded`].
+pub const MAX_ITERATIONS: u32 = 32;
+
+/// The plane `{x : n · x = d}` standing for a nearby object in the ray-plane lookup (§4.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// Unit normal (either orientation).
+    pub normal: Vec3,
+    /// `n · x` of its points.
+    pub offset: f32,
+}
+
+impl Plane {
+    /// The plane through `point` with unit normal `normal`.
+    pub fn through(point: Vec3, normal: Vec3) -> Self {
+        Self {
+            normal,
+            offset: normal.dot(point),
+        }
+    }
+
+    /// The ray parameter `t > 0` where `origin + t dir` meets the plane,
+    /// `t = (d − n·o) / (n·dir)`; `None` for rays parallel to it or meeting it behind `origin`.
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use refract_core::nearby_geometry::Plane;
+    /// let floor = Plane::through(Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
+    /// assert_eq!(floor.intersect(Vec3::ZERO, -Vec3::Y), Some(1.0));
+    /// assert_eq!(floor.intersect(Vec3::ZERO, Vec3::Y), None);
+    /// ```
+    #[inline]
+    pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<f32> {
+        let denom = self.normal.dot(dir);
+        let t = (self.offset - self.normal.dot(origin)) / denom;
+        (denom != 0.0 && t > 0.0 && t.is_finite()).then_some(t)
+    }
+}
+
+/// The nearest plane hit `t > 0` of `origin + t dir` among `planes` (§4.2).
+#[inline]
+pub fn nearest_plane_hit(planes: &[Plane], origin: Vec3, dir: Vec3) -> Option<f32> {
+    planes
+        .iter()
+        .filter_map(|p| p.intersect(origin, dir))
+        .min_by(f32::total_cmp)
+}
+
+/// How the seeds of [`NearbyLookup::Seeded`] are spread over the ray segment inside the NG
+/// camera's view. §4.3 leaves it open; the feature-size argument of Fig. 9 (screen length / K)
+/// holds for [`SeedSpacing::Screen`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SeedSpacing {
+    /// Evenly in screen space (evenly in `1/depth`): seed `i` at screen fraction
+    /// `s = (i + ½)/K` of the segment's projection.
+    #[default]
+    Screen,
+    /// Evenly in world distance `α` along the ray.
+    World,
+}
+
+/// Which lookup a nearby-geometry method does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NearbyLookup {
+    /// Wyman 2005b §4.1: the texel under `P~2`.
+    KayGreenberg,
+    /// §4.2: the texel under the nearest plane hit.
+    RayPlane,
+    /// §4.3 (Ohbuchi): the plane hit refined `iterations` times.
+    Iterative {
+        /// Distance updates at most (1..=[`MAX_ITERATIONS`]).
+        iterations: u32,
+    },
+    /// §4.3: the best of `seeds` samples, refined `iterations` times.
+    Seeded {
+        /// Distance updates at most (0..=[`MAX_ITERATIONS`]).
+        iterations: u32,
+        /// `K`, samples along the ray (1..=[`MAX_SEEDS`]).
+        seeds: u32,
+        /// Where the samples go.
+        spacing: SeedSpacing,
+    },
+}
+
+/// The NG texture as the lookups read it: per texel the world position of the nearest opaque
+/// surface the NG pass saw, or `None` where it saw nothing (the environment).
+pub trait NearbyGeometryTexture {
+    /// The surface at texel `(x, y)` (inside the texture; the lookups check bounds).
+    fn surface(&self, texel: UVec2) -> Option<Vec3>;
+}
+
+/// Where a lookup found nearby geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyHit {
+    /// The NG texel whose colour the pixel shows.
+    pub texel: UVec2,
+    /// The surface stored there: the method's `P_geom`.
+    pub p_geom: Vec3,
+}
+
+/// The outcome of a lookup: a hit, or a miss (the pixel shows the environment along `T~2`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyResult {
+    /// The texel found, `None` for a miss.
+    pub hit: Option<NearbyHit>,
+    /// Distance updates done (iterative lookups; 0 otherwise).
+    pub iterations: u32,
+    /// The iteration reached a fixed point: the same texel twice in a row. Lookups that do not
+    /// iterate report `true` for a hit.
+    pub converged: bool,
+}
+
+impl NearbyResult {
+    /// No geometry found.
+    pub const MISS: Self = Self {
+        hit: None,
+        iterations: 0,
+        converged: false,
+    };
+}
+
+/// The NG texel under `p_ws`: `floor` of its pixel position in `camera` when it lies in front of
+/// the eye, between the near and far planes and inside the texture; `None` otherwise.
+#[inline]
+pub fn texel_of(camera: &Camera, p_ws: Vec3) -> Option<UVec2> {
+    let q = camera.world_to_pixel(p_ws)?;
+    let (w, h) = (camera.width() as f32, camera.height() as f32);
+    let inside = q.x >= 0.0 && q.x < w && q.y >= 0.0 && q.y < h && q.z >= 0.0 && q.z <= 1.0;
+    inside.then(|| UVec2::new(q.x as u32, q.y as u32))
+}
+
+/// The view depth of `p_ws` in `camera` (distance along the look direction; > 0 in front).
+#[inline]
+pub fn view_depth(camera: &Camera, p_ws: Vec3) -> f32 {
+    (p_ws - camera.eye()).dot(camera.look_dir())
+}
+
+/// The part `[t0, t1]` of the ray `origin + t dir`, `t ≥ 0`, inside `camera`'s view frustum
+/// (between its near and far planes, inside its four sides): clip-space Liang–Barsky against
+/// `−w ≤ x, y ≤ w` and `0 ≤ z ≤ w` (WebGPU depth), each linear in `t`. `None` when the ray never
+/// enters it. This is the span where the NG texture can hold an answer; §4.3 samples
+/// `0 ≤ α ≤ d_far`, which it contains.
+pub fn frustum_segment(camera: &Camera, origin: Vec3, dir: Vec3) -> Option<(f32, f32)> {
+    let m = camera.world_to_clip();
+    let c0: Vec4 = m * origin.extend(1.0);
+    let c1: Vec4 = m * dir.extend(0.0);
+    // Each constraint a0 + t a1 ≥ 0.
+    let constraints = [
+        (c0.w + c0.x, c1.w + c1.x),
+        (c0.w - c0.x, c1.w - c1.x),
+        (c0.w + c0.y, c1.w + c1.y),
+        (c0.w - c0.y, c1.w - c1.y),
+        (c0.z, c1.z),
+        (c0.w - c0.z, c1.w - c1.z),
+    ];
+    // The far end is bounded by the far plane when the ray heads away from the eye; rays heading
+    // back toward the camera leave through the near plane or a side, so t stays finite.
+    let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+    for (a0, a1) in constraints {
+        if a1 == 0.0 {
+            if !(a0 >= 0.0) {
+                return None;
+            }
+        } else {
+            let t = -a0 / a1;
+            if a1 > 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    (t0.is_finite() && t1.is_finite() && t0 < t1).then_some((t0, t1))
+}
+
+/// The fraction `λ ∈ [0, 1]` of a segment with view depths `w0` (start) and `w1` (end) whose
+/// projection lies at screen fraction `s`: perspective interpolation,
+/// `λ = s w0 / ((1 − s) w1 + s w0)`.
+///
+/// ```
+/// use refract_core::nearby_geometry::screen_fraction_to_segment;
+/// // A segment from depth 1 to depth 3: halfway on screen is a quarter of the way in space.
+/// assert_eq!(screen_fraction_to_segment(0.5, 1.0, 3.0), 0.25);
+/// ```
+#[inline]
+pub fn screen_fraction_to_segment(s: f32, w0: f32, w1: f32) -> f32 {
+    let denom = (1.0 - s) * w1 + s * w0;
+    if denom > 0.0 { s * w0 / denom } else { s }
+}
+
+/// The ray parameter of seed `i` of `k` over the segment `[t0, t1]` of `origin + t dir`
+/// (§4.3: `P~2 + α_i T~2`): at fraction `(i + ½)/k` in screen space or in `α`.
+#[inline]
+pub fn seed_parameter(
+    camera: &Camera,
+    origin: Vec3,
+    dir: Vec3,
+    (t0, t1): (f32, f32),
+    i: u32,
+    k: u32,
+    spacing: SeedSpacing,
+) -> f32 {
+    let s = (i as f32 + 0.5) / k as f32;
+    let lambda = match spacing {
+        SeedSpacing::World => s,
+        SeedSpacing::Screen => {
+            let w0 = view_depth(camera, origin + t0 * dir);
+            let w1 = view_depth(camera, origin + t1 * dir);
+            screen_fraction_to_segment(s, w0, w1)
+        }
+    };
+    t0 + lambda * (t1 - t0)
+}
+
+/// The guaranteed feature size of Fig. 9 in NG pixels: the screen length of the ray's segment
+/// inside the view divided by the number of seeds `k`; a feature at least this long on screen
+/// contains a seed. `None` when the ray never enters the view.
+pub fn feature_size_px(camera: &Camera, origin: Vec3, dir: Vec3, k: u32) -> Option<f32> {
+    let (t0, t1) = frustum_segment(camera, origin, dir)?;
+    let a = camera.world_to_pixel(origin + t0 * dir)?;
+    let b = camera.world_to_pixel(origin + t1 * dir)?;
+    Some((b.truncate() - a.truncate()).length() / k as f32)
+}
+
+/// Wyman 2005b §4: finds the nearby geometry the ray `p2 + t t2` (unit `t2`) shows, with the
+/// NG texture `texture` rendered by `camera` and, for the ray-plane and iterative lookups, the
+/// planes standing for the objects.
+///
+/// - Kay–Greenberg: the texel under `p2`.
+/// - Ray-plane: the texel under `p2 + t_plane t2` (a miss without a plane hit).
+/// - Iterative: from `t_plane`, `t ← ‖S(t) − p2‖` where `S(t)` is the surface stored at the texel
+///   under `p2 + t t2` (the distance form of Ohbuchi's update, no division by `T~2 · view`, so
+///   rays leaving sideways or back toward the camera need no special case), until the texel
+///   repeats (converged) or after `iterations` updates.
+/// - Seeded: the seed with the smallest `|depth(p2 + t_i t2) − depth(S(t_i))|` over the
+///   non-empty texels starts the same iteration.
+///
+/// An empty texel (or a point outside the view, behind the eye or beyond the far plane) where
+/// the answer is read is a miss.
+pub fn find_nearby<T: NearbyGeometryTexture + ?Sized>(
+    camera: &Camera,
+    texture: &T,
+    planes: &[Plane],
+    lookup: NearbyLookup,
+    p2: Vec3,
+    t2: Vec3,
+) -> NearbyResult {
+    let lookup_at = |p: Vec3| -> Option<NearbyHit> {
+        let texel = texel_of(camera, p)?;
+        let p_geom = texture.surface(texel)?;
+        Some(NearbyHit { texel, p_geom })
+    };
+    let single = |hit: Option<NearbyHit>| NearbyResult {
+        hit,
+        iterations: 0,
+        converged: hit.is_some(),
+    };
+    match lookup {
+        NearbyLookup::KayGreenberg => single(lookup_at(p2)),
+        NearbyLookup::RayPlane => {
+            single(nearest_plane_hit(planes, p2, t2).and_then(|t| lookup_at(p2 + t * t2)))
+        }
+        NearbyLookup::Iterative { iterations } => match nearest_plane_hit(planes, p2, t2) {
+            None => NearbyResult::MISS,
+            Some(t) => iterate(&lookup_at, p2, t2, t, iterations),
+        },
+        NearbyLookup::Seeded {
+            iterations,
+            seeds,
+            spacing,
+        } => {
+            let Some(segment) = frustum_segment(camera, p2, t2) else {
+                return NearbyResult::MISS;
+            };
+            let mut best: Option<(f32, f32)> = None;
+            for i in 0..seeds {
+                let t = seed_parameter(camera, p2, t2, segment, i, seeds, spacing);
+                let p = p2 + t * t2;
+                if let Some(hit) = lookup_at(p) {
+                    let error = (view_depth(camera, p) - view_depth(camera, hit.p_geom)).abs();
+                    if best.is_none_or(|(e, _)| error < e) {
+                        best = Some((error, t));
+                    }
+                }
+            }
+            match best {
+                None => NearbyResult::MISS,
+                Some((_, t)) => iterate(&lookup_at, p2, t2, t, iterations),
+            }
+        }
+    }
+}
+
+/// The distance-form iteration of §4.3 from `p2 + t t2`.
+#[inline]
+fn iterate(
+    lookup_at: &impl Fn(Vec3) -> Option<NearbyHit>,
+    p2: Vec3,
+    t2: Vec3,
+    t: f32,
+    iterations: u32,
+) -> NearbyResult {
+    let Some(mut hit) = lookup_at(p2 + t * t2) else {
+        return NearbyResult::MISS;
+    };
+    for k in 0..iterations {
+        let t = (hit.p_geom - p2).length();
+        let Some(next) = lookup_at(p2 + t * t2) else {
+            return NearbyResult {
+                iterations: k + 1,
+                ..NearbyResult::MISS
+            };
+        };
+        let repeated = next.texel == hit.texel;
+        hit = next;
+        if repeated {
+            return NearbyResult {
+                hit: Some(hit),
+                iterations: k + 1,
+                converged: true,
+            };
+        }
+    }
+    NearbyResult {
+        hit: Some(hit),
+        iterations,
+        converged: false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraDesc;
+
+    /// An analytic NG texture: a wall `z = z_wall` seen by `camera`, empty outside `|x| < half`.
+    struct Wall<'a> {
+        camera: &'a Camera,
+        z_wall: f32,
+        half: f32,
+    }
+
+    impl NearbyGeometryTexture for Wall<'_> {
+        fn surface(&self, texel: UVec2) -> Option<Vec3> {
+            let ray = self
+                .camera
+                .pixel_ray(Camera::pixel_center(texel.x, texel.y));
+            let t = (self.z_wall - ray.origin.z) / ray.dir.z;
+            let p = ray.at(t);
+            (t > 0.0 && p.x.abs() < self.half).then_some(p)
+        }
+    }
+
+    fn camera() -> Camera {
+        Camera::new(CameraDesc {
+            width: 128,
+            height: 128,
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            near: 0.1,
+            far: 20.0,
+            ..CameraDesc::default()
+        })
+        .expect("camera")
+    }
+
+    #[test]
+    fn guard_band_texels_are_screen_pixels() {
+        let desc = CameraDesc {
+            width: 96,
+            height: 64,
+            ..CameraDesc::default()
+        };
+        let (ng_desc, pad) = guard_band_camera(&desc, 25);
+        let (eye, ng) = (Camera::new(desc).expect("eye"), Camera::new(ng_desc).expect("ng"));
+        for p in [Vec3::ZERO, Vec3::new(0.4, -0.3, 0.2), Vec3::new(-0.7, 0.5, -1.0)] {
+            let a = eye.world_to_pixel(p).expect("in front");
+            let b = ng.world_to_pixel(p).expect("in front");
+            let offset = b.truncate() - a.truncate();
+            assert!((offset - pad.as_vec2()).abs().max_element() < 1e-3, "{offset}");
+        }
+    }
+
+    #[test]
+    fn plane_hits_are_nearest_and_in_front() {
+        let planes = [
+            Plane::through(Vec3::new(0.0, 0.0, -2.0), Vec3::Z),
+            Plane::through(Vec3::new(0.0, 0.0, -1.0), -Vec3::Z),
+            Plane::through(Vec3::new(0.0, 0.0, 5.0), Vec3::Z),
+        ];
+        assert_eq!(nearest_plane_hit(&planes, Vec3::ZERO, -Vec3::Z), Some(1.0));
+        assert_eq!(nearest_plane_hit(&planes, Vec3::ZERO, Vec3::Z), Some(5.0));
+        assert_eq!(nearest_plane_hit(&planes, Vec3::ZERO, Vec3::X), None);
+    }
+
+    #[test]
+    fn frustum_segment_ends_on_the_far_plane_and_near_plane() {
+        let cam = camera();
+        // Straight ahead from the eye: from the near plane to the far plane.
+        let (t0, t1) = frustum_segment(&cam, cam.eye(), -Vec3::Z).expect("inside");
+        assert!((t0 - 0.1).abs() < 1e-5 && (t1 - 20.0).abs() < 1e-3, "{t0} {t1}");
+        // Back toward the camera from the origin: ends at the near plane.
+        let (t0, t1) = frustum_segment(&cam, Vec3::ZERO, Vec3::Z).expect("inside");
+        assert!(t0 == 0.0 && (t1 - 2.9).abs() < 1e-4, "{t0} {t1}");
+        // Sideways out of the view.
+        let (_, t1) = frustum_segment(&cam, Vec3::ZERO, Vec3::X).expect("inside");
+        let edge = Vec3::X * t1;
+        let q = cam.world_to_pixel(edge).expect("in front");
+        assert!((q.x - 128.0).abs() < 1e-2, "{q}");
+        // Behind the eye, looking away: never inside.
+        assert_eq!(
+            frustum_segment(&cam, Vec3::new(0.0, 0.0, 4.0), Vec3::Z),
+            None
+        );
+    }
+
+    #[test]
+    fn screen_spaced_seeds_are_evenly_spaced_on_screen() {
+        let cam = camera();
+        let (p2, t2) = (Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.3, 0.0, -1.0).normalize());
+        let segment = frustum_segment(&cam, p2, t2).expect("inside");
+        let k = 7;
+        let xs: Vec<f32> = (0..k)
+            .map(|i| {
+                let t = seed_parameter(&cam, p2, t2, segment, i, k, SeedSpacing::Screen);
+                cam.world_to_pixel(p2 + t * t2).expect("in view").x
+            })
+            .collect();
+        let steps: Vec<f32> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+        for s in &steps {
+            assert!((s - steps[0]).abs() < 1e-2 * steps[0].abs(), "{steps:?}");
+        }
+        // World spacing crowds the screen near P~2: its first step on screen is the largest.
+        let world: Vec<f32> = (0..k)
+            .map(|i| {
+                let t = seed_parameter(&cam, p2, t2, segment, i, k, SeedSpacing::World);
+                cam.world_to_pixel(p2 + t * t2).expect("in view").x
+            })
+            .collect();
+        assert!(world[1] - world[0] > 2.0 * (world[6] - world[5]), "{world:?}");
+    }
+
+    #[test]
+    fn lookups_on_a_wall_find_it_and_iteration_converges() {
+        let cam = camera();
+        let wall = Wall {
+            camera: &cam,
+            z_wall: -2.0,
+            half: 10.0,
+        };
+        let planes = [Plane::through(Vec3::new(0.0, 0.0, -2.0), Vec3::Z)];
+        let (p2, t2) = (Vec3::new(0.2, 0.0, 0.0), Vec3::new(0.4, 0.1, -1.0).normalize());
+        let exact = p2 + planes[0].intersect(p2, t2).expect("hit") * t2;
+        let exact_texel = texel_of(&cam, exact).expect("in view");
+        for lookup in [
+            NearbyLookup::RayPlane,
+            NearbyLookup::Iterative { iterations: 5 },
+            NearbyLookup::Seeded {
+                iterations: 5,
+                seeds: 7,
+                spacing: SeedSpacing::Screen,
+            },
+        ] {
+            let r = find_nearby(&cam, &wall, &planes, lookup, p2, t2);
+            let hit = r.hit.expect("hit");
+            assert!(
+                (hit.texel.as_ivec2() - exact_texel.as_ivec2()).abs().max_element() <= 1,
+                "{lookup:?}: {:?} vs {exact_texel}",
+                hit.texel
+            );
+            assert!(r.converged, "{lookup:?}");
+        }
+        // Kay–Greenberg reads the wall behind P~2, not where the ray goes.
+        let kg = find_nearby(&cam, &wall, &planes, NearbyLookup::KayGreenberg, p2, t2);
+        let kg_texel = kg.hit.expect("the wall is behind P~2").texel;
+        assert!((kg_texel.as_ivec2() - exact_texel.as_ivec2()).abs().max_element() > 3);
+    }
+
+    #[test]
+    fn iterative_misses_what_seeding_finds() {
+        // A narrow wall off to the side, with its plane far behind it: the plane hit lands on
+        // empty texels (Ohbuchi's miss), the seeds find the wall.
+        let cam = camera();
+        let wall = Wall {
+            camera: &cam,
+            z_wall: -1.0,
+            half: 0.6,
+        };
+        let planes = [Plane::through(Vec3::new(0.0, 0.0, -8.0), Vec3::Z)];
+        let (p2, t2) = (Vec3::ZERO, Vec3::new(0.35, 0.0, -1.0).normalize());
+        let iterative = find_nearby(
+            &cam,
+            &wall,
+            &planes,
+            NearbyLookup::Iterative { iterations: 5 },
+            p2,
+            t2,
+        );
+        assert_eq!(iterative.hit, None);
+        let seeded = find_nearby(
+            &cam,
+            &wall,
+            &planes,
+            NearbyLookup::Seeded {
+                iterations: 5,
+                seeds: 7,
+                spacing: SeedSpacing::Screen,
+            },
+            p2,
+            t2,
+        );
+        let hit = seeded.hit.expect("seeded finds the wall");
+        assert!((hit.p_geom.z + 1.0).abs() < 1e-4);
+        let exact = p2 + t2 * (1.0 / -t2.z);
+        assert!((hit.p_geom - exact).length() < 0.05, "{hit:?} vs {exact}");
+    }
+
+    #[test]
+    fn points_outside_the_view_are_empty() {
+        let cam = camera();
+        assert_eq!(texel_of(&cam, Vec3::new(0.0, 0.0, 5.0)), None, "behind");
+        assert_eq!(texel_of(&cam, Vec3::new(100.0, 0.0, 0.0)), None, "outside");
+        assert_eq!(texel_of(&cam, Vec3::new(0.0, 0.0, -30.0)), None, "beyond far");
+        assert!(texel_of(&cam, Vec3::ZERO).is_some());
+    }
+
+    #[test]
+    fn feature_size_divides_the_screen_length_by_k() {
+        let cam = camera();
+        // A ray straight away from the eye projects to one point.
+        let along = feature_size_px(&cam, Vec3::ZERO, -Vec3::Z, 7).expect("in view");
+        assert!(along < 1e-3, "{along}");
+        let side = feature_size_px(&cam, Vec3::ZERO, Vec3::X, 7).expect("in view");
+        assert!((side - 64.0 / 7.0).abs() < 1e-2, "{side}");
+    }
+}

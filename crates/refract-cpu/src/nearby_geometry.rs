@@ -1,0 +1,330 @@
+//! Wyman 2005b refraction of nearby geometry on the CPU (methods `kay-greenberg`, `ray-plane`,
+//! `iterative`, `iterative-seeded`): the three passes of §5 — the refractor's back faces, the
+//! nearby opaque objects from the eye into the NG texture (surface + colour per texel), and the
+//! front faces — then per pixel the two-interface kernel of Wyman 2005a and
+//! [`refract_core::nearby_geometry::find_nearby`].
+//!
+//! Every pixel is one of: the refractor in front of the objects (the refraction), an object
+//! seen directly (its NG texel), or the environment.
+
+use glam::{UVec2, Vec2, Vec3};
+use rayon::prelude::*;
+use refract_core::exit::ExitNormalSource;
+use refract_core::gpu::exit_normal_source_code;
+use refract_core::kernel::{FrontSurface, ImageSpaceParams, two_interface};
+use refract_core::nearby_geometry::{
+    NearbyGeometryTexture, NearbyLookup, Plane, find_nearby, guard_band_camera,
+};
+use refract_core::{BackSurface, Camera};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene};
+
+use crate::buffers::{BackFaces, front_faces_into};
+use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize_into};
+
+/// One texel of the NG texture: the nearest opaque surface seen through it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyTexel {
+    /// Window depth in the NG camera (the depth test between objects).
+    pub depth: f32,
+    /// World position (the lookups' `S`).
+    pub p_ws: Vec3,
+    /// Outgoing radiance of the surface (the object's material under the scene light).
+    pub color: Vec3,
+    /// [`refract_scene::SceneMesh::object_id`] of the object (`1 + k`).
+    pub object: u32,
+}
+
+/// The NG texture (Wyman 2005b §4, Fig. 10): every opaque object rasterised from the NG
+/// camera (the eye's, widened by a guard band), nearest surface per texel. Its memory is kept
+/// between frames.
+#[derive(Default)]
+pub struct NearbyTexture {
+    width: u32,
+    texels: Vec<Option<NearbyTexel>>,
+    scratch: SurfaceBuffer,
+}
+
+impl NearbyGeometryTexture for NearbyTexture {
+    #[inline]
+    fn surface(&self, texel: UVec2) -> Option<Vec3> {
+        self.texel(texel).map(|t| t.p_ws)
+    }
+}
+
+impl NearbyTexture {
+    /// The texel at `(x, y)` (`None` where empty or outside).
+    #[inline]
+    pub fn texel(&self, texel: UVec2) -> Option<NearbyTexel> {
+        if texel.x >= self.width {
+            return None;
+        }
+        let i = texel.y as usize * self.width as usize + texel.x as usize;
+        self.texels.get(i).copied().flatten()
+    }
+
+    /// Renders the objects of `scene` seen by `camera` into this texture (front faces, nearest
+    /// by window depth; the first object wins ties). Colours use the object's material under
+    /// the scene's light ([`refract_scene::Object::shade`]), as the reference does.
+    pub fn render_into(&mut self, scene: &Scene, camera: &Camera) {
+        let (width, height) = (camera.width(), camera.height());
+        self.width = width;
+        self.texels.clear();
+        self.texels.resize((width * height) as usize, None);
+        for (k, object) in scene.objects.iter().enumerate() {
+            let raster = RasterMesh::new(object.mesh());
+            rasterize_into(
+                &raster,
+                camera,
+                Faces::Front,
+                DepthTest::Nearest,
+                &mut self.scratch,
+            );
+            let scratch = &self.scratch;
+            let id = 1 + k as u32;
+            self.texels
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, slot)| {
+                    let Some(t) = scratch.texel(i) else { return };
+                    if slot.is_some_and(|s| s.depth <= t.depth) {
+                        return;
+                    }
+                    let w = raster.barycentrics(&t);
+                    let uv = object.uv_at(t.triangle, Vec2::new(w.y, w.z), t.p_ws);
+                    *slot = Some(NearbyTexel {
+                        depth: t.depth,
+                        p_ws: t.p_ws,
+                        color: object.shade(&scene.light, uv, t.n_ws),
+                        object: id,
+                    });
+                });
+        }
+    }
+}
+
+/// Per-pixel outputs beside the colour; NaN / 0 / false where they do not apply.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct NearbyAov {
+    covered: bool,
+    p2: Vec3,
+    t2: Vec3,
+    n2: Vec3,
+    n2_source: Option<ExitNormalSource>,
+    tir: bool,
+    p_geom: Vec3,
+    ng_texel: Vec3,
+    iterations: u32,
+    converged: bool,
+}
+
+impl NearbyAov {
+    const NONE: Self = Self {
+        covered: false,
+        p2: Vec3::NAN,
+        t2: Vec3::NAN,
+        n2: Vec3::NAN,
+        n2_source: None,
+        tir: false,
+        p_geom: Vec3::NAN,
+        ng_texel: Vec3::NAN,
+        iterations: 0,
+        converged: false,
+    };
+}
+
+/// One nearby-geometry method run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyMethod {
+    /// The back surface of the two-interface kernel.
+    pub back: BackSurface,
+    /// The lookup in the NG texture.
+    pub lookup: NearbyLookup,
+    /// Guard band of the NG texture, percent of the image size per side.
+    pub guard_band_percent: u32,
+}
+
+/// The passes of the nearby-geometry methods, with their memory kept between frames.
+#[derive(Default)]
+pub struct NearbyPasses {
+    front: SurfaceBuffer,
+    back: BackFaces,
+    nearby: NearbyTexture,
+    aovs: Vec<NearbyAov>,
+}
+
+impl NearbyPasses {
+    /// The NG texture of the last frame.
+    pub fn nearby_texture(&self) -> &NearbyTexture {
+        &self.nearby
+    }
+
+    /// One frame of `method` (`id` names its AOV layers) into `frame`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        planes: &[Plane],
+        camera: &Camera,
+        kernel: &ImageSpaceParams,
+        method: NearbyMethod,
+        id: MethodId,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        let refractor = &scene.refractor;
+        let (ng_desc, pad) = guard_band_camera(camera.desc(), method.guard_band_percent);
+        let ng_camera =
+            Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
+        self.back.render_into(refractor, camera, method.back);
+        self.nearby.render_into(scene, &ng_camera);
+        front_faces_into(refractor, camera, &mut self.front);
+
+        let (width, height) = (camera.width(), camera.height());
+        let n = (width * height) as usize;
+        frame.resize_for_overwrite(width, height);
+        self.aovs.clear();
+        self.aovs.resize(n, NearbyAov::NONE);
+        let pixels = PixelContext {
+            scene,
+            planes,
+            camera,
+            ng_camera: &ng_camera,
+            pad,
+            kernel,
+            lookup: method.lookup,
+            front: &self.front,
+            back: &self.back,
+            nearby: &self.nearby,
+        };
+        frame
+            .color
+            .par_chunks_mut(width as usize)
+            .zip(self.aovs.par_chunks_mut(width as usize))
+            .enumerate()
+            .for_each(|(y, (colors, aovs))| {
+                for (x, (color, aov)) in colors.iter_mut().zip(aovs.iter_mut()).enumerate() {
+                    (*color, *aov) = pixels.shade(x as u32, y as u32);
+                }
+            });
+        if outputs == FrameOutputs::ColorAndAovs {
+            write_layers(&self.aovs, id, frame);
+        }
+        Ok(())
+    }
+}
+
+/// What the per-pixel work reads.
+struct PixelContext<'a> {
+    scene: &'a Scene,
+    planes: &'a [Plane],
+    camera: &'a Camera,
+    ng_camera: &'a Camera,
+    pad: UVec2,
+    kernel: &'a ImageSpaceParams,
+    lookup: NearbyLookup,
+    front: &'a SurfaceBuffer,
+    back: &'a BackFaces,
+    nearby: &'a NearbyTexture,
+}
+
+impl PixelContext<'_> {
+    /// The colour and AOVs of pixel `(x, y)`.
+    fn shade(&self, x: u32, y: u32) -> (Vec3, NearbyAov) {
+        let index = (y * self.camera.width() + x) as usize;
+        let uv = Camera::pixel_center(x, y);
+        let object = self.nearby.texel(UVec2::new(x, y) + self.pad);
+        let front = self
+            .front
+            .texel(index)
+            .filter(|f| object.is_none_or(|o| self.view_distance(f.p_ws) < self.view_distance(o.p_ws)));
+        let Some(front) = front else {
+            // An object seen directly, or the environment.
+            return match object {
+                Some(o) => (o.color, NearbyAov::NONE),
+                None => (
+                    self.scene
+                        .environment
+                        .radiance(self.camera.pixel_ray(uv).dir),
+                    NearbyAov::NONE,
+                ),
+            };
+        };
+        let covered = NearbyAov {
+            covered: true,
+            ..NearbyAov::NONE
+        };
+        let surface = FrontSurface {
+            p1_ws: front.p_ws,
+            n1_ws: front.n_ws,
+            d_n: front.scalar,
+        };
+        let Ok(path) = two_interface(self.camera, uv, &surface, self.back, self.kernel) else {
+            return (Vec3::ZERO, covered);
+        };
+        let mut aov = NearbyAov {
+            p2: path.p2,
+            t2: path.t2,
+            n2: path.n2,
+            n2_source: Some(path.n2_source),
+            tir: path.entry.tir_entry || path.tir_exit,
+            ..covered
+        };
+        if path.t2 == Vec3::ZERO {
+            // Absorbed by the TIR policy `black`.
+            return (Vec3::ZERO, aov);
+        }
+        let result = find_nearby(
+            self.ng_camera,
+            self.nearby,
+            self.planes,
+            self.lookup,
+            path.p2,
+            path.t2,
+        );
+        aov.iterations = result.iterations;
+        aov.converged = result.converged;
+        let texel = result.hit.and_then(|hit| self.nearby.texel(hit.texel));
+        match (result.hit, texel) {
+            (Some(hit), Some(t)) => {
+                aov.p_geom = hit.p_geom;
+                aov.ng_texel = Vec3::new(hit.texel.x as f32, hit.texel.y as f32, t.object as f32);
+                (t.color, aov)
+            }
+            _ => (self.scene.environment.radiance(path.t2), aov),
+        }
+    }
+
+    #[inline]
+    fn view_distance(&self, p: Vec3) -> f32 {
+        (p - self.camera.eye()).dot(self.camera.look_dir())
+    }
+}
+
+/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
+fn write_layers(aovs: &[NearbyAov], method: MethodId, frame: &mut Frame) {
+    for &aov in method.info().aovs {
+        match aov {
+            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
+            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
+            Aov::Converged => fill(frame.flag_mut(aov), aovs, |a| a.converged),
+            Aov::P2 => fill(frame.vec3_mut(aov), aovs, |a| a.p2),
+            Aov::N2 => fill(frame.vec3_mut(aov), aovs, |a| a.n2),
+            Aov::T2 => fill(frame.vec3_mut(aov), aovs, |a| a.t2),
+            Aov::PGeom => fill(frame.vec3_mut(aov), aovs, |a| a.p_geom),
+            Aov::NgTexel => fill(frame.vec3_mut(aov), aovs, |a| a.ng_texel),
+            Aov::Iterations => fill(frame.count_mut(aov), aovs, |a| a.iterations),
+            Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
+                a.n2_source.map_or(0, exit_normal_source_code)
+            }),
+            Aov::P1 | Aov::N1 | Aov::T1 | Aov::TOut | Aov::Interfaces | Aov::TirFirstExit => {
+                unreachable!("the nearby-geometry methods do not compute {}", aov.name())
+            }
+        }
+    }
+}
+
+fn fill<T: Send>(out: &mut [T], aovs: &[NearbyAov], get: impl Fn(&NearbyAov) -> T + Sync + Send) {
+    out.par_iter_mut()
+        .zip(aovs.par_iter())
+        .for_each(|(o, a)| *o = get(a));
+}

@@ -1,0 +1,405 @@
+//! Wyman 2005b refraction of nearby geometry on the GPU (methods `kay-greenberg`, `ray-plane`,
+//! `iterative`, `iterative-seeded`): the three passes of §5 — the refractor's back faces, every
+//! opaque object from the NG camera into the NG targets (surface pass: P, N, uv + object id),
+//! the refractor's front faces — then `shade_nearby` of `shaders/nearby_geometry.wgsl` as a
+//! compute pass, one pipeline per method (`LOOKUP` fixed per pipeline).
+
+use glam::{UVec2, Vec3};
+use refract_core::Camera;
+use refract_core::gpu::{
+    FrameUniforms, NearbyUniforms, exit_normal_source_code, lookup_code, seed_spacing_code,
+};
+use refract_core::nearby_geometry::{MAX_PLANES, NearbyLookup, Plane, SeedSpacing};
+use refract_scene::{Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY};
+
+use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
+use crate::context::{GpuContext, GpuError};
+use crate::frame_uniforms::frame_uniforms;
+use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
+use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::scene_buffers::GpuScene;
+use crate::shaders::module_source;
+use crate::timestamps::Timestamps;
+
+/// The `shade_nearby` pipelines: one per nearby-geometry method, with and without AOV stores.
+pub(crate) struct NearbyPipelines {
+    layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(MethodId, FrameOutputs, wgpu::ComputePipeline)>,
+}
+
+impl NearbyPipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("nearby_geometry.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(module_source("nearby_geometry").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("nearby geometry"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                texture_entry(1),
+                texture_entry(2),
+                texture_entry(3),
+                storage_entry(4, true),
+                storage_entry(5, false),
+                storage_entry(6, false),
+                storage_entry(7, false),
+                storage_entry(8, false),
+                storage_entry(9, false),
+                storage_entry(10, false),
+                storage_entry(11, true),
+                texture_entry(12),
+                texture_entry(13),
+                texture_entry(14),
+                uniform_entry(15, wgpu::ShaderStages::COMPUTE),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("nearby geometry"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let mut pipelines = Vec::new();
+        let methods = REGISTRY
+            .iter()
+            .filter(|m| m.family == Family::NearbyGeometry)
+            .map(|m| m.id);
+        for id in methods {
+            let MethodParams::NearbyGeometry(params) = MethodParams::defaults(id) else {
+                unreachable!("a nearby-geometry method");
+            };
+            for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
+                let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
+                let constants = [
+                    ("WRITE_AOVS", write_aovs),
+                    ("LOOKUP", f64::from(lookup_code(params.lookup))),
+                ];
+                let label = format!("{id} ({outputs:?})");
+                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some("shade_nearby"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                });
+                pipelines.push((id, outputs, pipeline));
+            }
+        }
+        Self { layout, pipelines }
+    }
+
+    fn pipeline(&self, method: MethodId, outputs: FrameOutputs) -> &wgpu::ComputePipeline {
+        self.pipelines
+            .iter()
+            .find(|(m, o, _)| *m == method && *o == outputs)
+            .map(|(_, _, p)| p)
+            .expect("a pipeline for every nearby-geometry method")
+    }
+}
+
+/// What one frame of a nearby-geometry method needs besides the refractor's camera.
+pub(crate) struct NearbyFrame<'a> {
+    /// The NG camera (the eye's, widened by the guard band).
+    pub ng_camera: &'a Camera,
+    /// Guard band in texels.
+    pub pad: UVec2,
+    /// The planes of the ray-plane and iterative lookups.
+    pub planes: &'a [Plane],
+    /// The lookup.
+    pub lookup: NearbyLookup,
+    /// The scene's light.
+    pub light: DirectionalLight,
+}
+
+/// The targets of nearby-geometry frames at one frame and NG resolution.
+pub(crate) struct NearbyTargets {
+    size: (u32, u32, u32, u32),
+    refractor: RefractorTargets,
+    ng_uniforms: wgpu::Buffer,
+    ng_raster_group: wgpu::BindGroup,
+    ng: [wgpu::TextureView; 3],
+    ng_depth: wgpu::TextureView,
+    nearby_uniforms: wgpu::Buffer,
+    shade_group: wgpu::BindGroup,
+    /// Colour, T2, P~2, N2 (as the image-space methods), P_geom (w: hit + 2 converged),
+    /// NG texel (x, y, object id, iterations).
+    outputs: OutputBuffers,
+}
+
+impl NearbyTargets {
+    /// Allocates targets for `width × height` frames with an `ng_width × ng_height` NG texture.
+    pub(crate) fn new(
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &NearbyPipelines,
+        scene: &GpuScene,
+        (width, height): (u32, u32),
+        (ng_width, ng_height): (u32, u32),
+    ) -> Result<Self, GpuError> {
+        check_limits(context, width, height)?;
+        check_limits(context, ng_width, ng_height)?;
+        let device = &context.device;
+        context.checked(|| {
+            let refractor = RefractorTargets::allocate(device, raster, width, height);
+            let uniform = |label| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: std::mem::size_of::<FrameUniforms>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let ng_uniforms = uniform("NG frame uniforms");
+            let nearby_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nearby uniforms"),
+                size: std::mem::size_of::<NearbyUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let ng_raster_group = bind_group(
+                device,
+                "NG raster",
+                &raster.layout,
+                &[ng_uniforms.as_entire_binding()],
+            );
+            let ng = ["NG P", "NG N", "NG uv, object"].map(|label| {
+                target(device, label, ng_width, ng_height, TARGET_FORMAT)
+                    .create_view(&wgpu::TextureViewDescriptor::default())
+            });
+            let ng_depth = target(device, "NG depth", ng_width, ng_height, DEPTH_FORMAT)
+                .create_view(&wgpu::TextureViewDescriptor::default());
+            let outputs = OutputBuffers::new(
+                device,
+                &["colour", "T2", "P2", "N2", "P_geom", "NG texel"],
+                u64::from(width) * u64::from(height),
+            );
+            let shade_group = bind_group(
+                device,
+                "nearby geometry",
+                &pipelines.layout,
+                &[
+                    refractor.uniforms.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&refractor.front_p1),
+                    wgpu::BindingResource::TextureView(&refractor.front_n1),
+                    wgpu::BindingResource::TextureView(&refractor.back),
+                    scene.environment_texels.as_entire_binding(),
+                    outputs.outputs[0].as_entire_binding(),
+                    outputs.outputs[1].as_entire_binding(),
+                    outputs.outputs[2].as_entire_binding(),
+                    outputs.outputs[3].as_entire_binding(),
+                    outputs.outputs[4].as_entire_binding(),
+                    outputs.outputs[5].as_entire_binding(),
+                    scene.materials.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&ng[0]),
+                    wgpu::BindingResource::TextureView(&ng[1]),
+                    wgpu::BindingResource::TextureView(&ng[2]),
+                    nearby_uniforms.as_entire_binding(),
+                ],
+            );
+            Self {
+                size: (width, height, ng_width, ng_height),
+                refractor,
+                ng_uniforms,
+                ng_raster_group,
+                ng,
+                ng_depth,
+                nearby_uniforms,
+                shade_group,
+                outputs,
+            }
+        })
+    }
+
+    /// Whether these targets are for these frame and NG sizes.
+    pub(crate) fn fits(&self, frame: (u32, u32), ng: (u32, u32)) -> bool {
+        self.size == (frame.0, frame.1, ng.0, ng.1)
+    }
+
+    /// Encodes the passes of one frame and the copies of its outputs.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        &self,
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &NearbyPipelines,
+        scene: &GpuScene,
+        camera: &Camera,
+        uniforms: &FrameUniforms,
+        nearby: &NearbyFrame<'_>,
+        back: refract_core::BackSurface,
+        id: MethodId,
+        outputs: FrameOutputs,
+        timestamps: Option<&Timestamps>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        let ng_frame = frame_uniforms(
+            nearby.ng_camera,
+            &scene.environment,
+            uniforms.ior,
+            refract_core::TirPolicy::default(),
+        );
+        context
+            .queue
+            .write_buffer(&self.ng_uniforms, 0, bytemuck::bytes_of(&ng_frame));
+        context.queue.write_buffer(
+            &self.nearby_uniforms,
+            0,
+            bytemuck::bytes_of(&nearby_uniforms(nearby)),
+        );
+        self.refractor.encode(
+            context,
+            raster,
+            scene,
+            camera,
+            uniforms,
+            Some(back),
+            timestamps,
+            encoder,
+        );
+        let objects: Vec<_> = scene.objects.iter().collect();
+        raster.encode(
+            encoder,
+            RasterKind::Surface,
+            nearby.ng_camera,
+            &self.ng_raster_group,
+            &objects,
+            &[&self.ng[0], &self.ng[1], &self.ng[2]],
+            &self.ng_depth,
+            None,
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("nearby-geometry kernel"),
+                timestamp_writes: timestamps.map(Timestamps::end_compute),
+            });
+            pass.set_pipeline(pipelines.pipeline(id, outputs));
+            pass.set_bind_group(0, &self.shade_group, &[]);
+            let (width, height, _, _) = self.size;
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        if let Some(timestamps) = timestamps {
+            timestamps.resolve(encoder);
+        }
+        let copies = match outputs {
+            FrameOutputs::ColorAndAovs => 6,
+            FrameOutputs::Color => 1,
+        };
+        self.outputs.copy(encoder, copies);
+    }
+
+    /// Reads the last submitted frame into `frame` (the colour and the registry row's AOVs).
+    pub(crate) fn read(
+        &self,
+        context: &GpuContext,
+        method: MethodId,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        let (width, height, _, _) = self.size;
+        let color = self.outputs.read(context, 0)?;
+        frame.resize_for_overwrite(width, height);
+        for (out, c) in frame.color.iter_mut().zip(&color) {
+            *out = Vec3::new(c[0], c[1], c[2]);
+        }
+        if outputs == FrameOutputs::Color {
+            return Ok(());
+        }
+        let planes: Vec<Vec<[f32; 4]>> = (1..6)
+            .map(|i| self.outputs.read(context, i))
+            .collect::<Result<_, _>>()?;
+        let n = frame.pixel_count();
+        let pixels: Vec<DecodedPixel> = (0..n)
+            .map(|i| DecodedPixel::new(color[i], planes[0][i], planes[1][i], planes[2][i]))
+            .collect();
+        let (p_geom, ng) = (&planes[3], &planes[4]);
+        let hit = |i: usize| pixels[i].covered && p_geom[i][3] as u32 & 1 == 1;
+        for &aov in method.info().aovs {
+            match aov {
+                Aov::Covered => fill(frame.flag_mut(aov), |i| pixels[i].covered),
+                Aov::Tir => fill(frame.flag_mut(aov), |i| pixels[i].tir),
+                Aov::T2 => fill(frame.vec3_mut(aov), |i| pixels[i].t2),
+                Aov::P2 => fill(frame.vec3_mut(aov), |i| pixels[i].p2),
+                Aov::N2 => fill(frame.vec3_mut(aov), |i| pixels[i].n2),
+                Aov::ExitNormalSource => fill(frame.count_mut(aov), |i| {
+                    pixels[i].n2_source.map_or(0, exit_normal_source_code)
+                }),
+                Aov::PGeom => fill(frame.vec3_mut(aov), |i| {
+                    let p = p_geom[i];
+                    if hit(i) {
+                        Vec3::new(p[0], p[1], p[2])
+                    } else {
+                        Vec3::NAN
+                    }
+                }),
+                Aov::NgTexel => fill(frame.vec3_mut(aov), |i| {
+                    let t = ng[i];
+                    if hit(i) {
+                        Vec3::new(t[0], t[1], t[2].round())
+                    } else {
+                        Vec3::NAN
+                    }
+                }),
+                Aov::Iterations => fill(frame.count_mut(aov), |i| {
+                    if pixels[i].covered {
+                        ng[i][3].round() as u32
+                    } else {
+                        0
+                    }
+                }),
+                Aov::Converged => fill(frame.flag_mut(aov), |i| {
+                    pixels[i].covered && p_geom[i][3] as u32 & 2 == 2
+                }),
+                Aov::P1 | Aov::N1 | Aov::T1 | Aov::TOut | Aov::Interfaces | Aov::TirFirstExit => {
+                    unreachable!("the nearby-geometry methods do not compute {}", aov.name())
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn fill<T>(out: &mut [T], get: impl Fn(usize) -> T) {
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = get(i);
+    }
+}
+
+/// The uniform block of the lookup.
+fn nearby_uniforms(nearby: &NearbyFrame<'_>) -> NearbyUniforms {
+    let camera = nearby.ng_camera;
+    let mut planes = [[0.0; 4]; MAX_PLANES];
+    for (slot, plane) in planes.iter_mut().zip(nearby.planes) {
+        *slot = plane.normal.extend(plane.offset).to_array();
+    }
+    let (iterations, seeds, spacing) = match nearby.lookup {
+        NearbyLookup::KayGreenberg | NearbyLookup::RayPlane => (0, 1, SeedSpacing::Screen),
+        NearbyLookup::Iterative { iterations } => (iterations, 1, SeedSpacing::Screen),
+        NearbyLookup::Seeded {
+            iterations,
+            seeds,
+            spacing,
+        } => (iterations, seeds, spacing),
+    };
+    let light = nearby.light;
+    NearbyUniforms {
+        world_to_clip: camera.world_to_clip().to_cols_array_2d(),
+        eye: camera.eye().extend(1.0).to_array(),
+        look_dir: camera.look_dir().extend(0.0).to_array(),
+        light_direction: light.direction.extend(0.0).to_array(),
+        light_radiance: light.radiance.extend(0.0).to_array(),
+        light_ambient: light.ambient.extend(0.0).to_array(),
+        planes,
+        width: camera.width(),
+        height: camera.height(),
+        pad_x: nearby.pad.x,
+        pad_y: nearby.pad.y,
+        plane_count: nearby.planes.len().min(MAX_PLANES) as u32,
+        iterations,
+        seeds,
+        spacing: seed_spacing_code(spacing),
+    }
+}
