@@ -14,6 +14,7 @@ use refract_gpu::GpuRenderer;
 use refract_scene::tonemap::to_srgb8;
 use refract_scene::{
     Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TwoInterfaceParams,
+    load_scene,
 };
 use refract_tests::scenes::{builtin, camera, method, render, shared};
 use refract_tests::shared_data;
@@ -22,6 +23,9 @@ struct Agreement {
     coverage: f64,
     t2_differs: f64,
     color_differs: f64,
+    /// Nearby-geometry methods: the share of refractor pixels where one backend's lookup hits
+    /// an object and the other's does not, or their `P_geom` differ by more than 1e-3.
+    p_geom_differs: f64,
 }
 
 fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
@@ -30,6 +34,8 @@ fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
     let covered = |f: &Frame| f.flag(Aov::Covered).expect("covered").to_vec();
     let t2 = |f: &Frame| f.vec3(Aov::T2).expect("T2").to_vec();
     let (cpu_covered, gpu_covered, cpu_t2, gpu_t2) = (covered(cpu), covered(gpu), t2(cpu), t2(gpu));
+    let (cpu_geom, gpu_geom) = (cpu.vec3(Aov::PGeom), gpu.vec3(Aov::PGeom));
+    let mut p_geom_differs = 0;
     for i in 0..cpu.pixel_count() {
         let (c, g) = (cpu_covered[i], gpu_covered[i]);
         if c || g {
@@ -42,12 +48,17 @@ fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
             t2_differs += usize::from(angle.is_nan() || angle > 1e-3);
             let (a, b) = (to_srgb8(cpu.color[i]), to_srgb8(gpu.color[i]));
             color_differs += usize::from(a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1));
+            if let (Some(c), Some(g)) = (cpu_geom, gpu_geom) {
+                let same = (c[i].is_nan() && g[i].is_nan()) || (c[i] - g[i]).length() <= 1e-3;
+                p_geom_differs += usize::from(!same);
+            }
         }
     }
     Agreement {
         coverage: same_coverage as f64 / union as f64,
         t2_differs: t2_differs as f64 / both as f64,
         color_differs: color_differs as f64 / both as f64,
+        p_geom_differs: p_geom_differs as f64 / both as f64,
     }
 }
 
@@ -82,12 +93,18 @@ fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
             let a = agreement(&cpu_frame, &gpu_frame);
             let id = params.id();
             println!(
-                "{label} {id} ({}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} % ({:.2} ms GPU)",
+                "{label} {id} ({}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} %, P_geom on {:.3} % ({:.2} ms GPU)",
                 params.describe(),
                 a.coverage,
                 100.0 * a.t2_differs,
                 100.0 * a.color_differs,
+                100.0 * a.p_geom_differs,
                 timing.ms
+            );
+            assert!(
+                a.p_geom_differs <= 0.02,
+                "{label} {id}: P_geom {}",
+                a.p_geom_differs
             );
             assert!(a.coverage >= 0.995, "{label} {id}: coverage {}", a.coverage);
             assert!(a.t2_differs <= 0.02, "{label} {id}: T2 {}", a.t2_differs);
@@ -113,6 +130,8 @@ fn gpu_frames_agree_with_cpu_frames() {
         gpu.context().timestamps
     );
     check("sphere", &builtin("sphere", 1.5), &mut gpu);
+    let chart = Arc::new(load_scene("chart").expect("chart").scene);
+    check("chart", &chart, &mut gpu);
     if let Some(data) = shared_data() {
         check("cow", &shared(&data, "cow.obj", 1.2), &mut gpu);
     }

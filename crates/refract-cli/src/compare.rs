@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use refract_scene::metrics::{MetricsRecord, evaluate, reference_record};
+use refract_core::Camera;
+use refract_core::nearby_geometry::{NearbyLookup, guard_band_camera};
+use refract_scene::metrics::{MetricsRecord, evaluate, evaluate_nearby, reference_record};
 use refract_scene::{
     Aov, BackendId, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings, load_scene,
 };
@@ -133,6 +135,25 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                 })?;
                 let (mut record, maps) = evaluate(&truth, &frame, &camera, diameter);
                 let (id, backend) = (method.id(), renderer.backend());
+                let stem = format!("{id}-{backend}");
+                let mut has_miss = false;
+                if let MethodParams::NearbyGeometry(p) = method {
+                    let (ng_desc, _) = guard_band_camera(camera.desc(), p.guard_band_percent);
+                    let ng_camera = Camera::new(ng_desc)?;
+                    let seeds = match p.lookup {
+                        NearbyLookup::Seeded { seeds, spacing, .. } => Some((seeds, spacing)),
+                        _ => None,
+                    };
+                    evaluate_nearby(&truth, &frame, &ng_camera, seeds, &mut record);
+                    write_mask(
+                        &dir.join(format!("miss-{stem}.png")),
+                        w,
+                        h,
+                        &missed_geometry(&truth, &frame),
+                        &frame.color,
+                    )?;
+                    has_miss = true;
+                }
                 record.scene.clone_from(&scene.name);
                 record.method = id.name().to_owned();
                 record.backend = backend.id().to_owned();
@@ -140,7 +161,6 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                 record.ms_per_frame = Some(times.median);
                 records.push(record);
 
-                let stem = format!("{id}-{backend}");
                 write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
                 write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
                 write_error_map(
@@ -167,7 +187,11 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                     &tir_mask(&frame),
                     &frame.color,
                 )?;
-                images.push(MethodImages { stem, has_p2 });
+                images.push(MethodImages {
+                    stem,
+                    has_p2,
+                    has_miss,
+                });
                 progress.inc(1);
             }
         }
@@ -180,6 +204,18 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
     progress.finish_and_clear();
     write_reports(&options.out, &records, &scene_images, options)?;
     Ok(records)
+}
+
+/// Pixels where the reference's path meets an opaque object and the method's lookup found none
+/// (Wyman 2005b Fig. 6, 8: "rays completely miss the dragon").
+fn missed_geometry(truth: &Frame, frame: &Frame) -> Vec<bool> {
+    let (Some(t), Some(o)) = (truth.vec3(Aov::PGeom), frame.vec3(Aov::PGeom)) else {
+        return vec![false; frame.pixel_count()];
+    };
+    let covered = frame.flag(Aov::Covered);
+    (0..frame.pixel_count())
+        .map(|i| covered.is_some_and(|c| c[i]) && !t[i].is_nan() && o[i].is_nan())
+        .collect()
 }
 
 /// The frame's TIR flags (all false when it has no `tir` layer).

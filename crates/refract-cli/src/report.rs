@@ -15,6 +15,8 @@ pub struct MethodImages {
     pub stem: String,
     /// Whether a `|P~2 − P2|` map was written.
     pub has_p2: bool,
+    /// Whether a missed-geometry mask was written (nearby-geometry methods).
+    pub has_miss: bool,
 }
 
 /// The images written for one scene.
@@ -145,7 +147,7 @@ Times: median of {frames} colour-only frames after 2 warm-up frames, buffers + k
         html,
         "</table><p>Error maps use the magma colour map with a colour bar on the right: FLIP 0–1, \
 T2 angle error 0–{T2_SCALE_DEG}°, |P~2−P2| 0–{P2_SCALE} of the bounding-sphere diameter; grey where a \
-quantity does not exist. TIR masks show TIR pixels in magenta.</p>"
+quantity does not exist. TIR masks show TIR pixels in magenta; missed-object masks (nearby-geometry methods) show in magenta the pixels where the reference's path meets an opaque object and the method's lookup found none.</p>"
     );
     for scene in scenes {
         let s = &scene.scene;
@@ -163,6 +165,12 @@ quantity does not exist. TIR masks show TIR pixels in magenta.</p>"
                 let _ = write!(
                     html,
                     "<figure><img class=\"map\" src=\"{s}/p2err-{m}.png\"><figcaption>|P~2−P2| (0–{P2_SCALE} diam)</figcaption></figure>"
+                );
+            }
+            if images.has_miss {
+                let _ = write!(
+                    html,
+                    "<figure><img src=\"{s}/miss-{m}.png\"><figcaption>missed objects ({m})</figcaption></figure>"
                 );
             }
             let _ = write!(

@@ -164,7 +164,14 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         ),
         (
             &[
-                "compare", "sphere", "--methods", "wyman", "--param", "seeds=7", "--res", "8",
+                "compare",
+                "sphere",
+                "--methods",
+                "wyman",
+                "--param",
+                "seeds=7",
+                "--res",
+                "8",
             ],
             "seeds",
         ),

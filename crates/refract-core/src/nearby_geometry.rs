@@ -275,14 +275,35 @@ pub fn seed_parameter(
     t0 + lambda * (t1 - t0)
 }
 
-/// The guaranteed feature size of Fig. 9 in NG pixels: the screen length of the ray's segment
-/// inside the view divided by the number of seeds `k`; a feature at least this long on screen
-/// contains a seed. `None` when the ray never enters the view.
-pub fn feature_size_px(camera: &Camera, origin: Vec3, dir: Vec3, k: u32) -> Option<f32> {
-    let (t0, t1) = frustum_segment(camera, origin, dir)?;
-    let a = camera.world_to_pixel(origin + t0 * dir)?;
-    let b = camera.world_to_pixel(origin + t1 * dir)?;
-    Some((b.truncate() - a.truncate()).length() / k as f32)
+/// The guaranteed feature size of Fig. 9 in NG pixels: the largest screen gap a feature can hide
+/// in between the `k` seeds of `spacing` on the ray's segment inside the view — the largest
+/// distance between consecutive seeds, and twice the distance from each end of the segment to
+/// its nearest seed. A feature at least this long on screen contains a seed. For
+/// [`SeedSpacing::Screen`] this is the paper's "screen-space distance T~2 travels … divided by
+/// the number of intersections". `None` when the ray never enters the view.
+pub fn guaranteed_feature_px(
+    camera: &Camera,
+    origin: Vec3,
+    dir: Vec3,
+    k: u32,
+    spacing: SeedSpacing,
+) -> Option<f32> {
+    let segment = frustum_segment(camera, origin, dir)?;
+    let screen = |t: f32| {
+        camera
+            .world_to_pixel(origin + t * dir)
+            .map(|q| q.truncate())
+    };
+    let (start, end) = (screen(segment.0)?, screen(segment.1)?);
+    let mut previous = start;
+    let mut gap = 0.0f32;
+    for i in 0..k {
+        let seed = screen(seed_parameter(camera, origin, dir, segment, i, k, spacing))?;
+        let d = (seed - previous).length();
+        gap = gap.max(if i == 0 { 2.0 * d } else { d });
+        previous = seed;
+    }
+    Some(gap.max(2.0 * (end - previous).length()))
 }
 
 /// Wyman 2005b §4: finds the nearby geometry the ray `p2 + t t2` (unit `t2`) shows, with the
@@ -435,12 +456,22 @@ mod tests {
             ..CameraDesc::default()
         };
         let (ng_desc, pad) = guard_band_camera(&desc, 25);
-        let (eye, ng) = (Camera::new(desc).expect("eye"), Camera::new(ng_desc).expect("ng"));
-        for p in [Vec3::ZERO, Vec3::new(0.4, -0.3, 0.2), Vec3::new(-0.7, 0.5, -1.0)] {
+        let (eye, ng) = (
+            Camera::new(desc).expect("eye"),
+            Camera::new(ng_desc).expect("ng"),
+        );
+        for p in [
+            Vec3::ZERO,
+            Vec3::new(0.4, -0.3, 0.2),
+            Vec3::new(-0.7, 0.5, -1.0),
+        ] {
             let a = eye.world_to_pixel(p).expect("in front");
             let b = ng.world_to_pixel(p).expect("in front");
             let offset = b.truncate() - a.truncate();
-            assert!((offset - pad.as_vec2()).abs().max_element() < 1e-3, "{offset}");
+            assert!(
+                (offset - pad.as_vec2()).abs().max_element() < 1e-3,
+                "{offset}"
+            );
         }
     }
 
@@ -461,7 +492,10 @@ mod tests {
         let cam = camera();
         // Straight ahead from the eye: from the near plane to the far plane.
         let (t0, t1) = frustum_segment(&cam, cam.eye(), -Vec3::Z).expect("inside");
-        assert!((t0 - 0.1).abs() < 1e-5 && (t1 - 20.0).abs() < 1e-3, "{t0} {t1}");
+        assert!(
+            (t0 - 0.1).abs() < 1e-5 && (t1 - 20.0).abs() < 1e-3,
+            "{t0} {t1}"
+        );
         // Back toward the camera from the origin: ends at the near plane.
         let (t0, t1) = frustum_segment(&cam, Vec3::ZERO, Vec3::Z).expect("inside");
         assert!(t0 == 0.0 && (t1 - 2.9).abs() < 1e-4, "{t0} {t1}");
@@ -480,7 +514,10 @@ mod tests {
     #[test]
     fn screen_spaced_seeds_are_evenly_spaced_on_screen() {
         let cam = camera();
-        let (p2, t2) = (Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.3, 0.0, -1.0).normalize());
+        let (p2, t2) = (
+            Vec3::new(0.0, 0.0, 0.5),
+            Vec3::new(0.3, 0.0, -1.0).normalize(),
+        );
         let segment = frustum_segment(&cam, p2, t2).expect("inside");
         let k = 7;
         let xs: Vec<f32> = (0..k)
@@ -500,7 +537,10 @@ mod tests {
                 cam.world_to_pixel(p2 + t * t2).expect("in view").x
             })
             .collect();
-        assert!(world[1] - world[0] > 2.0 * (world[6] - world[5]), "{world:?}");
+        assert!(
+            world[1] - world[0] > 2.0 * (world[6] - world[5]),
+            "{world:?}"
+        );
     }
 
     #[test]
@@ -512,7 +552,10 @@ mod tests {
             half: 10.0,
         };
         let planes = [Plane::through(Vec3::new(0.0, 0.0, -2.0), Vec3::Z)];
-        let (p2, t2) = (Vec3::new(0.2, 0.0, 0.0), Vec3::new(0.4, 0.1, -1.0).normalize());
+        let (p2, t2) = (
+            Vec3::new(0.2, 0.0, 0.0),
+            Vec3::new(0.4, 0.1, -1.0).normalize(),
+        );
         let exact = p2 + planes[0].intersect(p2, t2).expect("hit") * t2;
         let exact_texel = texel_of(&cam, exact).expect("in view");
         for lookup in [
@@ -527,7 +570,10 @@ mod tests {
             let r = find_nearby(&cam, &wall, &planes, lookup, p2, t2);
             let hit = r.hit.expect("hit");
             assert!(
-                (hit.texel.as_ivec2() - exact_texel.as_ivec2()).abs().max_element() <= 1,
+                (hit.texel.as_ivec2() - exact_texel.as_ivec2())
+                    .abs()
+                    .max_element()
+                    <= 1,
                 "{lookup:?}: {:?} vs {exact_texel}",
                 hit.texel
             );
@@ -536,7 +582,12 @@ mod tests {
         // Kay–Greenberg reads the wall behind P~2, not where the ray goes.
         let kg = find_nearby(&cam, &wall, &planes, NearbyLookup::KayGreenberg, p2, t2);
         let kg_texel = kg.hit.expect("the wall is behind P~2").texel;
-        assert!((kg_texel.as_ivec2() - exact_texel.as_ivec2()).abs().max_element() > 3);
+        assert!(
+            (kg_texel.as_ivec2() - exact_texel.as_ivec2())
+                .abs()
+                .max_element()
+                > 3
+        );
     }
 
     #[test]
@@ -583,17 +634,28 @@ mod tests {
         let cam = camera();
         assert_eq!(texel_of(&cam, Vec3::new(0.0, 0.0, 5.0)), None, "behind");
         assert_eq!(texel_of(&cam, Vec3::new(100.0, 0.0, 0.0)), None, "outside");
-        assert_eq!(texel_of(&cam, Vec3::new(0.0, 0.0, -30.0)), None, "beyond far");
+        assert_eq!(
+            texel_of(&cam, Vec3::new(0.0, 0.0, -30.0)),
+            None,
+            "beyond far"
+        );
         assert!(texel_of(&cam, Vec3::ZERO).is_some());
     }
 
     #[test]
     fn feature_size_divides_the_screen_length_by_k() {
         let cam = camera();
+        let screen = SeedSpacing::Screen;
         // A ray straight away from the eye projects to one point.
-        let along = feature_size_px(&cam, Vec3::ZERO, -Vec3::Z, 7).expect("in view");
+        let along = guaranteed_feature_px(&cam, Vec3::ZERO, -Vec3::Z, 7, screen).expect("in view");
         assert!(along < 1e-3, "{along}");
-        let side = feature_size_px(&cam, Vec3::ZERO, Vec3::X, 7).expect("in view");
+        let side = guaranteed_feature_px(&cam, Vec3::ZERO, Vec3::X, 7, screen).expect("in view");
         assert!((side - 64.0 / 7.0).abs() < 1e-2, "{side}");
+        // Away from the camera and sideways: world spacing leaves a larger gap on screen.
+        let dir = Vec3::new(0.3, 0.0, -1.0).normalize();
+        let p = Vec3::new(0.0, 0.0, 1.0);
+        let s = guaranteed_feature_px(&cam, p, dir, 7, screen).expect("in view");
+        let w = guaranteed_feature_px(&cam, p, dir, 7, SeedSpacing::World).expect("in view");
+        assert!(w > 1.5 * s, "world {w} vs screen {s}");
     }
 }

@@ -233,10 +233,9 @@ impl PixelContext<'_> {
         let index = (y * self.camera.width() + x) as usize;
         let uv = Camera::pixel_center(x, y);
         let object = self.nearby.texel(UVec2::new(x, y) + self.pad);
-        let front = self
-            .front
-            .texel(index)
-            .filter(|f| object.is_none_or(|o| self.view_distance(f.p_ws) < self.view_distance(o.p_ws)));
+        let front = self.front.texel(index).filter(|f| {
+            object.is_none_or(|o| self.view_distance(f.p_ws) < self.view_distance(o.p_ws))
+        });
         let Some(front) = front else {
             // An object seen directly, or the environment.
             return match object {

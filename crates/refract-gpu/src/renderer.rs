@@ -8,8 +8,8 @@ use refract_core::Camera;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::nearby_geometry::guard_band_camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, NearbyParams,
-    RenderError, Renderer, Scene, SceneMesh, SurfaceTexel, TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, NearbyParams, RenderError,
+    Renderer, Scene, SceneMesh, SurfaceTexel, TimingSource,
 };
 
 use crate::context::{GpuContext, GpuError};
@@ -230,7 +230,12 @@ impl GpuRenderer {
             lookup: params.lookup,
             light: scene.light,
         };
-        let uniforms = frame_uniforms(camera, &gpu_scene.environment, kernel.ior(), kernel.tir_policy);
+        let uniforms = frame_uniforms(
+            camera,
+            &gpu_scene.environment,
+            kernel.ior(),
+            kernel.tir_policy,
+        );
         let start = Instant::now();
         let mut encoder =
             self.context

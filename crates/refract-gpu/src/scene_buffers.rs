@@ -2,9 +2,9 @@
 //! one scalar such as `d_N`, uv and object id per vertex), and the environment.
 
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
 use refract_core::gpu::{ENVIRONMENT_CONSTANT, ENVIRONMENT_LATLONG, ENVIRONMENT_PROCEDURAL};
 use refract_geometry::Mesh;
-use glam::Vec3;
 use refract_scene::{Albedo, Environment, Material, Object, Scene};
 use wgpu::util::DeviceExt;
 

@@ -108,7 +108,14 @@ impl Aov {
     /// The type of its values.
     pub const fn kind(self) -> AovKind {
         match self {
-            Aov::P1 | Aov::N1 | Aov::T1 | Aov::P2 | Aov::N2 | Aov::T2 | Aov::TOut | Aov::PGeom
+            Aov::P1
+            | Aov::N1
+            | Aov::T1
+            | Aov::P2
+            | Aov::N2
+            | Aov::T2
+            | Aov::TOut
+            | Aov::PGeom
             | Aov::NgTexel => AovKind::Vec3,
             Aov::ExitNormalSource | Aov::Interfaces | Aov::Iterations => AovKind::Count,
             Aov::Covered | Aov::Tir | Aov::TirFirstExit | Aov::Converged => AovKind::Flag,

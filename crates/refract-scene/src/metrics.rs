@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use refract_core::Camera;
+use refract_core::nearby_geometry::{SeedSpacing, guaranteed_feature_px};
 use refract_core::vector::angle_between;
 use serde::Serialize;
 
@@ -71,6 +72,30 @@ pub struct MetricsRecord {
     pub tir_fraction: Option<f64>,
     /// Share of the refractor pixels with TIR at the reference's first exit.
     pub tir_first_exit_fraction: Option<f64>,
+    /// Nearby geometry (Wyman 2005b): over pixels where both the reference and the method see
+    /// the refractor, `[both hit, method only, reference only, neither]`, where "hit" means the
+    /// ray leaving the refractor meets an opaque object (the reference's exact path; the
+    /// method's NG lookup).
+    pub nearby_confusion: Option<[usize; 4]>,
+    /// Share of the reference's hits the method misses ("rays completely miss the dragon").
+    pub nearby_miss_rate: Option<f64>,
+    /// Share of the reference's misses where the method shows an object.
+    pub nearby_false_hit_rate: Option<f64>,
+    /// Mean `|P_geom − P_geom,ref|`, world units, over pixels where both hit.
+    pub p_geom_error_world_mean: Option<f64>,
+    /// Median of the same distance in NG-texture pixels (both projected with the NG camera).
+    pub p_geom_error_px_p50: Option<f64>,
+    /// 90th percentile of the NG-pixel distance.
+    pub p_geom_error_px_p90: Option<f64>,
+    /// Mean distance updates of the iterative lookups over the method's refractor pixels.
+    pub iterations_mean: Option<f64>,
+    /// Share of those pixels whose iteration reached a fixed point.
+    pub converged_share: Option<f64>,
+    /// Seeded lookups, Fig. 9: share of refractor pixels whose seeds guarantee every feature at
+    /// least 3 NG pixels long ([`refract_core::nearby_geometry::guaranteed_feature_px`] ≤ 3).
+    pub feature_guarantee_3px_share: Option<f64>,
+    /// The same for features of at least 10 pixels.
+    pub feature_guarantee_10px_share: Option<f64>,
     /// Median time per frame (all per-frame passes), milliseconds.
     pub ms_per_frame: Option<f64>,
 }
@@ -252,6 +277,80 @@ pub fn evaluate(
             p2_rel,
         },
     )
+}
+
+/// The nearby-geometry metrics of `frame` (a Wyman 2005b method's, with its `P_geom`, `T2`,
+/// `P2` and, for iterative lookups, `iterations`/`converged` layers) against `reference`, into
+/// `record`: the hit/miss confusion, the `P_geom` error in world units and in pixels of the NG
+/// texture (`ng_camera`), iteration counts and, with `seeds = Some((K, spacing))`, the Fig. 9
+/// feature-size guarantee. Definitions: `docs/metrics.md`.
+pub fn evaluate_nearby(
+    reference: &Frame,
+    frame: &Frame,
+    ng_camera: &Camera,
+    seeds: Option<(u32, SeedSpacing)>,
+    record: &mut MetricsRecord,
+) {
+    let n = reference.pixel_count();
+    let (truth, ours) = (Layers::of(reference), Layers::of(frame));
+    let (truth_geom, ours_geom) = (reference.vec3(Aov::PGeom), frame.vec3(Aov::PGeom));
+    let both: Vec<usize> = (0..n)
+        .filter(|&i| Layers::flag(truth.covered, i) && Layers::flag(ours.covered, i))
+        .collect();
+    let mut confusion = [0usize; 4];
+    let mut world = Vec::new();
+    let mut px = Vec::new();
+    let pixel = |p: Vec3| ng_camera.world_to_pixel(p).map(|q| q.truncate());
+    for &i in &both {
+        let (t, o) = (Layers::vector(truth_geom, i), Layers::vector(ours_geom, i));
+        let (t_hit, o_hit) = (!t.is_nan(), !o.is_nan());
+        confusion[match (o_hit, t_hit) {
+            (true, true) => 0,
+            (true, false) => 1,
+            (false, true) => 2,
+            (false, false) => 3,
+        }] += 1;
+        if t_hit && o_hit {
+            world.push(f64::from((o - t).length()));
+            if let (Some(a), Some(b)) = (pixel(o), pixel(t)) {
+                px.push(f64::from((a - b).length()));
+            }
+        }
+    }
+    let ratio = |a: usize, b: usize| (a + b > 0).then(|| a as f64 / (a + b) as f64);
+    record.nearby_confusion = Some(confusion);
+    record.nearby_miss_rate = ratio(confusion[2], confusion[0]);
+    record.nearby_false_hit_rate = ratio(confusion[1], confusion[3]);
+    record.p_geom_error_world_mean = mean(world.iter().copied());
+    record.p_geom_error_px_p50 = percentile(&mut px, 50.0);
+    record.p_geom_error_px_p90 = percentile(&mut px, 90.0);
+    let covered: Vec<usize> = (0..n).filter(|&i| Layers::flag(ours.covered, i)).collect();
+    if let Some(iterations) = frame.count(Aov::Iterations) {
+        record.iterations_mean = mean(covered.iter().map(|&i| f64::from(iterations[i])));
+    }
+    if let Some(converged) = frame.flag(Aov::Converged) {
+        record.converged_share = mean(covered.iter().map(|&i| f64::from(u8::from(converged[i]))));
+    }
+    if let Some((k, spacing)) = seeds {
+        let sizes: Vec<Option<f32>> = (0..n)
+            .filter(|&i| Layers::flag(truth.covered, i))
+            .map(|i| {
+                let (p2, t2) = (Layers::vector(ours.p2, i), Layers::vector(ours.t2, i));
+                (!p2.is_nan() && !t2.is_nan() && t2 != Vec3::ZERO)
+                    .then(|| guaranteed_feature_px(ng_camera, p2, t2, k, spacing))
+                    .flatten()
+            })
+            .collect();
+        let share = |limit: f32| {
+            mean(
+                sizes
+                    .iter()
+                    .map(|s| f64::from(u8::from(s.is_some_and(|s| s <= limit)))),
+            )
+        };
+        record.feature_guarantee_3px_share = share(3.0);
+        record.feature_guarantee_10px_share = share(10.0);
+    }
 }
 
 /// The reference's own row: its refractor pixels, TIR shares and render time.

@@ -669,8 +669,7 @@ impl MethodParams {
                 ("back", _) => p.two.back = choice(name, value, &BACK_TABLE, origin)?,
                 ("tir", _) => p.two.tir = choice(name, value, &TIR_TABLE, origin)?,
                 ("guard", _) => {
-                    p.guard_band_percent =
-                        integer(name, value, 0, MAX_GUARD_BAND_PERCENT, origin)?;
+                    p.guard_band_percent = integer(name, value, 0, MAX_GUARD_BAND_PERCENT, origin)?;
                 }
                 ("iterations", NearbyLookup::Iterative { iterations }) => {
                     *iterations = integer(name, value, 1, MAX_ITERATIONS, origin)?;

@@ -219,7 +219,12 @@ impl OutputBuffers {
         Self {
             outputs: labels
                 .iter()
-                .map(|l| buffer(l, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC))
+                .map(|l| {
+                    buffer(
+                        l,
+                        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    )
+                })
                 .collect(),
             readback: labels
                 .iter()

@@ -10,7 +10,9 @@ use refract_core::gpu::{
     FrameUniforms, NearbyUniforms, exit_normal_source_code, lookup_code, seed_spacing_code,
 };
 use refract_core::nearby_geometry::{MAX_PLANES, NearbyLookup, Plane, SeedSpacing};
-use refract_scene::{Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY};
+use refract_scene::{
+    Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
