@@ -26,6 +26,9 @@ struct Agreement {
     /// Nearby-geometry methods: the share of refractor pixels where one backend's lookup hits
     /// an object and the other's does not, or their `P_geom` differ by more than 1e-3.
     p_geom_differs: f64,
+    /// Pixels neither backend covers (the environment, and opaque objects seen directly): the
+    /// share whose colours differ by more than 1/255.
+    outside_differs: f64,
 }
 
 fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
@@ -36,11 +39,17 @@ fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
     let (cpu_covered, gpu_covered, cpu_t2, gpu_t2) = (covered(cpu), covered(gpu), t2(cpu), t2(gpu));
     let (cpu_geom, gpu_geom) = (cpu.vec3(Aov::PGeom), gpu.vec3(Aov::PGeom));
     let mut p_geom_differs = 0;
+    let (mut outside, mut outside_differs) = (0, 0);
     for i in 0..cpu.pixel_count() {
         let (c, g) = (cpu_covered[i], gpu_covered[i]);
         if c || g {
             union += 1;
             same_coverage += usize::from(c == g);
+        }
+        if !c && !g {
+            outside += 1;
+            let (a, b) = (to_srgb8(cpu.color[i]), to_srgb8(gpu.color[i]));
+            outside_differs += usize::from(a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1));
         }
         if c && g {
             both += 1;
@@ -59,6 +68,7 @@ fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
         t2_differs: t2_differs as f64 / both as f64,
         color_differs: color_differs as f64 / both as f64,
         p_geom_differs: p_geom_differs as f64 / both as f64,
+        outside_differs: outside_differs as f64 / outside.max(1) as f64,
     }
 }
 
@@ -76,6 +86,12 @@ fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
         back: BackSurface::Second,
         ..TwoInterfaceParams::default()
     }));
+    // A guard band, world-spaced seeds and the second back surface on the NG path.
+    let mut seeded = method(MethodId::IterativeSeeded);
+    for (name, value) in [("guard", "20"), ("spacing", "world"), ("back", "second")] {
+        seeded.set(name, value, "test").expect(name);
+    }
+    methods.push(seeded);
     let (mut cpu_frame, mut gpu_frame) = (Frame::default(), Frame::default());
     for params in methods {
         for tir_policy in [TirPolicy::ClampToCritical, TirPolicy::Black] {
@@ -93,12 +109,13 @@ fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
             let a = agreement(&cpu_frame, &gpu_frame);
             let id = params.id();
             println!(
-                "{label} {id} ({}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} %, P_geom on {:.3} % ({:.2} ms GPU)",
+                "{label} {id} ({}) {tir_policy:?}: coverage {:.5}, T2 > 1e-3 rad on {:.3} %, colour > 1/255 on {:.3} %, P_geom on {:.3} %, outside colour on {:.3} % ({:.2} ms GPU)",
                 params.describe(),
                 a.coverage,
                 100.0 * a.t2_differs,
                 100.0 * a.color_differs,
                 100.0 * a.p_geom_differs,
+                100.0 * a.outside_differs,
                 timing.ms
             );
             assert!(
@@ -132,6 +149,24 @@ fn gpu_frames_agree_with_cpu_frames() {
     check("sphere", &builtin("sphere", 1.5), &mut gpu);
     let chart = Arc::new(load_scene("chart").expect("chart").scene);
     check("chart", &chart, &mut gpu);
+    // Every albedo kind on the GPU: a checker wall, a constant torus, a checker box without uvs
+    // (world x, z stand in), in front of and behind the sphere.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("objects.toml");
+    std::fs::write(
+        &path,
+        "[refractor]\nmesh = \"builtin:sphere\"\nior = 1.33\nscale = 0.7\n\
+         [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"checker\"\nscale = 4.0\nrotate_deg = [90.0, 0.0, 0.0]\ntranslate = [0.0, 0.0, -2.0]\n\
+         [[objects]]\nmesh = \"builtin:torus\"\ncolor = [0.2, 0.7, 0.3]\nscale = 0.8\ntranslate = [0.6, -0.3, -1.0]\n\
+         [[objects]]\nmesh = \"builtin:box\"\ntexture = \"checker\"\nscale = 0.3\ntranslate = [-0.5, 0.4, 1.0]\n",
+    )
+    .expect("write");
+    let objects = Arc::new(
+        load_scene(path.to_str().expect("utf-8"))
+            .expect("objects")
+            .scene,
+    );
+    check("objects", &objects, &mut gpu);
     if let Some(data) = shared_data() {
         check("cow", &shared(&data, "cow.obj", 1.2), &mut gpu);
     }

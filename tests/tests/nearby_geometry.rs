@@ -80,9 +80,15 @@ fn without_objects_every_method_is_wyman() {
     );
     for id in NEARBY {
         let frame = render(&mut CpuRenderer::new(), &scene, &camera, &method(id));
-        assert!(frame.color == wyman.color, "{id}: colours differ from wyman");
+        assert!(
+            frame.color == wyman.color,
+            "{id}: colours differ from wyman"
+        );
         let p_geom = frame.vec3(Aov::PGeom).expect("P_geom");
-        assert!(p_geom.iter().all(|p| p.is_nan()), "{id}: a hit without objects");
+        assert!(
+            p_geom.iter().all(|p| p.is_nan()),
+            "{id}: a hit without objects"
+        );
         let bits = |f: &Frame| -> Vec<[u32; 3]> {
             let p2 = f.vec3(Aov::P2).expect("P~2");
             p2.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
@@ -155,7 +161,10 @@ fn ray_plane_is_near_exact_on_planes_and_kay_greenberg_is_not() {
         miss_rate(&plane)
     );
     assert!(plane_p50 <= 2.0, "ray-plane p50 {plane_p50}");
-    assert!(kg_p50 >= 10.0 * plane_p50.max(0.1), "kay-greenberg p50 {kg_p50}");
+    assert!(
+        kg_p50 >= 10.0 * plane_p50.max(0.1),
+        "kay-greenberg p50 {kg_p50}"
+    );
     assert!(
         plane.psnr_ldr_db > kg.psnr_ldr_db,
         "ray-plane {:?} vs kay-greenberg {:?}",
@@ -222,7 +231,12 @@ fn screen_spacing_guarantees_smaller_features_than_world_spacing() {
         );
         shares.push(record.feature_guarantee_10px_share.expect("share"));
     }
-    assert!(shares[0] > shares[1], "screen {} vs world {}", shares[0], shares[1]);
+    assert!(
+        shares[0] > shares[1],
+        "screen {} vs world {}",
+        shares[0],
+        shares[1]
+    );
 }
 
 /// Beyond the paper: the NG texture covers only the screen, so refracted rays that meet an
@@ -252,7 +266,12 @@ fn a_guard_band_recovers_objects_outside_the_view() {
         frames.push(frame);
     }
     assert!(rates[0] > 0.01, "rays leave the view: {}", rates[0]);
-    assert!(rates[1] < 0.6 * rates[0], "guard band {} vs none {}", rates[1], rates[0]);
+    assert!(
+        rates[1] < 0.6 * rates[0],
+        "guard band {} vs none {}",
+        rates[1],
+        rates[0]
+    );
     // Pixels whose lookup hit inside the view without a guard band are unchanged by it.
     let (a, b) = (
         frames[0].vec3(Aov::PGeom).expect("P_geom"),

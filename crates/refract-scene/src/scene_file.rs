@@ -536,6 +536,28 @@ mod tests {
             .expect_err("unknown")
             .to_string();
         assert!(err.contains("sphere, torus, lens"), "{err}");
+        let texture = write(
+            "texture.toml",
+            "[refractor]\nmesh = \"builtin:sphere\"\n[[objects]]\nmesh = \"builtin:plane\"\ntexture = \"marble\"\n",
+        );
+        let err = load_scene(&texture).expect_err("texture").to_string();
+        assert!(
+            err.contains("objects[0].texture") && err.contains("wood"),
+            "{err}"
+        );
+    }
+
+    /// `[camera] near` and `far` reach the scene's camera (the NG texture's depth range,
+    /// Wyman 2005b §4.3's `d_far`); the defaults are the camera's.
+    #[test]
+    fn camera_clip_planes_are_read() {
+        let chart = load_scene("chart").expect("chart").scene;
+        assert_eq!((chart.camera.near, chart.camera.far), (0.05, 12.0));
+        assert_eq!(chart.objects.len(), 2);
+        assert_eq!(chart.objects[1].material, Material::Diffuse(Albedo::WOOD));
+        let sphere = load_scene("sphere").expect("sphere").scene;
+        let d = CameraDesc::default();
+        assert_eq!((sphere.camera.near, sphere.camera.far), (d.near, d.far));
     }
 
     /// Every numeric field has a range checked where the file is parsed; each fault is one
@@ -596,6 +618,26 @@ mod tests {
             (
                 "[camera]\nfov_y_deg = 0.0\n[refractor]\nmesh = \"builtin:sphere\"\n",
                 "fov_y_deg",
+            ),
+            (
+                "[camera]\nnear = 0.0\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] near",
+            ),
+            (
+                "[camera]\nnear = nan\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] near",
+            ),
+            (
+                "[camera]\nnear = 1.0\nfar = 0.5\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] far",
+            ),
+            (
+                "[camera]\nnear = 1e-4\nfar = 1e5\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] far",
+            ),
+            (
+                "[camera]\nfar = inf\n[refractor]\nmesh = \"builtin:sphere\"\n",
+                "[camera] far",
             ),
             (
                 "[camera]\neye = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[refractor]\nmesh = \"builtin:sphere\"\n",
