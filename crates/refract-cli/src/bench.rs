@@ -1,6 +1,7 @@
 //! `refract bench`: Wyman 2005a Table 1 on the models we have — frame rates of `wyman`
 //! ("2-sided") and `single` ("1-sided") per backend, the reference render time, and the paper's
-//! figures beside ours.
+//! figures beside ours; with `--table nearby`, Wyman 2005b Table 1 (refraction of nearby
+//! geometry at 1024² and 512²).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -13,6 +14,7 @@ use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
 use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Scene, TraceSettings,
+    load_scene_str,
 };
 use serde::Serialize;
 
@@ -47,9 +49,24 @@ pub struct BenchArgs {
     /// Output directory for bench.json and bench.md.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// A small run for smoke tests: 128², 3 frames, sphere and cow only.
+    /// A small run for smoke tests: 128², 3 frames, sphere and cow only (`--table nearby`:
+    /// 64² and 128², the sphere row only).
     #[arg(long)]
     pub quick: bool,
+    /// Which table: `image-space` (Wyman 2005a Table 1) or `nearby` (Wyman 2005b Table 1:
+    /// `iterative-seeded` on the paper's four scenes, our models mapped by size, at 1024² and
+    /// 512²; `--scenes`, `--methods` and `--res` do not apply).
+    #[arg(long, value_enum, default_value_t = Table::ImageSpace)]
+    pub table: Table,
+}
+
+/// The tables `refract bench` reproduces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Table {
+    /// Wyman 2005a Table 1.
+    ImageSpace,
+    /// Wyman 2005b Table 1.
+    Nearby,
 }
 
 /// One row of `bench.json`.
@@ -104,8 +121,186 @@ fn load_model(name: &str, data: &std::path::Path) -> anyhow::Result<Option<(Mesh
     Ok(Some((load_mesh(&path, &LoadOptions::default())?.mesh, ior)))
 }
 
-/// Runs the benchmark and writes `bench.json` and `bench.md`.
+/// Wyman 2005b Table 1 (GeForce 6800, "using our iterative approach"): row, our scene, the
+/// paper's fps at 1024² and at 512².
+const NEARBY_PAPER: [(&str, &str, f64, f64); 4] = [
+    ("Sphere w/1 plane", "sphere-plane", 61.0, 212.8),
+    ("Sphere & Dragon", "sphere-igea", 16.9, 21.3),
+    ("Dragon w/2 planes", "igea-planes", 8.5, 17.8),
+    ("Venus & Dragon", "horse-igea", 9.4, 12.6),
+];
+
+/// The scenes of [`NEARBY_PAPER`]: the files of `scenes/` (their meshes under
+/// `../../shared/data`, replaced by `--data`), and the sphere above one wood plane.
+const NEARBY_SCENES: [(&str, &str); 4] = [
+    (
+        "sphere-plane",
+        "[camera]\neye = [0.0, 0.9, 4.2]\ntarget = [0.0, -0.15, 0.0]\nnear = 0.05\nfar = 12.0\n\n\
+         [refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\nscale = 0.8\n\n\
+         [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"wood\"\nscale = 6.0\ntranslate = [0.0, -0.8, 0.6]\n",
+    ),
+    (
+        "sphere-igea",
+        include_str!("../../../scenes/sphere-igea.toml"),
+    ),
+    (
+        "igea-planes",
+        include_str!("../../../scenes/igea-planes.toml"),
+    ),
+    (
+        "horse-igea",
+        include_str!("../../../scenes/horse-igea.toml"),
+    ),
+];
+
+/// The scene files' path to the shared data, replaced by `--data`.
+const SCENE_DATA_PREFIX: &str = "../../shared/data";
+
+/// Runs Wyman 2005b Table 1.
+fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
+    let (resolutions, frames, rows) = if args.quick {
+        (vec![64, 128], 3, &NEARBY_PAPER[..1])
+    } else {
+        (vec![1024, 512], args.frames, &NEARBY_PAPER[..])
+    };
+    crate::cleanup::create_dir(&args.out)
+        .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
+    let method = MethodParams::defaults(MethodId::IterativeSeeded);
+    let backend_ids = backends::parse_backends(&args.backends)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    backends::check_supported(&renderers, std::slice::from_ref(&method))?;
+    let data = args.data.display().to_string();
+    let mut records = Vec::new();
+    let mut frame = Frame::default();
+    for &(_, name, _, _) in rows {
+        let Some(&(_, text)) = NEARBY_SCENES.iter().find(|s| s.0 == name) else {
+            unreachable!("a scene per row");
+        };
+        if text.contains(SCENE_DATA_PREFIX) && !args.data.join("meshes").is_dir() {
+            eprintln!("note: {data}/meshes not found; skipping {name}");
+            continue;
+        }
+        let text = text.replace(SCENE_DATA_PREFIX, &data);
+        let loaded = load_scene_str(name, &text, std::path::Path::new("."), name)?;
+        let scene = Arc::new(loaded.scene);
+        let triangles = scene.refractor.mesh().triangles.len()
+            + scene
+                .objects
+                .iter()
+                .map(|o| o.mesh().triangles.len())
+                .sum::<usize>();
+        for renderer in &mut renderers {
+            renderer.prepare(&scene)?;
+        }
+        for &res in &resolutions {
+            let camera = scene.camera(res, res)?;
+            for renderer in &mut renderers {
+                let times = time_frames(3, frames, || {
+                    Ok(renderer
+                        .render(&camera, &method, FrameOutputs::Color, &mut frame)?
+                        .ms)
+                })?;
+                let FrameTimes { median, min, max } = times;
+                let record = BenchRecord {
+                    scene: name.to_owned(),
+                    triangles,
+                    method: method.id().name().to_owned(),
+                    backend: renderer.backend().id().to_owned(),
+                    width: res,
+                    height: res,
+                    ms_median: median,
+                    ms_min: min,
+                    ms_max: max,
+                    frames,
+                    fps: 1e3 / median,
+                };
+                println!(
+                    "{:<13} {:>7} tris {:<4} {:>5}² {:>9.2} ms  {:>7.1} fps",
+                    name, triangles, record.backend, res, median, record.fps
+                );
+                records.push(record);
+            }
+        }
+    }
+    let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
+    write(&args.out.join("bench-nearby.json"), &json)?;
+    let md = nearby_table(&records, &resolutions, frames, &method);
+    write(&args.out.join("bench-nearby.md"), &md)?;
+    println!("\n{md}");
+    Ok(())
+}
+
+/// Wyman 2005b Table 1's layout with our figures, the paper's and the ratios.
+fn nearby_table(
+    records: &[BenchRecord],
+    resolutions: &[u32],
+    frames: u32,
+    method: &MethodParams,
+) -> String {
+    let fps = |scene: &str, backend: &str, res: u32| {
+        records
+            .iter()
+            .find(|r| r.scene == scene && r.backend == backend && r.width == res)
+            .map(|r| (r.fps, r.ms_median))
+    };
+    let cell = |v: Option<(f64, f64)>| {
+        v.map_or_else(|| "–".to_owned(), |(f, ms)| format!("{f:.1} ({ms:.1} ms)"))
+    };
+    let ratio = |v: Option<(f64, f64)>, paper: f64| {
+        v.map_or_else(|| "–".to_owned(), |(f, _)| format!("{:.2}×", f / paper))
+    };
+    let (hi, lo) = (resolutions[0], resolutions[resolutions.len() - 1]);
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# Wyman 2005b Table 1, reproduced\n\n`{}` ({}), colour only, median of {frames} frames after 3 warm-up \
+         frames; a frame is every per-frame pass (back faces, the NG texture of the opaque objects, front faces, the \
+         kernel). Paper: GeForce 6800 + 3.0 GHz Pentium 4 at 1024² and 512²; its Dragon (250k) is our igea \
+         (268k triangles), its Venus (100k) our horse (97k).\n",
+        method.id(),
+        method.describe()
+    );
+    let _ = writeln!(
+        md,
+        "| paper row | our scene | triangles | CPU fps {hi}² | CPU fps {lo}² | GPU fps {hi}² | GPU fps {lo}² | \
+         paper 1024² | paper 512² | CPU / paper {hi}² | CPU / paper {lo}² |"
+    );
+    let _ = writeln!(md, "|{}|", ["---"; 11].join("|"));
+    for (row, scene, p_hi, p_lo) in NEARBY_PAPER {
+        let Some(triangles) = records
+            .iter()
+            .find(|r| r.scene == scene)
+            .map(|r| r.triangles)
+        else {
+            continue;
+        };
+        let (c_hi, c_lo) = (fps(scene, "cpu", hi), fps(scene, "cpu", lo));
+        let _ = writeln!(
+            md,
+            "| {row} | {scene} | {triangles} | {} | {} | {} | {} | {p_hi} | {p_lo} | {} | {} |",
+            cell(c_hi),
+            cell(c_lo),
+            cell(fps(scene, "gpu", hi)),
+            cell(fps(scene, "gpu", lo)),
+            ratio(c_hi, p_hi),
+            ratio(c_lo, p_lo),
+        );
+    }
+    if hi != 1024 {
+        let _ = writeln!(
+            md,
+            "\nNote: a quick run ({hi}² and {lo}²); the paper's columns are 1024² and 512²."
+        );
+    }
+    md
+}
+
+/// Runs the benchmark and writes `bench.json` and `bench.md` (`bench-nearby.*` for
+/// `--table nearby`).
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    if args.table == Table::Nearby {
+        return run_nearby(args);
+    }
     let (res, frames) = if args.quick {
         (128, 3)
     } else {

@@ -74,6 +74,16 @@ fn compare_writes_metrics_images_and_reports() {
         "p2_error_px_p99_non_tir",
         "tir_fraction",
         "tir_first_exit_fraction",
+        "nearby_confusion",
+        "nearby_miss_rate",
+        "nearby_false_hit_rate",
+        "p_geom_error_world_mean",
+        "p_geom_error_px_p50",
+        "p_geom_error_px_p90",
+        "iterations_mean",
+        "converged_share",
+        "feature_guarantee_3px_share",
+        "feature_guarantee_10px_share",
         "ms_per_frame",
     ];
     for record in records {
@@ -88,6 +98,18 @@ fn compare_writes_metrics_images_and_reports() {
         .find(|r| r["method"] == "single" && r["scene"] == "sphere")
         .expect("single");
     assert!(single["p2_error_rel_mean"].is_null() && single["flip_mean"].as_f64().is_some());
+    assert!(
+        single["nearby_confusion"].is_null(),
+        "only nearby-geometry methods have it"
+    );
+    let seeded = records
+        .iter()
+        .find(|r| r["method"] == "iterative-seeded" && r["scene"] == "sphere")
+        .expect("iterative-seeded");
+    // The sphere has no objects: every lookup misses, the confusion is all "neither".
+    let confusion = seeded["nearby_confusion"].as_array().expect("confusion");
+    assert_eq!(confusion[0], 0);
+    assert!(seeded["feature_guarantee_3px_share"].as_f64().is_some());
     for file in [
         "index.html",
         "report.md",
@@ -95,6 +117,7 @@ fn compare_writes_metrics_images_and_reports() {
         "sphere/reference.exr",
         "sphere/flip-wyman-cpu.png",
         "lens/p2err-wyman-cpu.png",
+        "sphere/miss-ray-plane-cpu.png",
     ] {
         assert!(out.join(file).is_file(), "{file}");
     }
@@ -145,7 +168,7 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
         (
             &[

@@ -145,11 +145,22 @@ pub enum NearbyLookup {
     },
 }
 
-/// The NG texture as the lookups read it: per texel the world position of the nearest opaque
-/// surface the NG pass saw, or `None` where it saw nothing (the environment).
+/// What the NG texture stores per texel for the lookups: the nearest opaque surface the NG pass
+/// saw there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbySurface {
+    /// World position (the lookups' `S`).
+    pub p_ws: Vec3,
+    /// Its view depth in the NG camera, `(p_ws − eye) · look` (the NG z-buffer of §4.3,
+    /// linear, as a float target stores it).
+    pub depth: f32,
+}
+
+/// The NG texture as the lookups read it: per texel the nearest opaque surface the NG pass
+/// saw, or `None` where it saw nothing (the environment).
 pub trait NearbyGeometryTexture {
     /// The surface at texel `(x, y)` (inside the texture; the lookups check bounds).
-    fn surface(&self, texel: UVec2) -> Option<Vec3>;
+    fn surface(&self, texel: UVec2) -> Option<NearbySurface>;
 }
 
 /// Where a lookup found nearby geometry.
@@ -198,42 +209,129 @@ pub fn view_depth(camera: &Camera, p_ws: Vec3) -> f32 {
     (p_ws - camera.eye()).dot(camera.look_dir())
 }
 
+/// The ray `origin + t dir` in a camera's clip space, `clip(t) = c0 + t c1` (affine in `t`):
+/// a point of the ray projects with four multiply-adds and one division, and its view depth is
+/// `clip.w` (the perspective projection's `w = −z_view`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClipRay {
+    origin: Vec3,
+    dir: Vec3,
+    c0: Vec4,
+    c1: Vec4,
+    width: f32,
+    height: f32,
+}
+
+impl ClipRay {
+    /// The ray `origin + t dir` seen by `camera`.
+    #[inline]
+    pub fn new(camera: &Camera, origin: Vec3, dir: Vec3) -> Self {
+        let m = camera.world_to_clip();
+        Self {
+            origin,
+            dir,
+            c0: m * origin.extend(1.0),
+            c1: m * dir.extend(0.0),
+            width: camera.width() as f32,
+            height: camera.height() as f32,
+        }
+    }
+
+    /// The point at `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+
+    /// The view depth of the point at `t`.
+    #[inline]
+    pub fn depth(&self, t: f32) -> f32 {
+        self.c0.w + t * self.c1.w
+    }
+
+    /// The pixel position and window depth of the point at `t` (as
+    /// [`Camera::world_to_pixel`]), `None` on or behind the eye plane.
+    #[inline]
+    pub fn pixel(&self, t: f32) -> Option<Vec3> {
+        let clip = self.c0 + t * self.c1;
+        // `w ≤ 0` or NaN: on or behind the eye plane.
+        if clip.w.is_nan() || clip.w <= 0.0 {
+            return None;
+        }
+        let ndc = clip.truncate() * clip.w.recip();
+        Some(Vec3::new(
+            0.5 * (ndc.x + 1.0) * self.width,
+            0.5 * (1.0 - ndc.y) * self.height,
+            ndc.z,
+        ))
+    }
+
+    /// The texel under the point at `t` ([`texel_of`]).
+    #[inline]
+    pub fn texel(&self, t: f32) -> Option<UVec2> {
+        let q = self.pixel(t)?;
+        let inside = q.x >= 0.0
+            && q.x < self.width
+            && q.y >= 0.0
+            && q.y < self.height
+            && q.z >= 0.0
+            && q.z <= 1.0;
+        inside.then(|| UVec2::new(q.x as u32, q.y as u32))
+    }
+
+    /// The part `[t0, t1]`, `t ≥ 0`, inside the view frustum ([`frustum_segment`]).
+    pub fn segment(&self) -> Option<(f32, f32)> {
+        let (c0, c1) = (self.c0, self.c1);
+        // Each constraint a0 + t a1 ≥ 0.
+        let constraints = [
+            (c0.w + c0.x, c1.w + c1.x),
+            (c0.w - c0.x, c1.w - c1.x),
+            (c0.w + c0.y, c1.w + c1.y),
+            (c0.w - c0.y, c1.w - c1.y),
+            (c0.z, c1.z),
+            (c0.w - c0.z, c1.w - c1.z),
+        ];
+        // The far end is bounded by the far plane when the ray heads away from the eye; rays
+        // heading back toward the camera leave through the near plane or a side, so t stays
+        // finite.
+        let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+        for (a0, a1) in constraints {
+            if a1 == 0.0 {
+                // Parallel to this plane: inside everywhere or nowhere (NaN: nowhere).
+                if a0.is_nan() || a0 < 0.0 {
+                    return None;
+                }
+            } else {
+                let t = -a0 / a1;
+                if a1 > 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+            }
+        }
+        (t0.is_finite() && t1.is_finite() && t0 < t1).then_some((t0, t1))
+    }
+
+    /// The ray parameter of seed `i` of `k` over `segment` ([`seed_parameter`]).
+    #[inline]
+    pub fn seed(&self, (t0, t1): (f32, f32), i: u32, k: u32, spacing: SeedSpacing) -> f32 {
+        let s = (i as f32 + 0.5) / k as f32;
+        let lambda = match spacing {
+            SeedSpacing::World => s,
+            SeedSpacing::Screen => screen_fraction_to_segment(s, self.depth(t0), self.depth(t1)),
+        };
+        t0 + lambda * (t1 - t0)
+    }
+}
+
 /// The part `[t0, t1]` of the ray `origin + t dir`, `t ≥ 0`, inside `camera`'s view frustum
 /// (between its near and far planes, inside its four sides): clip-space Liang–Barsky against
 /// `−w ≤ x, y ≤ w` and `0 ≤ z ≤ w` (WebGPU depth), each linear in `t`. `None` when the ray never
 /// enters it. This is the span where the NG texture can hold an answer; §4.3 samples
 /// `0 ≤ α ≤ d_far`, which it contains.
 pub fn frustum_segment(camera: &Camera, origin: Vec3, dir: Vec3) -> Option<(f32, f32)> {
-    let m = camera.world_to_clip();
-    let c0: Vec4 = m * origin.extend(1.0);
-    let c1: Vec4 = m * dir.extend(0.0);
-    // Each constraint a0 + t a1 ≥ 0.
-    let constraints = [
-        (c0.w + c0.x, c1.w + c1.x),
-        (c0.w - c0.x, c1.w - c1.x),
-        (c0.w + c0.y, c1.w + c1.y),
-        (c0.w - c0.y, c1.w - c1.y),
-        (c0.z, c1.z),
-        (c0.w - c0.z, c1.w - c1.z),
-    ];
-    // The far end is bounded by the far plane when the ray heads away from the eye; rays heading
-    // back toward the camera leave through the near plane or a side, so t stays finite.
-    let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
-    for (a0, a1) in constraints {
-        if a1 == 0.0 {
-            if !(a0 >= 0.0) {
-                return None;
-            }
-        } else {
-            let t = -a0 / a1;
-            if a1 > 0.0 {
-                t0 = t0.max(t);
-            } else {
-                t1 = t1.min(t);
-            }
-        }
-    }
-    (t0.is_finite() && t1.is_finite() && t0 < t1).then_some((t0, t1))
+    ClipRay::new(camera, origin, dir).segment()
 }
 
 /// The fraction `λ ∈ [0, 1]` of a segment with view depths `w0` (start) and `w1` (end) whose
@@ -258,21 +356,12 @@ pub fn seed_parameter(
     camera: &Camera,
     origin: Vec3,
     dir: Vec3,
-    (t0, t1): (f32, f32),
+    segment: (f32, f32),
     i: u32,
     k: u32,
     spacing: SeedSpacing,
 ) -> f32 {
-    let s = (i as f32 + 0.5) / k as f32;
-    let lambda = match spacing {
-        SeedSpacing::World => s,
-        SeedSpacing::Screen => {
-            let w0 = view_depth(camera, origin + t0 * dir);
-            let w1 = view_depth(camera, origin + t1 * dir);
-            screen_fraction_to_segment(s, w0, w1)
-        }
-    };
-    t0 + lambda * (t1 - t0)
+    ClipRay::new(camera, origin, dir).seed(segment, i, k, spacing)
 }
 
 /// The guaranteed feature size of Fig. 9 in NG pixels: the largest screen gap a feature can hide
@@ -288,17 +377,14 @@ pub fn guaranteed_feature_px(
     k: u32,
     spacing: SeedSpacing,
 ) -> Option<f32> {
-    let segment = frustum_segment(camera, origin, dir)?;
-    let screen = |t: f32| {
-        camera
-            .world_to_pixel(origin + t * dir)
-            .map(|q| q.truncate())
-    };
+    let ray = ClipRay::new(camera, origin, dir);
+    let segment = ray.segment()?;
+    let screen = |t: f32| ray.pixel(t).map(|q| q.truncate());
     let (start, end) = (screen(segment.0)?, screen(segment.1)?);
     let mut previous = start;
     let mut gap = 0.0f32;
     for i in 0..k {
-        let seed = screen(seed_parameter(camera, origin, dir, segment, i, k, spacing))?;
+        let seed = screen(ray.seed(segment, i, k, spacing))?;
         let d = (seed - previous).length();
         gap = gap.max(if i == 0 { 2.0 * d } else { d });
         previous = seed;
@@ -329,39 +415,39 @@ pub fn find_nearby<T: NearbyGeometryTexture + ?Sized>(
     p2: Vec3,
     t2: Vec3,
 ) -> NearbyResult {
-    let lookup_at = |p: Vec3| -> Option<NearbyHit> {
-        let texel = texel_of(camera, p)?;
-        let p_geom = texture.surface(texel)?;
-        Some(NearbyHit { texel, p_geom })
+    let ray = ClipRay::new(camera, p2, t2);
+    let lookup_at = |t: f32| -> Option<(UVec2, NearbySurface)> {
+        let texel = ray.texel(t)?;
+        Some((texel, texture.surface(texel)?))
     };
-    let single = |hit: Option<NearbyHit>| NearbyResult {
-        hit,
+    let single = |found: Option<(UVec2, NearbySurface)>| NearbyResult {
+        hit: found.map(|(texel, s)| NearbyHit {
+            texel,
+            p_geom: s.p_ws,
+        }),
         iterations: 0,
-        converged: hit.is_some(),
+        converged: found.is_some(),
     };
     match lookup {
-        NearbyLookup::KayGreenberg => single(lookup_at(p2)),
-        NearbyLookup::RayPlane => {
-            single(nearest_plane_hit(planes, p2, t2).and_then(|t| lookup_at(p2 + t * t2)))
-        }
+        NearbyLookup::KayGreenberg => single(lookup_at(0.0)),
+        NearbyLookup::RayPlane => single(nearest_plane_hit(planes, p2, t2).and_then(lookup_at)),
         NearbyLookup::Iterative { iterations } => match nearest_plane_hit(planes, p2, t2) {
             None => NearbyResult::MISS,
-            Some(t) => iterate(&lookup_at, p2, t2, t, iterations),
+            Some(t) => iterate(&lookup_at, p2, t, iterations),
         },
         NearbyLookup::Seeded {
             iterations,
             seeds,
             spacing,
         } => {
-            let Some(segment) = frustum_segment(camera, p2, t2) else {
+            let Some(segment) = ray.segment() else {
                 return NearbyResult::MISS;
             };
             let mut best: Option<(f32, f32)> = None;
             for i in 0..seeds {
-                let t = seed_parameter(camera, p2, t2, segment, i, seeds, spacing);
-                let p = p2 + t * t2;
-                if let Some(hit) = lookup_at(p) {
-                    let error = (view_depth(camera, p) - view_depth(camera, hit.p_geom)).abs();
+                let t = ray.seed(segment, i, seeds, spacing);
+                if let Some((_, surface)) = lookup_at(t) {
+                    let error = (ray.depth(t) - surface.depth).abs();
                     if best.is_none_or(|(e, _)| error < e) {
                         best = Some((error, t));
                     }
@@ -369,7 +455,7 @@ pub fn find_nearby<T: NearbyGeometryTexture + ?Sized>(
             }
             match best {
                 None => NearbyResult::MISS,
-                Some((_, t)) => iterate(&lookup_at, p2, t2, t, iterations),
+                Some((_, t)) => iterate(&lookup_at, p2, t, iterations),
             }
         }
     }
@@ -378,38 +464,37 @@ pub fn find_nearby<T: NearbyGeometryTexture + ?Sized>(
 /// The distance-form iteration of §4.3 from `p2 + t t2`.
 #[inline]
 fn iterate(
-    lookup_at: &impl Fn(Vec3) -> Option<NearbyHit>,
+    lookup_at: &impl Fn(f32) -> Option<(UVec2, NearbySurface)>,
     p2: Vec3,
-    t2: Vec3,
     t: f32,
     iterations: u32,
 ) -> NearbyResult {
-    let Some(mut hit) = lookup_at(p2 + t * t2) else {
+    let Some(mut hit) = lookup_at(t) else {
         return NearbyResult::MISS;
     };
+    let result = |(texel, s): (UVec2, NearbySurface), iterations, converged| NearbyResult {
+        hit: Some(NearbyHit {
+            texel,
+            p_geom: s.p_ws,
+        }),
+        iterations,
+        converged,
+    };
     for k in 0..iterations {
-        let t = (hit.p_geom - p2).length();
-        let Some(next) = lookup_at(p2 + t * t2) else {
+        let t = (hit.1.p_ws - p2).length();
+        let Some(next) = lookup_at(t) else {
             return NearbyResult {
                 iterations: k + 1,
                 ..NearbyResult::MISS
             };
         };
-        let repeated = next.texel == hit.texel;
+        let repeated = next.0 == hit.0;
         hit = next;
         if repeated {
-            return NearbyResult {
-                hit: Some(hit),
-                iterations: k + 1,
-                converged: true,
-            };
+            return result(hit, k + 1, true);
         }
     }
-    NearbyResult {
-        hit: Some(hit),
-        iterations,
-        converged: false,
-    }
+    result(hit, iterations, false)
 }
 
 #[cfg(test)]
@@ -425,13 +510,16 @@ mod tests {
     }
 
     impl NearbyGeometryTexture for Wall<'_> {
-        fn surface(&self, texel: UVec2) -> Option<Vec3> {
+        fn surface(&self, texel: UVec2) -> Option<NearbySurface> {
             let ray = self
                 .camera
                 .pixel_ray(Camera::pixel_center(texel.x, texel.y));
             let t = (self.z_wall - ray.origin.z) / ray.dir.z;
             let p = ray.at(t);
-            (t > 0.0 && p.x.abs() < self.half).then_some(p)
+            (t > 0.0 && p.x.abs() < self.half).then(|| NearbySurface {
+                p_ws: p,
+                depth: view_depth(self.camera, p),
+            })
         }
     }
 
@@ -627,6 +715,23 @@ mod tests {
         assert!((hit.p_geom.z + 1.0).abs() < 1e-4);
         let exact = p2 + t2 * (1.0 / -t2.z);
         assert!((hit.p_geom - exact).length() < 0.05, "{hit:?} vs {exact}");
+    }
+
+    #[test]
+    fn clip_rays_project_like_the_camera() {
+        let cam = camera();
+        let (p, d) = (
+            Vec3::new(0.3, -0.2, 0.5),
+            Vec3::new(-0.2, 0.1, -1.0).normalize(),
+        );
+        let ray = ClipRay::new(&cam, p, d);
+        for t in [0.0, 0.5, 2.0, 7.5] {
+            let a = ray.pixel(t).expect("in front");
+            let b = cam.world_to_pixel(p + t * d).expect("in front");
+            assert!((a - b).abs().max_element() < 1e-3, "{a} vs {b}");
+            assert!((ray.depth(t) - view_depth(&cam, p + t * d)).abs() < 1e-4);
+            assert_eq!(ray.texel(t), texel_of(&cam, p + t * d));
+        }
     }
 
     #[test]

@@ -7,98 +7,166 @@
 //! Every pixel is one of: the refractor in front of the objects (the refraction), an object
 //! seen directly (its NG texel), or the environment.
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams, two_interface};
 use refract_core::nearby_geometry::{
-    NearbyGeometryTexture, NearbyLookup, Plane, find_nearby, guard_band_camera,
+    NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
 };
 use refract_core::{BackSurface, Camera};
 use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene};
 
 use crate::buffers::{BackFaces, front_faces_into};
-use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize_into};
+use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize_bands};
 
 /// One texel of the NG texture: the nearest opaque surface seen through it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NearbyTexel {
-    /// Window depth in the NG camera (the depth test between objects).
-    pub depth: f32,
-    /// World position (the lookups' `S`).
-    pub p_ws: Vec3,
+    /// The surface the lookups read: world position and view depth in the NG camera.
+    pub surface: NearbySurface,
     /// Outgoing radiance of the surface (the object's material under the scene light).
     pub color: Vec3,
     /// [`refract_scene::SceneMesh::object_id`] of the object (`1 + k`).
     pub object: u32,
 }
 
+/// The texel store the lookups search: `(P, depth)`, depth `< 0` where empty (16 bytes, so a
+/// search touches only these; colours are read once per pixel).
+const EMPTY_SURFACE: Vec4 = Vec4::new(0.0, 0.0, 0.0, -1.0);
+
+/// The colour and object of a texel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Shading {
+    color: Vec3,
+    object: u32,
+}
+
+/// Every opaque object of a scene as one mesh for the NG pass (one rasterisation, one depth
+/// test, one interpolation per texel): the objects' vertices and triangles concatenated in
+/// object order, and for each triangle its object and its index in that object's mesh.
+#[derive(Clone, Debug, Default)]
+pub struct NearbyMeshes {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    sources: Vec<(u32, u32)>,
+}
+
+impl NearbyMeshes {
+    /// The objects of `scene`.
+    pub fn new(scene: &Scene) -> Self {
+        let mut meshes = Self::default();
+        for (k, object) in scene.objects.iter().enumerate() {
+            let mesh = object.mesh();
+            let base = meshes.positions.len() as u32;
+            meshes.positions.extend_from_slice(&mesh.positions);
+            meshes.normals.extend_from_slice(&mesh.normals);
+            meshes
+                .triangles
+                .extend(mesh.triangles.iter().map(|t| t.map(|v| v + base)));
+            meshes
+                .sources
+                .extend((0..mesh.triangles.len() as u32).map(|t| (k as u32, t)));
+        }
+        meshes
+    }
+
+    fn raster(&self) -> RasterMesh<'_> {
+        RasterMesh {
+            positions: &self.positions,
+            normals: &self.normals,
+            scalars: &[],
+            triangles: &self.triangles,
+        }
+    }
+}
+
 /// The NG texture (Wyman 2005b §4, Fig. 10): every opaque object rasterised from the NG
-/// camera (the eye's, widened by a guard band), nearest surface per texel. Its memory is kept
-/// between frames.
+/// camera (the eye's, widened by a guard band), nearest surface per texel, each band of rows
+/// shaded right after it is rasterised. Its memory is kept between frames.
 #[derive(Default)]
 pub struct NearbyTexture {
     width: u32,
-    texels: Vec<Option<NearbyTexel>>,
+    surfaces: Vec<Vec4>,
+    shading: Vec<Shading>,
     scratch: SurfaceBuffer,
 }
 
 impl NearbyGeometryTexture for NearbyTexture {
     #[inline]
-    fn surface(&self, texel: UVec2) -> Option<Vec3> {
-        self.texel(texel).map(|t| t.p_ws)
+    fn surface(&self, texel: UVec2) -> Option<NearbySurface> {
+        let s = *self.surfaces.get(self.index(texel)?)?;
+        (s.w >= 0.0).then(|| NearbySurface {
+            p_ws: s.truncate(),
+            depth: s.w,
+        })
     }
 }
 
 impl NearbyTexture {
+    #[inline]
+    fn index(&self, texel: UVec2) -> Option<usize> {
+        (texel.x < self.width).then(|| texel.y as usize * self.width as usize + texel.x as usize)
+    }
+
     /// The texel at `(x, y)` (`None` where empty or outside).
     #[inline]
     pub fn texel(&self, texel: UVec2) -> Option<NearbyTexel> {
-        if texel.x >= self.width {
-            return None;
-        }
-        let i = texel.y as usize * self.width as usize + texel.x as usize;
-        self.texels.get(i).copied().flatten()
+        let surface = self.surface(texel)?;
+        let shading = self.shading[self.index(texel)?];
+        Some(NearbyTexel {
+            surface,
+            color: shading.color,
+            object: shading.object,
+        })
     }
 
-    /// Renders the objects of `scene` seen by `camera` into this texture (front faces, nearest
-    /// by window depth; the first object wins ties). Colours use the object's material under
-    /// the scene's light ([`refract_scene::Object::shade`]), as the reference does.
-    pub fn render_into(&mut self, scene: &Scene, camera: &Camera) {
+    /// Renders the objects of `scene` (as `meshes`, [`NearbyMeshes::new`] of the same scene)
+    /// seen by `camera` into this texture: front faces, nearest by depth (the first object wins
+    /// ties). Colours use the object's material under the scene's light
+    /// ([`refract_scene::Object::shade`]), as the reference does.
+    pub fn render_into(&mut self, scene: &Scene, meshes: &NearbyMeshes, camera: &Camera) {
         let (width, height) = (camera.width(), camera.height());
+        let n = (width * height) as usize;
         self.width = width;
-        self.texels.clear();
-        self.texels.resize((width * height) as usize, None);
-        for (k, object) in scene.objects.iter().enumerate() {
-            let raster = RasterMesh::new(object.mesh());
-            rasterize_into(
-                &raster,
-                camera,
-                Faces::Front,
-                DepthTest::Nearest,
-                &mut self.scratch,
-            );
-            let scratch = &self.scratch;
-            let id = 1 + k as u32;
-            self.texels
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(i, slot)| {
-                    let Some(t) = scratch.texel(i) else { return };
-                    if slot.is_some_and(|s| s.depth <= t.depth) {
-                        return;
+        self.surfaces.resize(n, EMPTY_SURFACE);
+        self.shading.resize(n, Shading::default());
+        let (eye, look) = (camera.eye(), camera.look_dir());
+        let raster = meshes.raster();
+        let band = band_pixels(width);
+        rasterize_bands(
+            &raster,
+            camera,
+            Faces::Front,
+            DepthTest::Nearest,
+            &mut self.scratch,
+            self.surfaces
+                .par_chunks_mut(band)
+                .zip(self.shading.par_chunks_mut(band)),
+            |rows, (surfaces, shading)| {
+                for row in 0..rows.rows() {
+                    let y = rows.first_row + row;
+                    for x in 0..width {
+                        let i = (row * width + x) as usize;
+                        let Some(t) = rows.texel(x, y) else {
+                            surfaces[i] = EMPTY_SURFACE;
+                            continue;
+                        };
+                        let (k, triangle) = meshes.sources[t.triangle as usize];
+                        let object = &scene.objects[k as usize];
+                        let w = raster.barycentrics(&t);
+                        let uv = object.uv_at(triangle, Vec2::new(w.y, w.z), t.p_ws);
+                        surfaces[i] = t.p_ws.extend((t.p_ws - eye).dot(look));
+                        shading[i] = Shading {
+                            color: object.shade(&scene.light, uv, t.n_ws),
+                            object: 1 + k,
+                        };
                     }
-                    let w = raster.barycentrics(&t);
-                    let uv = object.uv_at(t.triangle, Vec2::new(w.y, w.z), t.p_ws);
-                    *slot = Some(NearbyTexel {
-                        depth: t.depth,
-                        p_ws: t.p_ws,
-                        color: object.shade(&scene.light, uv, t.n_ws),
-                        object: id,
-                    });
-                });
-        }
+                }
+            },
+        );
     }
 }
 
@@ -146,6 +214,7 @@ pub struct NearbyMethod {
 /// The passes of the nearby-geometry methods, with their memory kept between frames.
 #[derive(Default)]
 pub struct NearbyPasses {
+    meshes: NearbyMeshes,
     front: SurfaceBuffer,
     back: BackFaces,
     nearby: NearbyTexture,
@@ -153,6 +222,11 @@ pub struct NearbyPasses {
 }
 
 impl NearbyPasses {
+    /// Prepares the passes for `scene` (its objects as one mesh).
+    pub fn prepare(&mut self, scene: &Scene) {
+        self.meshes = NearbyMeshes::new(scene);
+    }
+
     /// The NG texture of the last frame.
     pub fn nearby_texture(&self) -> &NearbyTexture {
         &self.nearby
@@ -176,14 +250,12 @@ impl NearbyPasses {
         let ng_camera =
             Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
         self.back.render_into(refractor, camera, method.back);
-        self.nearby.render_into(scene, &ng_camera);
+        self.nearby.render_into(scene, &self.meshes, &ng_camera);
         front_faces_into(refractor, camera, &mut self.front);
 
         let (width, height) = (camera.width(), camera.height());
         let n = (width * height) as usize;
         frame.resize_for_overwrite(width, height);
-        self.aovs.clear();
-        self.aovs.resize(n, NearbyAov::NONE);
         let pixels = PixelContext {
             scene,
             planes,
@@ -196,18 +268,26 @@ impl NearbyPasses {
             back: &self.back,
             nearby: &self.nearby,
         };
-        frame
-            .color
-            .par_chunks_mut(width as usize)
-            .zip(self.aovs.par_chunks_mut(width as usize))
-            .enumerate()
-            .for_each(|(y, (colors, aovs))| {
-                for (x, (color, aov)) in colors.iter_mut().zip(aovs.iter_mut()).enumerate() {
-                    (*color, *aov) = pixels.shade(x as u32, y as u32);
+        let rows = frame.color.par_chunks_mut(width as usize).enumerate();
+        if outputs == FrameOutputs::ColorAndAovs {
+            self.aovs.clear();
+            self.aovs.resize(n, NearbyAov::NONE);
+            rows.zip(self.aovs.par_chunks_mut(width as usize))
+                .for_each(|((y, colors), aovs)| {
+                    for (x, (color, aov)) in colors.iter_mut().zip(aovs.iter_mut()).enumerate() {
+                        (*color, *aov) = pixels.shade(x as u32, y as u32);
+                    }
+                });
+        } else {
+            // Colour only, as displayed: no per-pixel AOV memory is touched.
+            rows.for_each(|(y, colors)| {
+                for (x, color) in colors.iter_mut().enumerate() {
+                    *color = pixels.shade(x as u32, y as u32).0;
                 }
             });
+        }
         if outputs == FrameOutputs::ColorAndAovs {
-            write_layers(&self.aovs, id, frame);
+            write_layers(&self.aovs[..n], id, frame);
         }
         Ok(())
     }
@@ -233,9 +313,10 @@ impl PixelContext<'_> {
         let index = (y * self.camera.width() + x) as usize;
         let uv = Camera::pixel_center(x, y);
         let object = self.nearby.texel(UVec2::new(x, y) + self.pad);
-        let front = self.front.texel(index).filter(|f| {
-            object.is_none_or(|o| self.view_distance(f.p_ws) < self.view_distance(o.p_ws))
-        });
+        let front = self
+            .front
+            .texel(index)
+            .filter(|f| object.is_none_or(|o| self.view_distance(f.p_ws) < o.surface.depth));
         let Some(front) = front else {
             // An object seen directly, or the environment.
             return match object {

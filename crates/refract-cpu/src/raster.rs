@@ -602,6 +602,19 @@ impl Band<'_> {
         self.visibility[((y - self.first_row) * self.width + x) as usize].triangle != EMPTY
     }
 
+    /// The fragment covering pixel `(x, y)` (`y` an image row inside this band), as
+    /// [`SurfaceBuffer::texel`] computes it.
+    #[inline]
+    pub fn texel(&self, x: u32, y: u32) -> Option<Texel> {
+        let v = self.visibility[((y - self.first_row) * self.width + x) as usize];
+        (v.triangle != EMPTY).then(|| self.triangles.get(v.triangle).texel(x, y))
+    }
+
+    /// The number of rows of this band.
+    pub fn rows(&self) -> u32 {
+        (self.visibility.len() / self.width as usize) as u32
+    }
+
     /// [`SurfaceBuffer::texels_x8`] for eight pixels of row `y` of this band.
     pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
         let row = ((y - self.first_row) * self.width) as usize;

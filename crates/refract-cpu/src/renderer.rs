@@ -45,6 +45,7 @@ impl Renderer for CpuRenderer {
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         // The mesh, its BVH and d_N come built with the scene; buffers are sized per frame.
+        self.nearby.prepare(scene);
         self.scene = Some(Arc::clone(scene));
         Ok(())
     }

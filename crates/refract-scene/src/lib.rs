@@ -40,4 +40,4 @@ pub use scene::{
     Albedo, COLOR_CHART, DirectionalLight, Material, Object, Refractor, Scene, SceneMesh,
     SurfaceTexel,
 };
-pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene};
+pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene, load_scene_str};

@@ -205,6 +205,17 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
     build(&name, &text, &base, &path.display().to_string())
 }
 
+/// A scene from TOML text: `name` names it, relative paths are relative to `base`, and errors
+/// name `origin` (e.g. the embedding program's description of the text).
+pub fn load_scene_str(
+    name: &str,
+    toml: &str,
+    base: &Path,
+    origin: &str,
+) -> Result<LoadedScene, SceneError> {
+    build(name, toml, base, origin)
+}
+
 /// The largest magnitude of a coordinate (`translate`, `eye`, `target`), documented in
 /// `docs/scenes.md`: the refractor is normalised into the unit sphere, so a million units
 /// away is already far beyond any useful scene, and `f32` keeps its precision.
