@@ -4,7 +4,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_cpu::{CpuRenderer, FrameBuffers, render_buffers_into, shade_into};
 use refract_geometry::{Mesh, builtin};
-use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
+use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
 const RES: u32 = 1024;
 
@@ -27,7 +27,8 @@ fn cpu_methods(c: &mut Criterion) {
         let mut renderer = CpuRenderer::new();
         renderer.prepare(&scene).expect("prepare");
         let mut frame = Frame::default();
-        for id in MethodId::approximations() {
+        // The image-space family (nearby geometry: benches/nearby_geometry.rs).
+        for id in MethodId::approximations().filter(|id| id.info().family == Family::ImageSpace) {
             let params = MethodParams::defaults(id);
             // Correctness before timing: the refractor covers pixels and colours are finite.
             renderer

@@ -9,7 +9,9 @@ use refract_core::Camera;
 use refract_core::nearby_geometry::{NearbyLookup, SeedSpacing, guard_band_camera};
 use refract_cpu::CpuRenderer;
 use refract_scene::metrics::{MetricsRecord, evaluate, evaluate_nearby};
-use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene, load_scene};
+use refract_scene::{
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene,
+};
 use refract_tests::scenes::{builtin, method, render};
 use refract_trace::ReferenceRenderer;
 
@@ -284,6 +286,26 @@ fn a_guard_band_recovers_objects_outside_the_view() {
         changed <= a.len() / 200,
         "{changed} hits changed by the guard band"
     );
+}
+
+/// Colour-only frames (as displayed) have exactly the colours of frames with AOVs.
+#[test]
+fn colour_only_frames_have_the_same_colours() {
+    let scene = Arc::new(load_scene("chart").expect("chart").scene);
+    let camera = scene.camera(80, 72).expect("camera");
+    let mut renderer = CpuRenderer::new();
+    renderer.prepare(&scene).expect("prepare");
+    for id in NEARBY {
+        let (mut full, mut colour) = (Frame::default(), Frame::default());
+        renderer
+            .render(&camera, &method(id), FrameOutputs::ColorAndAovs, &mut full)
+            .expect("frame");
+        renderer
+            .render(&camera, &method(id), FrameOutputs::Color, &mut colour)
+            .expect("frame");
+        assert!(full.color == colour.color, "{id}");
+        assert_eq!(colour.aovs().count(), 0, "{id}");
+    }
 }
 
 /// `iterations` and `seeds` are honoured: more seeds never guarantee larger features, and the

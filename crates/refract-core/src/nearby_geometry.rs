@@ -35,9 +35,11 @@ use crate::math;
 /// ```
 pub fn guard_band_camera(desc: &CameraDesc, percent: u32) -> (CameraDesc, UVec2) {
     let fraction = percent as f32 / 100.0;
+    // Round half up (both are ≥ 0), with the no_std-safe floor.
+    let round = |x: f32| math::floor(x + 0.5) as u32;
     let pad = UVec2::new(
-        (fraction * desc.width as f32).round() as u32,
-        (fraction * desc.height as f32).round() as u32,
+        round(fraction * desc.width as f32),
+        round(fraction * desc.height as f32),
     );
     if pad == UVec2::ZERO {
         return (*desc, pad);
