@@ -6,9 +6,8 @@
 use std::sync::Arc;
 
 use refract_core::Camera;
-use refract_core::nearby_geometry::{NearbyLookup, SeedSpacing, guard_band_camera};
 use refract_cpu::CpuRenderer;
-use refract_scene::metrics::{MetricsRecord, evaluate, evaluate_nearby};
+use refract_scene::metrics::{MetricsRecord, evaluate_method};
 use refract_scene::{
     Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene,
 };
@@ -51,16 +50,7 @@ fn measure(
     params: &MethodParams,
 ) -> (Frame, MetricsRecord) {
     let frame = render(&mut CpuRenderer::new(), scene, camera, params);
-    let (mut record, _) = evaluate(truth, &frame, camera, scene.refractor.diameter());
-    let MethodParams::NearbyGeometry(p) = params else {
-        panic!("a nearby-geometry method");
-    };
-    let ng = Camera::new(guard_band_camera(camera.desc(), p.guard_band_percent).0).expect("ng");
-    let seeds = match p.lookup {
-        NearbyLookup::Seeded { seeds, spacing, .. } => Some((seeds, spacing)),
-        _ => None,
-    };
-    evaluate_nearby(truth, &frame, &ng, seeds, &mut record);
+    let (record, _) = evaluate_method(truth, &frame, camera, scene, params);
     (frame, record)
 }
 
@@ -327,5 +317,4 @@ fn parameters_are_honoured() {
         let iterations = frame.count(Aov::Iterations).expect("iterations");
         assert!(iterations.iter().all(|&n| n <= 3), "K = {seeds}");
     }
-    let _ = SeedSpacing::Screen;
 }

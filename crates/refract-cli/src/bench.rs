@@ -14,11 +14,11 @@ use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
 use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Scene, TraceSettings,
-    load_scene_str,
 };
 use serde::Serialize;
 
 use crate::backends::{self, GpuPolicy};
+use crate::data_scenes;
 use crate::timing::{FrameTimes, time_frames};
 
 /// Arguments of `refract bench`.
@@ -130,31 +130,10 @@ const NEARBY_PAPER: [(&str, &str, f64, f64); 4] = [
     ("Venus & Dragon", "horse-igea", 9.4, 12.6),
 ];
 
-/// The scenes of [`NEARBY_PAPER`]: the files of `scenes/` (their meshes under
-/// `../../shared/data`, replaced by `--data`), and the sphere above one wood plane.
-const NEARBY_SCENES: [(&str, &str); 4] = [
-    (
-        "sphere-plane",
-        "[camera]\neye = [0.0, 0.9, 4.2]\ntarget = [0.0, -0.15, 0.0]\nnear = 0.05\nfar = 12.0\n\n\
-         [refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\nscale = 0.8\n\n\
-         [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"wood\"\nscale = 6.0\ntranslate = [0.0, -0.8, 0.6]\n",
-    ),
-    (
-        "sphere-igea",
-        include_str!("../../../scenes/sphere-igea.toml"),
-    ),
-    (
-        "igea-planes",
-        include_str!("../../../scenes/igea-planes.toml"),
-    ),
-    (
-        "horse-igea",
-        include_str!("../../../scenes/horse-igea.toml"),
-    ),
-];
-
-/// The scene files' path to the shared data, replaced by `--data`.
-const SCENE_DATA_PREFIX: &str = "../../shared/data";
+/// The sphere above one wood plane ("Sphere w/1 plane"); the other rows are `scenes/` files.
+const SPHERE_PLANE: &str = "[camera]\neye = [0.0, 0.9, 4.2]\ntarget = [0.0, -0.15, 0.0]\nnear = 0.05\nfar = 12.0\n\n\
+     [refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\nscale = 0.8\n\n\
+     [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"wood\"\nscale = 6.0\ntranslate = [0.0, -0.8, 0.6]\n";
 
 /// Runs Wyman 2005b Table 1.
 fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
@@ -169,20 +148,16 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
     let backend_ids = backends::parse_backends(&args.backends)?;
     let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
     backends::check_supported(&renderers, std::slice::from_ref(&method))?;
-    let data = args.data.display().to_string();
     let mut records = Vec::new();
     let mut frame = Frame::default();
     for &(_, name, _, _) in rows {
-        let Some(&(_, text)) = NEARBY_SCENES.iter().find(|s| s.0 == name) else {
-            unreachable!("a scene per row");
+        let loaded = if name == "sphere-plane" {
+            data_scenes::load_text(name, SPHERE_PLANE, &args.data)?
+        } else {
+            data_scenes::load(name, &args.data)?
         };
-        if text.contains(SCENE_DATA_PREFIX) && !args.data.join("meshes").is_dir() {
-            eprintln!("note: {data}/meshes not found; skipping {name}");
-            continue;
-        }
-        let text = text.replace(SCENE_DATA_PREFIX, &data);
-        let loaded = load_scene_str(name, &text, std::path::Path::new("."), name)?;
-        let scene = Arc::new(loaded.scene);
+        let Some(scene) = loaded else { continue };
+        let scene = Arc::new(scene);
         let triangles = scene.refractor.mesh().triangles.len()
             + scene
                 .objects

@@ -6,11 +6,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use refract_core::Camera;
-use refract_core::nearby_geometry::{NearbyLookup, guard_band_camera};
-use refract_scene::metrics::{MetricsRecord, evaluate, evaluate_nearby, reference_record};
+use refract_scene::metrics::{MetricsRecord, evaluate_method, reference_record};
 use refract_scene::{
-    Aov, BackendId, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings, load_scene,
+    Aov, BackendId, Family, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings, load_scene,
 };
 use refract_trace::ReferenceRenderer;
 
@@ -117,7 +115,6 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         row.params = settings.describe();
         records.push(row);
 
-        let diameter = scene.refractor.diameter();
         let mut images = Vec::new();
         for renderer in &mut renderers {
             renderer.prepare(scene)?;
@@ -133,18 +130,11 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         .render(&camera, method, FrameOutputs::Color, &mut scratch)?
                         .ms)
                 })?;
-                let (mut record, maps) = evaluate(&truth, &frame, &camera, diameter);
+                let (mut record, maps) = evaluate_method(&truth, &frame, &camera, scene, method);
                 let (id, backend) = (method.id(), renderer.backend());
                 let stem = format!("{id}-{backend}");
-                let mut has_miss = false;
-                if let MethodParams::NearbyGeometry(p) = method {
-                    let (ng_desc, _) = guard_band_camera(camera.desc(), p.guard_band_percent);
-                    let ng_camera = Camera::new(ng_desc)?;
-                    let seeds = match p.lookup {
-                        NearbyLookup::Seeded { seeds, spacing, .. } => Some((seeds, spacing)),
-                        _ => None,
-                    };
-                    evaluate_nearby(&truth, &frame, &ng_camera, seeds, &mut record);
+                let has_miss = id.info().family == Family::NearbyGeometry;
+                if has_miss {
                     write_mask(
                         &dir.join(format!("miss-{stem}.png")),
                         w,
@@ -152,7 +142,6 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         &missed_geometry(&truth, &frame),
                         &frame.color,
                     )?;
-                    has_miss = true;
                 }
                 record.scene.clone_from(&scene.name);
                 record.method = id.name().to_owned();

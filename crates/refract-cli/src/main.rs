@@ -14,6 +14,7 @@ mod bench;
 mod claims;
 mod cleanup;
 mod compare;
+mod data_scenes;
 mod export;
 mod images;
 mod info;

@@ -6,11 +6,15 @@
 
 use glam::Vec3;
 use refract_core::Camera;
-use refract_core::nearby_geometry::{SeedSpacing, guaranteed_feature_px};
+use refract_core::nearby_geometry::{
+    NearbyLookup, SeedSpacing, guaranteed_feature_px, guard_band_camera,
+};
 use refract_core::vector::angle_between;
 use serde::Serialize;
 
 use crate::frame::{Aov, Frame};
+use crate::registry::MethodParams;
+use crate::scene::Scene;
 use crate::tonemap::to_srgb8;
 
 /// The `ε` of the relative MSE, `(a − b)² / (b² + ε)` (pbrt's `imgtool diff --metric MRSE`).
@@ -87,6 +91,14 @@ pub struct MetricsRecord {
     pub p_geom_error_px_p50: Option<f64>,
     /// 90th percentile of the NG-pixel distance.
     pub p_geom_error_px_p90: Option<f64>,
+    /// The lookup alone: median NG-pixel distance between the method's `P_geom` and where the
+    /// method's own ray `P~2 + t T~2` exactly meets the objects (BVH), over pixels where both
+    /// exist: Wyman 2005b's error without Wyman 2005a's error in `P~2` and `T~2`.
+    pub lookup_error_px_p50: Option<f64>,
+    /// 90th percentile of the same distance.
+    pub lookup_error_px_p90: Option<f64>,
+    /// Share of the pixels whose own ray meets an object where the lookup found none.
+    pub lookup_miss_rate: Option<f64>,
     /// Mean distance updates of the iterative lookups over the method's refractor pixels.
     pub iterations_mean: Option<f64>,
     /// Share of those pixels whose iteration reached a fixed point.
@@ -287,6 +299,7 @@ pub fn evaluate(
 pub fn evaluate_nearby(
     reference: &Frame,
     frame: &Frame,
+    scene: &Scene,
     ng_camera: &Camera,
     seeds: Option<(u32, SeedSpacing)>,
     record: &mut MetricsRecord,
@@ -325,6 +338,26 @@ pub fn evaluate_nearby(
     record.p_geom_error_px_p50 = percentile(&mut px, 50.0);
     record.p_geom_error_px_p90 = percentile(&mut px, 90.0);
     let covered: Vec<usize> = (0..n).filter(|&i| Layers::flag(ours.covered, i)).collect();
+    let (mut lookup_px, mut own_hits, mut lookup_misses) = (Vec::new(), 0usize, 0usize);
+    for &i in &covered {
+        let (p2, t2) = (Layers::vector(ours.p2, i), Layers::vector(ours.t2, i));
+        if p2.is_nan() || t2.is_nan() || t2 == Vec3::ZERO {
+            continue;
+        }
+        let Some(exact) = nearest_object_hit(scene, p2, t2) else {
+            continue;
+        };
+        own_hits += 1;
+        let o = Layers::vector(ours_geom, i);
+        if o.is_nan() {
+            lookup_misses += 1;
+        } else if let (Some(a), Some(b)) = (pixel(o), pixel(exact)) {
+            lookup_px.push(f64::from((a - b).length()));
+        }
+    }
+    record.lookup_error_px_p50 = percentile(&mut lookup_px, 50.0);
+    record.lookup_error_px_p90 = percentile(&mut lookup_px, 90.0);
+    record.lookup_miss_rate = (own_hits > 0).then(|| lookup_misses as f64 / own_hits as f64);
     if let Some(iterations) = frame.count(Aov::Iterations) {
         record.iterations_mean = mean(covered.iter().map(|&i| f64::from(iterations[i])));
     }
@@ -351,6 +384,42 @@ pub fn evaluate_nearby(
         record.feature_guarantee_3px_share = share(3.0);
         record.feature_guarantee_10px_share = share(10.0);
     }
+}
+
+/// Where the ray `origin + t dir` (unit `dir`, `t > 0`) first meets an opaque object of `scene`.
+fn nearest_object_hit(scene: &Scene, origin: Vec3, dir: Vec3) -> Option<Vec3> {
+    let ray = refract_core::Ray { origin, dir };
+    scene
+        .objects
+        .iter()
+        .filter_map(|o| o.bvh().closest_hit(&ray, 1e-4, f32::INFINITY))
+        .map(|hit| hit.t)
+        .min_by(f32::total_cmp)
+        .map(|t| ray.at(t))
+}
+
+/// [`evaluate`], and for a nearby-geometry method (Wyman 2005b) also [`evaluate_nearby`] with
+/// the NG camera its parameters imply (the guard band) and its seeds.
+pub fn evaluate_method(
+    reference: &Frame,
+    frame: &Frame,
+    camera: &Camera,
+    scene: &Scene,
+    method: &MethodParams,
+) -> (MetricsRecord, ErrorMaps) {
+    let (mut record, maps) = evaluate(reference, frame, camera, scene.refractor.diameter());
+    if let MethodParams::NearbyGeometry(p) = method {
+        let (desc, _) = guard_band_camera(camera.desc(), p.guard_band_percent);
+        // The NG camera differs from a valid camera only by its field of view and size.
+        if let Ok(ng_camera) = Camera::new(desc) {
+            let seeds = match p.lookup {
+                NearbyLookup::Seeded { seeds, spacing, .. } => Some((seeds, spacing)),
+                _ => None,
+            };
+            evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
+        }
+    }
+    (record, maps)
 }
 
 /// The reference's own row: its refractor pixels, TIR shares and render time.
