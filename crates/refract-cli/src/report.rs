@@ -76,6 +76,57 @@ const HEADERS: [&str; 14] = [
     "ms / frame",
 ];
 
+/// The nearby-geometry table (Wyman 2005b methods only): the hit/miss confusion against the
+/// reference, the `P_geom` errors, the lookup alone, iterations and the Fig. 9 guarantee.
+fn nearby_table(records: &[MetricsRecord]) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let headers = vec![
+        "scene",
+        "method",
+        "backend",
+        "hit both / method only / reference only / neither",
+        "misses vs reference (%)",
+        "P_geom error (world)",
+        "P_geom p50 / p90 (NG px)",
+        "lookup error p50 / p90 (NG px)",
+        "lookup misses (%)",
+        "iterations",
+        "features ≥ 3 / ≥ 10 px guaranteed (%)",
+    ];
+    let pct = |v: Option<f64>| cell(v.map(|v| 100.0 * v), 1);
+    let rows = records
+        .iter()
+        .filter_map(|r| {
+            let c = r.nearby_confusion?;
+            Some(vec![
+                r.scene.clone(),
+                r.method.clone(),
+                r.backend.clone(),
+                format!("{} / {} / {} / {}", c[0], c[1], c[2], c[3]),
+                pct(r.nearby_miss_rate),
+                cell(r.p_geom_error_world_mean, 4),
+                format!(
+                    "{} / {}",
+                    cell(r.p_geom_error_px_p50, 1),
+                    cell(r.p_geom_error_px_p90, 1)
+                ),
+                format!(
+                    "{} / {}",
+                    cell(r.lookup_error_px_p50, 2),
+                    cell(r.lookup_error_px_p90, 1)
+                ),
+                pct(r.lookup_miss_rate),
+                cell(r.iterations_mean, 2),
+                format!(
+                    "{} / {}",
+                    pct(r.feature_guarantee_3px_share),
+                    pct(r.feature_guarantee_10px_share)
+                ),
+            ])
+        })
+        .collect();
+    (headers, rows)
+}
+
 /// Writes the three report files.
 pub fn write_reports(
     out: &Path,
@@ -99,6 +150,19 @@ pub fn write_reports(
     let _ = writeln!(md, "|{}|", ["---"; HEADERS.len()].join("|"));
     for row in &rows {
         let _ = writeln!(md, "| {} |", row.join(" | "));
+    }
+    let (nearby_headers, nearby_rows) = nearby_table(records);
+    if !nearby_rows.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n## Nearby geometry (Wyman 2005b)\n\nOver the pixels where both see the refractor; \
+             \"lookup\" compares with the exact hit of the method's own ray (`docs/metrics.md`).\n"
+        );
+        let _ = writeln!(md, "| {} |", nearby_headers.join(" | "));
+        let _ = writeln!(md, "|{}|", vec!["---"; nearby_headers.len()].join("|"));
+        for row in &nearby_rows {
+            let _ = writeln!(md, "| {} |", row.join(" | "));
+        }
     }
     for scene in scenes {
         let _ = writeln!(md, "\n## {}\n", scene.scene);
@@ -149,6 +213,21 @@ Times: median of {frames} colour-only frames after 2 warm-up frames, buffers + k
 T2 angle error 0–{T2_SCALE_DEG}°, |P~2−P2| 0–{P2_SCALE} of the bounding-sphere diameter; grey where a \
 quantity does not exist. TIR masks show TIR pixels in magenta; missed-object masks (nearby-geometry methods) show in magenta the pixels where the reference's path meets an opaque object and the method's lookup found none.</p>"
     );
+    if !nearby_rows.is_empty() {
+        html.push_str("<h2>Nearby geometry (Wyman 2005b)</h2><table><tr>");
+        for h in &nearby_headers {
+            let _ = write!(html, "<th>{h}</th>");
+        }
+        html.push_str("</tr>");
+        for row in &nearby_rows {
+            html.push_str("<tr>");
+            for c in row {
+                let _ = write!(html, "<td>{c}</td>");
+            }
+            html.push_str("</tr>");
+        }
+        html.push_str("</table>");
+    }
     for scene in scenes {
         let s = &scene.scene;
         let _ = write!(html, "<h2>{s}</h2>");
