@@ -197,7 +197,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
 
 /// Pixels where the reference's path meets an opaque object and the method's lookup found none
 /// (Wyman 2005b Fig. 6, 8: "rays completely miss the dragon").
-fn missed_geometry(truth: &Frame, frame: &Frame) -> Vec<bool> {
+pub(crate) fn missed_geometry(truth: &Frame, frame: &Frame) -> Vec<bool> {
     let (Some(t), Some(o)) = (truth.vec3(Aov::PGeom), frame.vec3(Aov::PGeom)) else {
         return vec![false; frame.pixel_count()];
     };

@@ -21,12 +21,14 @@ mod info;
 mod memory;
 mod render;
 mod report;
+mod sweep;
+mod sweep_report;
 mod timing;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
 /// With no command, compares every method of the registry (`refract methods`) on the CPU backend and the GPU backend (when an adapter exists) against the exact reference ray
-/// tracer on the built-in scenes (sphere, torus, lens) at 512², writes images, error maps,
+/// tracer on the built-in scenes (sphere, torus, lens, chart) at 512², writes images, error maps,
 /// metrics.json, report.md and index.html to out/, and prints a summary table.
 #[derive(Debug, Parser)]
 #[command(name = "refract", version, about, long_about)]
@@ -49,6 +51,10 @@ enum Command {
     Methods,
     /// Measure the seed papers' claims on named scenes and write docs/claims.md with verdicts.
     Claims(claims::ClaimsArgs),
+    /// Run the jobs of a sweep file (the product of its axes), or every N-th with --shard I/N.
+    Sweep(sweep::SweepArgs),
+    /// Merge sweep (shard) directories into one report: results.json, plots, index.html.
+    Report(sweep_report::ReportArgs),
     /// Write a scene as refract renders it (OBJ meshes with normals, scene.json) for other renderers.
     Export(export::ExportArgs),
     /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
@@ -225,6 +231,8 @@ fn main() -> ExitCode {
         }),
         Some(Command::Render(args)) => render::run(&args),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Sweep(args)) => sweep::run(&args),
+        Some(Command::Report(args)) => sweep_report::run(&args),
         Some(Command::Scenes) => {
             for (name, line, _) in BUILTIN_SCENES {
                 println!("{name:<8} {line}");

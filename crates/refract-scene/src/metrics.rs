@@ -10,7 +10,7 @@ use refract_core::nearby_geometry::{
     NearbyLookup, SeedSpacing, guaranteed_feature_px, guard_band_camera,
 };
 use refract_core::vector::angle_between;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::frame::{Aov, Frame};
 use crate::registry::MethodParams;
@@ -21,7 +21,7 @@ use crate::tonemap::to_srgb8;
 pub const REL_MSE_EPSILON: f64 = 0.01;
 
 /// One row of `metrics.json`: exactly these fields, `null` where not applicable.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MetricsRecord {
     /// Scene name.
     pub scene: String,

@@ -1,0 +1,714 @@
+//! `refract sweep SWEEP.toml`: the product of a sweep file's axes (scenes × IORs × resolutions ×
+//! backends × methods × method parameters, minus `[[exclude]]` combinations) as independent
+//! jobs, every `N`-th one with `--shard I/N` (a Slurm array task, a GNU parallel slot), each
+//! written atomically to `OUT/jobs/<job>.json` so a re-run skips finished jobs and a failed job
+//! is recorded without stopping the others. `docs/sweeps.md` has the format and cluster
+//! recipes; `refract report DIR...` merges shards (`sweep_report.rs`).
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use refract_core::Camera;
+use refract_scene::atomic_write::write_text_atomically;
+use refract_scene::metrics::{MetricsRecord, evaluate_method};
+use refract_scene::{
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings, load_scene,
+};
+use refract_trace::ReferenceRenderer;
+use serde::{Deserialize, Serialize};
+
+use crate::backends::{self, GpuPolicy};
+use crate::images::{write_color, write_error_map, write_mask};
+use crate::timing::time_frames;
+
+/// Arguments of `refract sweep`.
+#[derive(Debug, clap::Args)]
+pub struct SweepArgs {
+    /// The sweep file (TOML, `docs/sweeps.md`).
+    pub file: PathBuf,
+    /// Run every N-th job starting at job I (`I/N`, `0 ≤ I < N`), e.g.
+    /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<Shard>,
+    /// Output directory (jobs/, images/); shards of one sweep may share it or not.
+    #[arg(long, default_value = "sweep-out")]
+    pub out: PathBuf,
+    /// A directory where reference frames are kept, keyed by everything they depend on, and
+    /// shared between shards and runs (default: each shard renders the references it needs).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// List the jobs (this shard's) and exit.
+    #[arg(long)]
+    pub list: bool,
+}
+
+/// `--shard I/N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, `0 ≤ index < count`.
+    pub index: usize,
+    /// Shards in all.
+    pub count: usize,
+}
+
+fn parse_shard(text: &str) -> Result<Shard, String> {
+    let err = || format!("`{text}`: expected I/N with 0 ≤ I < N ≤ 100000");
+    let (i, n) = text.split_once('/').ok_or_else(err)?;
+    let (index, count) = (
+        i.trim().parse::<usize>().map_err(|_| err())?,
+        n.trim().parse::<usize>().map_err(|_| err())?,
+    );
+    if count == 0 || count > 100_000 || index >= count {
+        return Err(err());
+    }
+    Ok(Shard { index, count })
+}
+
+/// A sweep file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepFile {
+    /// Scene names or files (relative to the sweep file).
+    scenes: Vec<String>,
+    /// Method ids.
+    methods: Vec<String>,
+    #[serde(default = "default_backends")]
+    backends: Vec<String>,
+    #[serde(default = "default_res")]
+    res: Vec<u32>,
+    /// Indices of refraction replacing each scene's; empty: the scene's own.
+    #[serde(default)]
+    ior: Vec<f32>,
+    #[serde(default = "one")]
+    spp: u32,
+    #[serde(default = "three")]
+    frames: u32,
+    /// Method parameter axes (`seeds = [3, 7, 15]`), applied to the methods that have them.
+    #[serde(default)]
+    params: BTreeMap<String, Vec<toml::Value>>,
+    /// Combinations to leave out: every key given must match (`method`, `scene`, `backend`,
+    /// `res`, `ior` or a parameter name).
+    #[serde(default)]
+    exclude: Vec<BTreeMap<String, toml::Value>>,
+    /// Write each job's images (colour, FLIP and T2 maps) for the report.
+    #[serde(default = "yes")]
+    images: bool,
+}
+
+fn default_backends() -> Vec<String> {
+    vec!["cpu".to_owned()]
+}
+fn default_res() -> Vec<u32> {
+    vec![256]
+}
+fn one() -> u32 {
+    1
+}
+fn three() -> u32 {
+    3
+}
+fn yes() -> bool {
+    true
+}
+
+/// One job: every input that determines its result.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Job {
+    /// Its position in the sweep's job list.
+    pub index: usize,
+    /// A file-name-safe id made of its inputs (`chart-ior1.2-256-cpu-iterative-seeded-seeds7`).
+    pub id: String,
+    /// The scene as written in the sweep file.
+    pub scene: String,
+    /// The IOR replacing the scene's, if any.
+    pub ior: Option<f32>,
+    /// Square resolution.
+    pub res: u32,
+    /// `cpu` or `gpu`.
+    pub backend: String,
+    /// Method id.
+    pub method: String,
+    /// The swept parameters of this job (the rest are the method's defaults).
+    pub params: BTreeMap<String, String>,
+}
+
+/// A job's recorded outcome (`OUT/jobs/<id>.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JobResult {
+    /// The job.
+    pub job: Job,
+    /// `ok` or `error`.
+    pub status: String,
+    /// The error of a failed job.
+    pub error: Option<String>,
+    /// The metrics of a finished job (its `ms_per_frame` is this machine's).
+    pub metrics: Option<MetricsRecord>,
+    /// The job's images, relative to the output directory: `[colour, FLIP, T2 error, reference]`.
+    pub images: Vec<String>,
+}
+
+/// A parsed sweep: its jobs and run settings.
+pub struct Sweep {
+    /// Every job, in order.
+    pub jobs: Vec<Job>,
+    spp: u32,
+    frames: u32,
+    images: bool,
+    base: PathBuf,
+}
+
+fn value_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// File-name-safe: letters, digits, `.`, `-`; anything else becomes `_`.
+fn safe(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+fn scene_label(spec: &str) -> String {
+    Path::new(spec)
+        .file_stem()
+        .map_or_else(|| spec.to_owned(), |s| s.to_string_lossy().into_owned())
+}
+
+impl Sweep {
+    /// Reads and checks a sweep file: every method, backend, parameter and number is checked
+    /// here, with errors naming the file and key.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read the sweep file", path.display()))?;
+        let file: SweepFile = toml::from_str(&text)
+            .with_context(|| format!("{}: invalid sweep file", path.display()))?;
+        let origin = path.display().to_string();
+        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        anyhow::ensure!(!file.scenes.is_empty(), "{origin}: `scenes` is empty");
+        anyhow::ensure!(!file.methods.is_empty(), "{origin}: `methods` is empty");
+        for &res in &file.res {
+            anyhow::ensure!(
+                (1..=8192).contains(&res),
+                "{origin}: res = {res}: expected sizes from 1 to 8192"
+            );
+        }
+        for &ior in &file.ior {
+            anyhow::ensure!(
+                ior > 0.0 && ior <= refract_scene::scene::MAX_IOR,
+                "{origin}: ior = {ior}: expected {}",
+                refract_scene::scene::IOR_EXPECTED
+            );
+        }
+        anyhow::ensure!(
+            (1..=4096).contains(&file.spp),
+            "{origin}: spp = {}: expected 1 to 4096",
+            file.spp
+        );
+        anyhow::ensure!(
+            (1..=1000).contains(&file.frames),
+            "{origin}: frames = {}: expected 1 to 1000",
+            file.frames
+        );
+        backends::parse_backends(&file.backends).with_context(|| format!("{origin}: backends"))?;
+        let methods: Vec<MethodId> = file
+            .methods
+            .iter()
+            .map(|m| {
+                m.parse()
+                    .map_err(|e| anyhow::anyhow!("{origin}: methods: {e}"))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        anyhow::ensure!(
+            !methods.contains(&MethodId::Reference),
+            "{origin}: methods: the reference is rendered for every job; list the methods to compare with it"
+        );
+        for name in file.params.keys() {
+            anyhow::ensure!(
+                methods
+                    .iter()
+                    .any(|m| m.info().params.iter().any(|p| p.name == name)),
+                "{origin}: [params] {name}: none of the sweep's methods has this parameter (see `refract methods`)"
+            );
+        }
+        let iors: Vec<Option<f32>> = if file.ior.is_empty() {
+            vec![None]
+        } else {
+            file.ior.iter().copied().map(Some).collect()
+        };
+        let mut jobs = Vec::new();
+        for scene in &file.scenes {
+            for &ior in &iors {
+                for &res in &file.res {
+                    for backend in &file.backends {
+                        for &method in &methods {
+                            // The parameter axes this method has.
+                            let axes: Vec<(&String, &Vec<toml::Value>)> = file
+                                .params
+                                .iter()
+                                .filter(|(name, _)| {
+                                    method.info().params.iter().any(|p| p.name == *name)
+                                })
+                                .collect();
+                            for combination in product(&axes) {
+                                let mut params = MethodParams::defaults(method);
+                                for (name, value) in &combination {
+                                    params.set(name, value, &format!("{origin}: [params]"))?;
+                                }
+                                let job = Job {
+                                    index: jobs.len(),
+                                    id: String::new(),
+                                    scene: scene.clone(),
+                                    ior,
+                                    res,
+                                    backend: backend.clone(),
+                                    method: method.name().to_owned(),
+                                    params: combination.into_iter().collect(),
+                                };
+                                if !file.exclude.iter().any(|rule| excluded(&job, rule)) {
+                                    jobs.push(job);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for (index, job) in jobs.iter_mut().enumerate() {
+            job.index = index;
+            let mut id = format!(
+                "{}-{}{}-{}-{}",
+                scene_label(&job.scene),
+                job.ior.map_or_else(String::new, |i| format!("ior{i}-")),
+                job.res,
+                job.backend,
+                job.method
+            );
+            for (k, v) in &job.params {
+                id.push_str(&format!("-{k}{v}"));
+            }
+            job.id = safe(&id);
+        }
+        Ok(Self {
+            jobs,
+            spp: file.spp,
+            frames: file.frames,
+            images: file.images,
+            base,
+        })
+    }
+
+    /// The jobs of `shard` (all without one).
+    pub fn shard(&self, shard: Option<Shard>) -> Vec<&Job> {
+        self.jobs
+            .iter()
+            .filter(|j| shard.is_none_or(|s| j.index % s.count == s.index))
+            .collect()
+    }
+}
+
+/// Every combination of one value per axis, as `(name, value)` pairs.
+fn product(axes: &[(&String, &Vec<toml::Value>)]) -> Vec<Vec<(String, String)>> {
+    let mut combos = vec![Vec::new()];
+    for (name, values) in axes {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.push(((*name).clone(), value_text(v)));
+                    c
+                })
+            })
+            .collect();
+    }
+    combos
+}
+
+fn excluded(job: &Job, rule: &BTreeMap<String, toml::Value>) -> bool {
+    rule.iter().all(|(key, value)| {
+        let value = value_text(value);
+        match key.as_str() {
+            "scene" => job.scene == value,
+            "method" => job.method == value,
+            "backend" => job.backend == value,
+            "res" => job.res.to_string() == value,
+            "ior" => job.ior.is_some_and(|i| value.parse::<f32>() == Ok(i)),
+            param => job.params.get(param) == Some(&value),
+        }
+    })
+}
+
+/// FNV-1a, 64 bits: a stable key for cached reference frames (not for security).
+fn fnv1a(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// A loaded scene and its reference frame for one `(scene, ior, res)`.
+struct Prepared {
+    scene: Arc<Scene>,
+    camera: Camera,
+    truth: Frame,
+    reference_image: String,
+}
+
+/// Runs `refract sweep`.
+pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
+    let sweep = Sweep::load(&args.file)?;
+    let mine = sweep.shard(args.shard);
+    if args.list {
+        for job in &mine {
+            println!("{:>5} {}", job.index, job.id);
+        }
+        return Ok(());
+    }
+    let jobs_dir = args.out.join("jobs");
+    let images_dir = args.out.join("images");
+    for dir in [&jobs_dir, &images_dir] {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
+    }
+    if let Some(cache) = &args.cache {
+        std::fs::create_dir_all(cache)
+            .with_context(|| format!("{}: cannot create the cache directory", cache.display()))?;
+    }
+    let todo: Vec<&Job> = mine
+        .iter()
+        .copied()
+        .filter(|job| !finished(&jobs_dir, job))
+        .collect();
+    eprintln!(
+        "{}: {} jobs, {} in this shard, {} to run",
+        args.file.display(),
+        sweep.jobs.len(),
+        mine.len(),
+        todo.len()
+    );
+    let progress = ProgressBar::new(todo.len() as u64);
+    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
+        progress.set_style(style.progress_chars("=> "));
+    }
+    progress.set_message("jobs");
+    let mut prepared: HashMap<(String, Option<u32>, u32), Prepared> = HashMap::new();
+    let mut renderers: HashMap<String, Box<dyn Renderer>> = HashMap::new();
+    let mut prepared_for: HashMap<String, (String, Option<u32>, u32)> = HashMap::new();
+    let (mut ok, mut failed) = (0usize, 0usize);
+    for job in todo {
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_job(
+                &sweep,
+                job,
+                args,
+                &mut prepared,
+                &mut renderers,
+                &mut prepared_for,
+            )
+        }));
+        let result = match outcome {
+            Ok(Ok((metrics, images))) => {
+                ok += 1;
+                JobResult {
+                    job: job.clone(),
+                    status: "ok".to_owned(),
+                    error: None,
+                    metrics: Some(metrics),
+                    images,
+                }
+            }
+            Ok(Err(err)) => {
+                failed += 1;
+                record_failure(job, format!("{err:#}"))
+            }
+            Err(panic) => {
+                failed += 1;
+                let message = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+                    .unwrap_or_else(|| "panic".to_owned());
+                record_failure(job, format!("panicked: {message}"))
+            }
+        };
+        if let Some(error) = &result.error {
+            progress.suspend(|| eprintln!("job {} failed: {error}", job.id));
+        }
+        let json = serde_json::to_string_pretty(&result).context("serialising a job result")?;
+        write_text_atomically(&jobs_dir.join(format!("{}.json", job.id)), &json)?;
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    eprintln!(
+        "done: {ok} finished, {failed} failed (recorded in {}), {} skipped as finished before",
+        jobs_dir.display(),
+        mine.len() - ok - failed
+    );
+    Ok(())
+}
+
+fn record_failure(job: &Job, error: String) -> JobResult {
+    JobResult {
+        job: job.clone(),
+        status: "error".to_owned(),
+        error: Some(error),
+        metrics: None,
+        images: Vec::new(),
+    }
+}
+
+/// Whether `job` has a recorded successful result (failed jobs run again).
+fn finished(jobs_dir: &Path, job: &Job) -> bool {
+    std::fs::read_to_string(jobs_dir.join(format!("{}.json", job.id)))
+        .ok()
+        .and_then(|text| serde_json::from_str::<JobResult>(&text).ok())
+        .is_some_and(|r| r.status == "ok" && r.job == *job)
+}
+
+fn scene_spec(sweep: &Sweep, spec: &str) -> String {
+    let path = Path::new(spec);
+    if path.extension().is_some_and(|e| e == "toml") && path.is_relative() {
+        sweep.base.join(path).display().to_string()
+    } else {
+        spec.to_owned()
+    }
+}
+
+/// The text a reference frame depends on: the scene (its file's text, or the built-in's name),
+/// the IOR, the resolution and the tracer settings.
+fn reference_key(sweep: &Sweep, job: &Job, settings: &MethodParams) -> anyhow::Result<String> {
+    let spec = scene_spec(sweep, &job.scene);
+    let scene_text = if spec.ends_with(".toml") {
+        std::fs::read_to_string(&spec).with_context(|| format!("{spec}: cannot read"))?
+    } else {
+        format!("builtin {spec}")
+    };
+    Ok(format!(
+        "{scene_text}\nior {:?}\nres {}\n{}\nrefract {}",
+        job.ior,
+        job.res,
+        settings.describe(),
+        env!("CARGO_PKG_VERSION")
+    ))
+}
+
+#[allow(clippy::type_complexity)]
+fn run_job(
+    sweep: &Sweep,
+    job: &Job,
+    args: &SweepArgs,
+    prepared: &mut HashMap<(String, Option<u32>, u32), Prepared>,
+    renderers: &mut HashMap<String, Box<dyn Renderer>>,
+    prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
+) -> anyhow::Result<(MetricsRecord, Vec<String>)> {
+    let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
+    let settings = MethodParams::Reference(TraceSettings {
+        spp: sweep.spp,
+        ..TraceSettings::default()
+    });
+    if !prepared.contains_key(&key) {
+        let mut scene = load_scene(&scene_spec(sweep, &job.scene))?.scene;
+        if let Some(ior) = job.ior {
+            scene.refractor.set_ior(ior)?;
+        }
+        let scene = Arc::new(scene);
+        let camera = scene.camera(job.res, job.res)?;
+        let text = reference_key(sweep, job, &settings)?;
+        let stem = format!(
+            "ref-{}-{:016x}",
+            safe(&scene_label(&job.scene)),
+            fnv1a(&text)
+        );
+        let cached = args.cache.as_ref().map(|c| c.join(format!("{stem}.exr")));
+        let truth = match cached.as_ref().filter(|p| p.is_file()) {
+            Some(path) => Frame::read_exr(path)?,
+            None => {
+                let mut reference = ReferenceRenderer::new();
+                reference.prepare(&scene)?;
+                let mut truth = Frame::default();
+                reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
+                if let Some(path) = &cached {
+                    truth.write_exr(path)?;
+                }
+                truth
+            }
+        };
+        let reference_image = format!("images/{stem}.png");
+        if sweep.images {
+            write_color(
+                &args.out.join(&reference_image),
+                job.res,
+                job.res,
+                &truth.color,
+            )?;
+        }
+        prepared.insert(
+            key.clone(),
+            Prepared {
+                scene,
+                camera,
+                truth,
+                reference_image,
+            },
+        );
+    }
+    let Some(p) = prepared.get(&key) else {
+        unreachable!("inserted above")
+    };
+    let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
+    if !renderers.contains_key(&job.backend) {
+        let mut opened = backends::open(&[backend], GpuPolicy::Required)?;
+        renderers.insert(job.backend.clone(), opened.remove(0));
+    }
+    let Some(renderer) = renderers.get_mut(&job.backend) else {
+        unreachable!("opened above")
+    };
+    if prepared_for.get(&job.backend) != Some(&key) {
+        renderer.prepare(&p.scene)?;
+        prepared_for.insert(job.backend.clone(), key.clone());
+    }
+    let id: MethodId = job.method.parse()?;
+    let mut method = MethodParams::defaults(id);
+    for (name, value) in &job.params {
+        method.set(name, value, "sweep job")?;
+    }
+    anyhow::ensure!(
+        renderer.supports(id),
+        "the {backend} backend does not support {id}"
+    );
+    let mut frame = Frame::default();
+    renderer.render(&p.camera, &method, FrameOutputs::ColorAndAovs, &mut frame)?;
+    let mut scratch = Frame::default();
+    let times = time_frames(1, sweep.frames, || {
+        Ok(renderer
+            .render(&p.camera, &method, FrameOutputs::Color, &mut scratch)?
+            .ms)
+    })?;
+    let (mut record, maps) = evaluate_method(&p.truth, &frame, &p.camera, &p.scene, &method);
+    record.scene = scene_label(&job.scene);
+    record.method = id.name().to_owned();
+    record.backend = backend.id().to_owned();
+    record.params = method.describe();
+    record.ms_per_frame = Some(times.median);
+    let mut images = Vec::new();
+    if sweep.images {
+        let (w, h) = (job.res, job.res);
+        let names = [
+            format!("images/{}.png", job.id),
+            format!("images/{}-flip.png", job.id),
+            format!("images/{}-t2err.png", job.id),
+        ];
+        write_color(&args.out.join(&names[0]), w, h, &frame.color)?;
+        write_error_map(&args.out.join(&names[1]), w, h, &maps.flip, 1.0)?;
+        write_error_map(
+            &args.out.join(&names[2]),
+            w,
+            h,
+            &maps.t2_deg,
+            crate::compare::T2_SCALE_DEG,
+        )?;
+        images.extend(names);
+        images.push(p.reference_image.clone());
+        if frame.has(Aov::PGeom) {
+            let name = format!("images/{}-miss.png", job.id);
+            write_mask(
+                &args.out.join(&name),
+                w,
+                h,
+                &crate::compare::missed_geometry(&p.truth, &frame),
+                &frame.color,
+            )?;
+            images.push(name);
+        }
+    }
+    Ok((record, images))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sweep(text: &str) -> anyhow::Result<Sweep> {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("s.toml");
+        std::fs::write(&path, text).expect("write");
+        Sweep::load(&path)
+    }
+
+    #[test]
+    fn jobs_are_the_product_of_the_axes_minus_exclusions() {
+        let s = sweep(
+            "scenes = [\"sphere\", \"chart\"]\nmethods = [\"wyman\", \"iterative-seeded\"]\n\
+             ior = [1.1, 1.5]\nres = [32]\n[params]\nseeds = [3, 7]\n\
+             [[exclude]]\nscene = \"sphere\"\nmethod = \"iterative-seeded\"\n",
+        )
+        .expect("sweep");
+        // chart: 2 IORs × (wyman + seeded × 2 seeds) = 6; sphere: 2 IORs × wyman = 2.
+        assert_eq!(s.jobs.len(), 8);
+        let ids: Vec<&str> = s.jobs.iter().map(|j| j.id.as_str()).collect();
+        assert!(
+            ids.contains(&"chart-ior1.1-32-cpu-iterative-seeded-seeds7"),
+            "{ids:?}"
+        );
+        assert!(
+            ids.iter()
+                .all(|id| !id.starts_with("sphere") || id.contains("wyman"))
+        );
+        let unique: std::collections::BTreeSet<&str> = ids.iter().copied().collect();
+        assert_eq!(unique.len(), ids.len(), "ids are unique");
+        // Shards partition the jobs.
+        let shards: Vec<usize> = (0..3)
+            .map(|i| s.shard(Some(Shard { index: i, count: 3 })).len())
+            .collect();
+        assert_eq!(shards.iter().sum::<usize>(), 8);
+    }
+
+    #[test]
+    fn sweep_errors_name_the_file_and_key() {
+        for (text, expected) in [
+            ("scenes = [\"sphere\"]\nmethods = [\"nope\"]\n", "methods"),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nres = [0]\n",
+                "res = 0",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nior = [-1.0]\n",
+                "ior",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\n[params]\nseeds = [3]\n",
+                "seeds",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"iterative-seeded\"]\n[params]\nseeds = [0]\n",
+                "seeds",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nbackends = [\"tpu\"]\n",
+                "tpu",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nframe = 3\n",
+                "frame",
+            ),
+        ] {
+            let err = format!("{:#}", sweep(text).err().expect(expected));
+            assert!(err.contains("s.toml") && err.contains(expected), "{err}");
+        }
+        assert_eq!(parse_shard("2/3"), Ok(Shard { index: 2, count: 3 }));
+        for bad in ["3/3", "1/0", "x/2", "1"] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,558 @@
+//! `refract report DIR... --out OUT`: merges the job results of any number of sweep (shard)
+//! directories into one report — `results.json`, `report.md`, SVG plots (`plotters`) and an
+//! interactive `index.html` (sortable table, per-scene method × backend thumbnails, a comparison
+//! view with the vendored `img-comparison-slider`).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use plotters::prelude::*;
+use refract_scene::atomic_write::write_text_atomically;
+use refract_scene::metrics::MetricsRecord;
+use refract_scene::{MethodId, REGISTRY};
+
+use crate::sweep::JobResult;
+
+/// Arguments of `refract report`.
+#[derive(Debug, clap::Args)]
+pub struct ReportArgs {
+    /// Sweep output directories (each with `jobs/`), e.g. one per shard.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Where the merged report goes.
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+}
+
+/// The vendored A/B slider (MIT, `crates/refract-cli/assets/`).
+const SLIDER_JS: &str = include_str!("../assets/img-comparison-slider.js");
+/// The report's own script.
+const REPORT_JS: &str = include_str!("../assets/report.js");
+
+/// Every job result under `dirs`, one per job id (a successful result wins over a failed one;
+/// among equals the later directory wins), in job order. Image paths are made relative to
+/// the merged report by copying the images into `out/images`.
+pub fn merge(dirs: &[PathBuf]) -> anyhow::Result<Vec<(JobResult, PathBuf)>> {
+    let mut by_id: BTreeMap<String, (JobResult, PathBuf)> = BTreeMap::new();
+    for dir in dirs {
+        let jobs = dir.join("jobs");
+        let entries = std::fs::read_dir(&jobs)
+            .with_context(|| format!("{}: not a sweep directory (no jobs/)", dir.display()))?;
+        for entry in entries {
+            let path = entry?.path();
+            if path.extension().is_none_or(|e| e != "json") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path)
+                .with_context(|| format!("{}: cannot read", path.display()))?;
+            let result: JobResult = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a job result", path.display()))?;
+            let keep = by_id
+                .get(&result.job.id)
+                .is_none_or(|(old, _)| old.status != "ok" || result.status == "ok");
+            if keep {
+                by_id.insert(result.job.id.clone(), (result, dir.clone()));
+            }
+        }
+    }
+    let mut results: Vec<(JobResult, PathBuf)> = by_id.into_values().collect();
+    results.sort_by_key(|(r, _)| r.job.index);
+    Ok(results)
+}
+
+/// Runs `refract report`.
+pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
+    let results = merge(&args.dirs)?;
+    anyhow::ensure!(
+        !results.is_empty(),
+        "no job results under {}",
+        args.dirs
+            .iter()
+            .map(|d| d.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let images_dir = args.out.join("images");
+    std::fs::create_dir_all(&images_dir)
+        .with_context(|| format!("{}: cannot create the directory", images_dir.display()))?;
+    for (result, dir) in &results {
+        for image in &result.images {
+            let (from, to) = (dir.join(image), args.out.join(image));
+            if from.is_file() && !to.is_file() {
+                std::fs::copy(&from, &to)
+                    .with_context(|| format!("copying {} to {}", from.display(), to.display()))?;
+            }
+        }
+    }
+    let results: Vec<JobResult> = results.into_iter().map(|(r, _)| r).collect();
+    write_text_atomically(
+        &args.out.join("results.json"),
+        &serde_json::to_string_pretty(&results).context("serialising results")?,
+    )?;
+    let plots = write_plots(&args.out, &results)?;
+    write_text_atomically(&args.out.join("report.md"), &markdown(&results, &plots))?;
+    write_text_atomically(&args.out.join("img-comparison-slider.js"), SLIDER_JS)?;
+    write_text_atomically(&args.out.join("report.js"), REPORT_JS)?;
+    write_text_atomically(&args.out.join("index.html"), &html(&results, &plots)?)?;
+    let failed = results.iter().filter(|r| r.status != "ok").count();
+    println!(
+        "{} jobs ({failed} failed) -> {}/index.html, report.md, results.json, {} plots",
+        results.len(),
+        args.out.display(),
+        plots.len()
+    );
+    Ok(())
+}
+
+fn cell(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
+}
+
+/// A table column: its header and how a result shows in it.
+type Column = (&'static str, fn(&JobResult) -> String);
+
+/// The table columns.
+fn columns() -> Vec<Column> {
+    fn m(r: &JobResult) -> Option<&MetricsRecord> {
+        r.metrics.as_ref()
+    }
+    vec![
+        ("job", |r| r.job.id.clone()),
+        ("scene", |r| r.job.scene.clone()),
+        ("IOR", |r| {
+            r.job
+                .ior
+                .map_or_else(|| "scene".to_owned(), |i| i.to_string())
+        }),
+        ("res", |r| r.job.res.to_string()),
+        ("backend", |r| r.job.backend.clone()),
+        ("method", |r| r.job.method.clone()),
+        ("params", |r| {
+            r.job
+                .params
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        }),
+        ("status", |r| r.status.clone()),
+        ("PSNR (dB)", |r| cell(m(r).and_then(|m| m.psnr_ldr_db), 2)),
+        ("mean FLIP", |r| cell(m(r).and_then(|m| m.flip_mean), 4)),
+        ("T2 error, no TIR (°)", |r| {
+            cell(m(r).and_then(|m| m.t2_angle_deg_mean_non_tir), 3)
+        }),
+        ("misses vs reference (%)", |r| {
+            cell(m(r).and_then(|m| m.nearby_miss_rate).map(|v| 100.0 * v), 1)
+        }),
+        ("ms / frame", |r| cell(m(r).and_then(|m| m.ms_per_frame), 2)),
+    ]
+}
+
+fn markdown(results: &[JobResult], plots: &[(String, String)]) -> String {
+    let mut md = String::from("# refract sweep report\n\n");
+    let _ = writeln!(
+        md,
+        "{} jobs. Errors against the exact reference over refractor pixels (`docs/metrics.md`); \
+         times: median colour-only frame on the machine that ran the job.\n",
+        results.len()
+    );
+    let cols = columns();
+    let _ = writeln!(
+        md,
+        "| {} |\n|{}|",
+        cols.iter().map(|c| c.0).collect::<Vec<_>>().join(" | "),
+        vec!["---"; cols.len()].join("|")
+    );
+    for r in results {
+        let row: Vec<String> = cols.iter().map(|c| c.1(r)).collect();
+        let _ = writeln!(md, "| {} |", row.join(" | "));
+    }
+    for r in results.iter().filter(|r| r.status != "ok") {
+        let _ = writeln!(
+            md,
+            "\nFailed: `{}`: {}",
+            r.job.id,
+            r.error.as_deref().unwrap_or("")
+        );
+    }
+    for (file, title) in plots {
+        let _ = writeln!(md, "\n## {title}\n\n![{title}]({file})");
+    }
+    md
+}
+
+/// One colour per method, the same in every plot (registry order).
+fn method_color(method: &str) -> RGBColor {
+    const PALETTE: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+    ];
+    let index = REGISTRY.iter().position(|m| m.name == method).unwrap_or(0);
+    PALETTE[index % PALETTE.len()]
+}
+
+/// A series: legend label, method (its colour) and `(x, y)` points sorted by `x`.
+struct Series {
+    label: String,
+    method: String,
+    points: Vec<(f64, f64)>,
+}
+
+/// The results grouped into series by everything but the `x` axis; `x` and `y` from each result.
+fn series(
+    results: &[JobResult],
+    x: impl Fn(&JobResult) -> Option<f64>,
+    y: impl Fn(&MetricsRecord) -> Option<f64>,
+    group: impl Fn(&JobResult) -> String,
+) -> Vec<Series> {
+    let mut groups: BTreeMap<String, Series> = BTreeMap::new();
+    for r in results {
+        let (Some(m), Some(x)) = (r.metrics.as_ref(), x(r)) else {
+            continue;
+        };
+        let Some(y) = y(m) else { continue };
+        let label = group(r);
+        groups
+            .entry(label.clone())
+            .or_insert_with(|| Series {
+                label,
+                method: r.job.method.clone(),
+                points: Vec::new(),
+            })
+            .points
+            .push((x, y));
+    }
+    let mut out: Vec<Series> = groups.into_values().collect();
+    for s in &mut out {
+        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    out
+}
+
+fn label_except(r: &JobResult, skip: &[&str]) -> String {
+    let mut parts = Vec::new();
+    if !skip.contains(&"method") {
+        parts.push(r.job.method.clone());
+    }
+    if !skip.contains(&"scene") {
+        parts.push(r.job.scene.clone());
+    }
+    if !skip.contains(&"backend") {
+        parts.push(r.job.backend.clone());
+    }
+    if !skip.contains(&"res") {
+        parts.push(format!("{}²", r.job.res));
+    }
+    if let Some(i) = r.job.ior.filter(|_| !skip.contains(&"ior")) {
+        parts.push(format!("IOR {i}"));
+    }
+    for (k, v) in &r.job.params {
+        if !skip.contains(&k.as_str()) {
+            parts.push(format!("{k}={v}"));
+        }
+    }
+    parts.join(" ")
+}
+
+/// Draws one SVG plot; `lines` joins each series' points.
+fn plot(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    lines: bool,
+) -> anyhow::Result<()> {
+    let points = series.iter().flat_map(|s| s.points.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in points {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    let pad = |a: f64, b: f64| {
+        if b > a {
+            0.05 * (b - a)
+        } else {
+            0.5 * a.abs().max(1.0)
+        }
+    };
+    let (px, py) = (pad(x0, x1), pad(y0, y1));
+    let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
+    let draw = || -> Result<(), Box<dyn std::error::Error>> {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d((x0 - px)..(x1 + px), (y0 - py).max(0.0)..(y1 + py))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .draw()?;
+        for s in series {
+            let color = method_color(&s.method);
+            let style = ShapeStyle::from(&color).filled();
+            if lines {
+                chart
+                    .draw_series(LineSeries::new(
+                        s.points.iter().copied(),
+                        color.stroke_width(2),
+                    ))?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
+                chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, style)))?;
+            } else {
+                chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, style)))?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 4, style));
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
+}
+
+/// The plots the results support: an axis with at least two values gets its plot. Returns
+/// `(file, title)` pairs.
+fn write_plots(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String, String)>> {
+    let distinct = |f: &dyn Fn(&JobResult) -> Option<String>| {
+        let mut values: Vec<String> = results.iter().filter_map(f).collect();
+        values.sort();
+        values.dedup();
+        values.len()
+    };
+    let flip = |m: &MetricsRecord| m.flip_mean;
+    let mut plots = Vec::new();
+    let mut add = |file: &str, title: &str, x: &str, y: &str, s: Vec<Series>, lines: bool| {
+        if s.is_empty() {
+            return Ok(());
+        }
+        plot(&out.join(file), title, x, y, &s, lines)?;
+        plots.push((file.to_owned(), title.to_owned()));
+        anyhow::Ok(())
+    };
+    if distinct(&|r| r.job.ior.map(|i| i.to_string())) >= 2 {
+        add(
+            "error-vs-ior.svg",
+            "Error vs index of refraction (Wyman 2005b Fig. 11)",
+            "index of refraction",
+            "mean FLIP (refractor pixels)",
+            series(
+                results,
+                |r| r.job.ior.map(f64::from),
+                flip,
+                |r| label_except(r, &["ior"]),
+            ),
+            true,
+        )?;
+    }
+    if distinct(&|r| r.job.params.get("seeds").cloned()) >= 2 {
+        add(
+            "error-vs-seeds.svg",
+            "Error vs seeds K (iterative-seeded)",
+            "seeds K",
+            "mean FLIP (refractor pixels)",
+            series(
+                results,
+                |r| r.job.params.get("seeds").and_then(|v| v.parse().ok()),
+                flip,
+                |r| label_except(r, &["seeds"]),
+            ),
+            true,
+        )?;
+    }
+    if distinct(&|r| r.job.params.get("iterations").cloned()) >= 2 {
+        add(
+            "error-vs-iterations.svg",
+            "Error vs iterations",
+            "iterations",
+            "mean FLIP (refractor pixels)",
+            series(
+                results,
+                |r| r.job.params.get("iterations").and_then(|v| v.parse().ok()),
+                flip,
+                |r| label_except(r, &["iterations"]),
+            ),
+            true,
+        )?;
+    }
+    if distinct(&|r| Some(r.job.res.to_string())) >= 2 {
+        add(
+            "time-vs-resolution.svg",
+            "Frame time vs resolution, per backend",
+            "pixels (millions)",
+            "median frame time (ms)",
+            series(
+                results,
+                |r| Some(f64::from(r.job.res) * f64::from(r.job.res) / 1e6),
+                |m| m.ms_per_frame,
+                |r| label_except(r, &["res"]),
+            ),
+            true,
+        )?;
+    }
+    add(
+        "error-vs-time.svg",
+        "Error vs frame time (the trade-off)",
+        "median frame time (ms)",
+        "mean FLIP (refractor pixels)",
+        series(
+            results,
+            |r| r.metrics.as_ref().and_then(|m| m.ms_per_frame),
+            flip,
+            |r| r.job.method.clone(),
+        ),
+        false,
+    )?;
+    Ok(plots)
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn html(results: &[JobResult], plots: &[(String, String)]) -> anyhow::Result<String> {
+    let cols = columns();
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>refract sweep report</title>\
+<script src=\"img-comparison-slider.js\" defer></script><script src=\"report.js\" defer></script><style>\
+body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
+table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:3px 8px;border-bottom:1px solid #ddd;text-align:right;white-space:nowrap}}\
+th{{background:#eee;cursor:pointer;user-select:none}}th.asc::after{{content:' ▲'}}th.desc::after{{content:' ▼'}}\
+td:nth-child(-n+8){{text-align:left}}.grid{{display:grid;gap:6px;margin:8px 0}}.grid figure{{margin:0;cursor:pointer}}\
+.grid img{{width:160px;image-rendering:pixelated;border:1px solid #ccc}}figcaption{{font-size:11px;color:#555;max-width:160px}}\
+#viewer{{display:none;position:fixed;inset:0;background:#181818;color:#eee;z-index:10}}\
+#viewer.open{{display:flex;flex-direction:column}}#bar{{padding:8px 12px;font-size:14px}}#bar kbd{{background:#444;border-radius:3px;padding:0 4px}}\
+#stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
+#stage img{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
+.plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed{{color:#b00}}</style></head><body>\
+<h1>refract sweep report</h1><p>{} jobs. Click a column to sort; click a thumbnail to compare it with the reference \
+(keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
+        results.len()
+    );
+    h.push_str("<table id=\"metrics\"><thead><tr>");
+    for (name, _) in &cols {
+        let _ = write!(h, "<th>{}</th>", escape(name));
+    }
+    h.push_str("</tr></thead><tbody>");
+    for r in results {
+        let class = if r.status == "ok" {
+            ""
+        } else {
+            " class=\"failed\""
+        };
+        let _ = write!(h, "<tr{class}>");
+        for (_, value) in &cols {
+            let _ = write!(h, "<td>{}</td>", escape(&value(r)));
+        }
+        h.push_str("</tr>");
+    }
+    h.push_str("</tbody></table>");
+    for r in results.iter().filter(|r| r.status != "ok") {
+        let _ = write!(
+            h,
+            "<p class=\"failed\">Failed: <code>{}</code>: {}</p>",
+            escape(&r.job.id),
+            escape(r.error.as_deref().unwrap_or(""))
+        );
+    }
+    if !plots.is_empty() {
+        h.push_str("<h2>Plots</h2><div class=\"plots\">");
+        for (file, title) in plots {
+            let _ = write!(
+                h,
+                "<figure><img src=\"{file}\" alt=\"{}\"></figure>",
+                escape(title)
+            );
+        }
+        h.push_str("</div>");
+    }
+    // Per scene group (scene, IOR, resolution): a method × backend grid of thumbnails.
+    let mut groups: BTreeMap<(String, String, u32), Vec<&JobResult>> = BTreeMap::new();
+    for r in results.iter().filter(|r| r.images.len() >= 4) {
+        let ior = r
+            .job
+            .ior
+            .map_or_else(|| "scene".to_owned(), |i| i.to_string());
+        groups
+            .entry((r.job.scene.clone(), ior, r.job.res))
+            .or_default()
+            .push(r);
+    }
+    for ((scene, ior, res), jobs) in &groups {
+        let backends: Vec<&str> = {
+            let mut b: Vec<&str> = jobs.iter().map(|r| r.job.backend.as_str()).collect();
+            b.sort_unstable();
+            b.dedup();
+            b
+        };
+        let _ = write!(
+            h,
+            "<h2>{} — IOR {}, {res}²</h2><div class=\"grid\" style=\"grid-template-columns:repeat({},max-content)\">",
+            escape(scene),
+            escape(ior),
+            backends.len()
+        );
+        let mut ordered = jobs.clone();
+        ordered.sort_by_key(|r| {
+            let method = r
+                .job
+                .method
+                .parse::<MethodId>()
+                .map_or(usize::MAX, |m| m as usize);
+            (method, r.job.params.clone(), r.job.backend.clone())
+        });
+        for r in ordered {
+            let imgs = &r.images;
+            let miss = imgs.get(4).map_or("", String::as_str);
+            let params: Vec<String> = r
+                .job
+                .params
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            let caption = format!("{} {} {}", r.job.method, r.job.backend, params.join(" "));
+            let _ = write!(
+                h,
+                "<figure class=\"thumb\" data-image=\"{}\" data-flip=\"{}\" data-t2=\"{}\" data-reference=\"{}\" data-miss=\"{miss}\" \
+data-title=\"{}\"><img src=\"{}\" loading=\"lazy\"><figcaption>{}</figcaption></figure>",
+                imgs[0],
+                imgs[1],
+                imgs[2],
+                imgs[3],
+                escape(&format!("{} — {caption}", r.job.id)),
+                imgs[0],
+                escape(&caption)
+            );
+        }
+        h.push_str("</div>");
+    }
+    h.push_str(
+        "<div id=\"viewer\"><div id=\"bar\"></div><div id=\"stage\"></div></div></body></html>\n",
+    );
+    Ok(h)
+}

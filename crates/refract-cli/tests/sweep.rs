@@ -1,0 +1,240 @@
+//! `refract sweep` and `refract report` end to end: shards in parallel processes merge to the
+//! unsharded result, re-runs skip finished jobs, failures are recorded, and the report works
+//! in headless Chromium (when installed; `REFRACT_REQUIRE_BROWSER=1` makes a missing browser a
+//! failure, as in CI).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn refract(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_refract"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run refract")
+}
+
+fn ok(output: &Output) -> String {
+    let err = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "{err}");
+    err
+}
+
+const SWEEP: &str = r#"
+scenes = ["chart", "sphere"]
+methods = ["wyman", "ray-plane", "iterative-seeded"]
+res = [24, 32]
+ior = [1.2, 1.5]
+frames = 1
+[params]
+seeds = [3, 7]
+[[exclude]]
+scene = "sphere"
+method = "ray-plane"
+"#;
+
+/// The results with this machine's timings removed (they differ from run to run).
+fn without_timings(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).expect("results.json");
+    let mut value: serde_json::Value = serde_json::from_str(&text).expect("json");
+    for result in value.as_array_mut().expect("array") {
+        if let Some(metrics) = result.get_mut("metrics").and_then(|m| m.as_object_mut()) {
+            metrics.insert("ms_per_frame".to_owned(), serde_json::Value::Null);
+        }
+    }
+    value
+}
+
+#[test]
+fn three_shards_in_parallel_merge_to_the_unsharded_result() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("sweep.toml"), SWEEP).expect("write");
+    let exe = env!("CARGO_BIN_EXE_refract");
+    let shards: Vec<std::process::Child> = (0..3)
+        .map(|i| {
+            Command::new(exe)
+                .args([
+                    "sweep",
+                    "sweep.toml",
+                    "--shard",
+                    &format!("{i}/3"),
+                    "--out",
+                    &format!("shard{i}"),
+                    "--cache",
+                    "cache",
+                ])
+                .current_dir(dir.path())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .expect("spawn a shard")
+        })
+        .collect();
+    for child in shards {
+        let output = child.wait_with_output().expect("shard");
+        ok(&output);
+    }
+    ok(&refract(
+        &["sweep", "sweep.toml", "--out", "all"],
+        dir.path(),
+    ));
+    ok(&refract(
+        &["report", "shard0", "shard1", "shard2", "--out", "merged"],
+        dir.path(),
+    ));
+    ok(&refract(&["report", "all", "--out", "single"], dir.path()));
+    let (merged, single) = (
+        without_timings(&dir.path().join("merged/results.json")),
+        without_timings(&dir.path().join("single/results.json")),
+    );
+    // chart: 2 res × 2 IORs × (wyman + ray-plane + 2 seeded) = 16; sphere: 2 × 2 × 3 = 12.
+    assert_eq!(merged.as_array().map(Vec::len), Some(28));
+    assert!(
+        merged == single,
+        "merged shards differ from the unsharded run"
+    );
+    assert!(
+        merged
+            .as_array()
+            .expect("array")
+            .iter()
+            .all(|r| r["status"] == "ok")
+    );
+    // The shards shared their references through the cache: one per (scene, IOR, resolution).
+    let cached = std::fs::read_dir(dir.path().join("cache"))
+        .expect("cache")
+        .count();
+    assert_eq!(cached, 2 * 2 * 2);
+    for file in [
+        "index.html",
+        "report.md",
+        "error-vs-ior.svg",
+        "error-vs-seeds.svg",
+        "time-vs-resolution.svg",
+        "error-vs-time.svg",
+        "img-comparison-slider.js",
+    ] {
+        assert!(dir.path().join("merged").join(file).is_file(), "{file}");
+    }
+    let svg = std::fs::read_to_string(dir.path().join("merged/error-vs-ior.svg")).expect("svg");
+    assert!(svg.contains("index of refraction") && svg.contains("mean FLIP"));
+}
+
+#[test]
+fn reruns_skip_finished_jobs_and_failures_are_recorded() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("sweep.toml"),
+        "scenes = [\"sphere\", \"missing.toml\"]\nmethods = [\"single\", \"wyman\"]\nres = [16]\nframes = 1\n",
+    )
+    .expect("write");
+    let first = ok(&refract(
+        &["sweep", "sweep.toml", "--out", "out"],
+        dir.path(),
+    ));
+    assert!(first.contains("2 finished, 2 failed"), "{first}");
+    let failed: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("out/jobs/missing-16-cpu-wyman.json"))
+            .expect("failure recorded"),
+    )
+    .expect("json");
+    assert_eq!(failed["status"], "error");
+    assert!(
+        failed["error"]
+            .as_str()
+            .is_some_and(|e| e.contains("missing.toml")),
+        "{failed}"
+    );
+    // Finished jobs are skipped; failed ones run again.
+    let second = ok(&refract(
+        &["sweep", "sweep.toml", "--out", "out"],
+        dir.path(),
+    ));
+    assert!(second.contains("2 to run"), "{second}");
+    std::fs::remove_file(dir.path().join("out/jobs/sphere-16-cpu-single.json")).expect("rm");
+    let third = ok(&refract(
+        &["sweep", "sweep.toml", "--out", "out"],
+        dir.path(),
+    ));
+    assert!(third.contains("3 to run"), "{third}");
+    // The report lists the failures.
+    ok(&refract(&["report", "out", "--out", "rep"], dir.path()));
+    let md = std::fs::read_to_string(dir.path().join("rep/report.md")).expect("report");
+    assert!(md.contains("Failed: `missing-16-cpu-wyman`"), "{md}");
+    // Bad shard arguments are errors naming them.
+    let bad = refract(&["sweep", "sweep.toml", "--shard", "3/3"], dir.path());
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("3/3"));
+}
+
+/// The report page and its comparison view in headless Chromium: both render, the viewer
+/// opens with the A/B slider, and no console message is logged.
+#[test]
+fn the_report_works_in_headless_chromium() {
+    let Some(chromium) = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })
+    else {
+        assert!(
+            !std::env::var("REFRACT_REQUIRE_BROWSER").is_ok_and(|v| v == "1"),
+            "REFRACT_REQUIRE_BROWSER=1 but no chromium"
+        );
+        println!("skipped: chromium not found");
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("sweep.toml"),
+        "scenes = [\"chart\"]\nmethods = [\"wyman\", \"iterative-seeded\"]\nres = [48]\nframes = 1\n",
+    )
+    .expect("write");
+    ok(&refract(
+        &["sweep", "sweep.toml", "--out", "out"],
+        dir.path(),
+    ));
+    ok(&refract(&["report", "out", "--out", "rep"], dir.path()));
+    let page = dir.path().join("rep/index.html");
+    let url = format!("file://{}", page.display());
+    let browse = |extra: &[&str], target: &str| {
+        let output = Command::new(chromium)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--enable-logging=stderr",
+                "--v=0",
+                "--virtual-time-budget=3000",
+                "--window-size=1100,800",
+            ])
+            .args(extra)
+            .arg(target)
+            .output()
+            .expect("chromium");
+        let log = String::from_utf8_lossy(&output.stderr).into_owned();
+        let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+        assert!(console.is_empty(), "console messages: {console:?}");
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let shots = dir.path().join("shots");
+    std::fs::create_dir_all(&shots).expect("mkdir");
+    for (name, target) in [("page", url.clone()), ("viewer", format!("{url}#view=1"))] {
+        let png = shots.join(format!("{name}.png"));
+        browse(&[&format!("--screenshot={}", png.display())], &target);
+        let size = std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0);
+        assert!(size > 10_000, "{name} screenshot {size} bytes");
+    }
+    let dom = browse(&["--dump-dom"], &format!("{url}#view=1"));
+    assert!(
+        dom.contains("id=\"viewer\" class=\"open\""),
+        "viewer not open"
+    );
+    assert!(dom.contains("<img-comparison-slider"), "no A/B slider");
+    assert!(
+        dom.contains("<th class=") || dom.contains("<th>"),
+        "no table"
+    );
+}
