@@ -1,4 +1,5 @@
-//! `metrics.json`, `report.md` and `index.html` of a comparison.
+//! `metrics.json`, `report.md`, `index.html` (the interactive page of `refract report`) and
+//! `all-images.html` (every image of every method on one page) of a comparison.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -8,6 +9,7 @@ use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::metrics::MetricsRecord;
 
 use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
+use crate::sweep::{Job, JobResult};
 
 /// The images of one method on one backend.
 pub struct MethodImages {
@@ -259,5 +261,58 @@ quantity does not exist. TIR masks show TIR pixels in magenta; missed-object mas
         }
     }
     html.push_str("</body></html>\n");
-    write_atomically(&out.join("index.html"), &html)
+    write_atomically(&out.join("all-images.html"), &html)?;
+    // index.html: the interactive page of `refract report` over the same results.
+    let results = job_results(records, scenes, options.res);
+    crate::sweep_report::write_html(out, &results)?;
+    Ok(())
+}
+
+/// The comparison's method rows as the job results the interactive report reads (the
+/// reference rows are its "reference" side).
+fn job_results(records: &[MetricsRecord], scenes: &[SceneImages], res: u32) -> Vec<JobResult> {
+    records
+        .iter()
+        .filter(|r| r.backend != "trace")
+        .enumerate()
+        .map(|(index, r)| {
+            let stem = format!("{}-{}", r.method, r.backend);
+            let s = &r.scene;
+            let has_miss = scenes
+                .iter()
+                .find(|i| &i.scene == s)
+                .and_then(|i| i.methods.iter().find(|m| m.stem == stem))
+                .is_some_and(|m| m.has_miss);
+            let mut images = vec![
+                format!("{s}/{stem}.png"),
+                format!("{s}/flip-{stem}.png"),
+                format!("{s}/t2err-{stem}.png"),
+                format!("{s}/reference.png"),
+            ];
+            if has_miss {
+                images.push(format!("{s}/miss-{stem}.png"));
+            }
+            JobResult {
+                job: Job {
+                    index,
+                    id: format!("{s}-{res}-{stem}"),
+                    scene: s.clone(),
+                    ior: None,
+                    res,
+                    backend: r.backend.clone(),
+                    method: r.method.clone(),
+                    params: r
+                        .params
+                        .split_whitespace()
+                        .filter_map(|p| p.split_once('='))
+                        .map(|(k, v)| (k.to_owned(), v.to_owned()))
+                        .collect(),
+                },
+                status: "ok".to_owned(),
+                error: None,
+                metrics: Some(r.clone()),
+                images,
+            }
+        })
+        .collect()
 }

@@ -91,11 +91,8 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
         &args.out.join("results.json"),
         &serde_json::to_string_pretty(&results).context("serialising results")?,
     )?;
-    let plots = write_plots(&args.out, &results)?;
+    let plots = write_html(&args.out, &results)?;
     write_text_atomically(&args.out.join("report.md"), &markdown(&results, &plots))?;
-    write_text_atomically(&args.out.join("img-comparison-slider.js"), SLIDER_JS)?;
-    write_text_atomically(&args.out.join("report.js"), REPORT_JS)?;
-    write_text_atomically(&args.out.join("index.html"), &html(&results, &plots)?)?;
     let failed = results.iter().filter(|r| r.status != "ok").count();
     println!(
         "{} jobs ({failed} failed) -> {}/index.html, report.md, results.json, {} plots",
@@ -104,6 +101,18 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
         plots.len()
     );
     Ok(())
+}
+
+/// Writes the plots, the scripts and the interactive `index.html` of `results` into `out`
+/// (whose `images/` or scene directories hold the images the results name); returns the plots
+/// as `(file, title)`.
+pub fn write_html(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String, String)>> {
+    let plots = write_plots(out, results)?;
+    write_text_atomically(&out.join("img-comparison-slider.js"), SLIDER_JS)?;
+    write_text_atomically(&out.join("report.js"), REPORT_JS)?;
+    let all_images = out.join("all-images.html").is_file();
+    write_text_atomically(&out.join("index.html"), &html(results, &plots, all_images)?)?;
+    Ok(plots)
 }
 
 fn cell(v: Option<f64>, digits: usize) -> String {
@@ -142,6 +151,15 @@ fn columns() -> Vec<Column> {
         ("mean FLIP", |r| cell(m(r).and_then(|m| m.flip_mean), 4)),
         ("T2 error, no TIR (°)", |r| {
             cell(m(r).and_then(|m| m.t2_angle_deg_mean_non_tir), 3)
+        }),
+        ("T2 p90, no TIR (°)", |r| {
+            cell(m(r).and_then(|m| m.t2_angle_deg_p90_non_tir), 3)
+        }),
+        ("|P~2−P2|/diam, no TIR", |r| {
+            cell(m(r).and_then(|m| m.p2_error_rel_mean_non_tir), 4)
+        }),
+        ("TIR (%)", |r| {
+            cell(m(r).and_then(|m| m.tir_fraction).map(|v| 100.0 * v), 1)
         }),
         ("misses vs reference (%)", |r| {
             cell(m(r).and_then(|m| m.nearby_miss_rate).map(|v| 100.0 * v), 1)
@@ -433,7 +451,11 @@ fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn html(results: &[JobResult], plots: &[(String, String)]) -> anyhow::Result<String> {
+fn html(
+    results: &[JobResult],
+    plots: &[(String, String)],
+    all_images: bool,
+) -> anyhow::Result<String> {
     let cols = columns();
     let mut h = String::new();
     let _ = write!(
@@ -443,16 +465,21 @@ fn html(results: &[JobResult], plots: &[(String, String)]) -> anyhow::Result<Str
 body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
 table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:3px 8px;border-bottom:1px solid #ddd;text-align:right;white-space:nowrap}}\
 th{{background:#eee;cursor:pointer;user-select:none}}th.asc::after{{content:' ▲'}}th.desc::after{{content:' ▼'}}\
-td:nth-child(-n+8){{text-align:left}}.grid{{display:grid;gap:6px;margin:8px 0}}.grid figure{{margin:0;cursor:pointer}}\
+td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-space:normal;min-width:160px;max-width:240px;font-size:12px}}.grid{{display:grid;gap:6px;margin:8px 0}}.grid figure{{margin:0;cursor:pointer}}\
 .grid img{{width:160px;image-rendering:pixelated;border:1px solid #ccc}}figcaption{{font-size:11px;color:#555;max-width:160px}}\
 #viewer{{display:none;position:fixed;inset:0;background:#181818;color:#eee;z-index:10}}\
 #viewer.open{{display:flex;flex-direction:column}}#bar{{padding:8px 12px;font-size:14px}}#bar kbd{{background:#444;border-radius:3px;padding:0 4px}}\
 #stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
 #stage img{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
 .plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed{{color:#b00}}</style></head><body>\
-<h1>refract sweep report</h1><p>{} jobs. Click a column to sort; click a thumbnail to compare it with the reference \
+<h1>refract report</h1><p>{} jobs{}. Click a column to sort; click a thumbnail to compare it with the reference \
 (keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
-        results.len()
+        results.len(),
+        if all_images {
+            " (<a href=\"all-images.html\">every image on one page</a>)"
+        } else {
+            ""
+        }
     );
     h.push_str("<table id=\"metrics\"><thead><tr>");
     for (name, _) in &cols {

@@ -115,6 +115,10 @@ fn compare_writes_metrics_images_and_reports() {
     assert!(seeded["feature_guarantee_3px_share"].as_f64().is_some());
     for file in [
         "index.html",
+        "all-images.html",
+        "report.js",
+        "img-comparison-slider.js",
+        "error-vs-time.svg",
         "report.md",
         "sphere/reference.png",
         "sphere/reference.exr",
