@@ -42,6 +42,69 @@ const viewer = {
   y: 0,
 };
 
+// Linear colour for the exposure control: RGBE in a double-width PNG held as a data URL by a
+// per-image script (refract's images::write_hdr_script), decoded to floats once.
+const hdrCache = new Map();
+
+function loadScript(src) {
+  return new Promise((resolve, reject) => {
+    const script = document.createElement("script");
+    script.src = src;
+    script.onload = resolve;
+    script.onerror = () => reject(new Error(`cannot load ${src}`));
+    document.head.append(script);
+  });
+}
+
+async function loadHdr(src) {
+  if (hdrCache.has(src)) return hdrCache.get(src);
+  if (!(window.refractHdr && window.refractHdr[src])) await loadScript(src);
+  const img = new Image();
+  img.src = window.refractHdr[src];
+  await img.decode();
+  const w = img.naturalWidth / 2, h = img.naturalHeight;
+  const canvas = document.createElement("canvas");
+  canvas.width = 2 * w;
+  canvas.height = h;
+  const ctx = canvas.getContext("2d");
+  ctx.drawImage(img, 0, 0);
+  const bytes = ctx.getImageData(0, 0, 2 * w, h).data;
+  const linear = new Float32Array(w * h * 3);
+  for (let y = 0; y < h; y++) {
+    for (let x = 0; x < w; x++) {
+      const m = 4 * (y * 2 * w + x), e = bytes[4 * (y * 2 * w + w + x)];
+      const scale = e === 0 ? 0 : Math.pow(2, e - 136);
+      const o = 3 * (y * w + x);
+      for (let k = 0; k < 3; k++) linear[o + k] = e === 0 ? 0 : (bytes[m + k] + 0.5) * scale;
+    }
+  }
+  const hdr = { w, h, linear };
+  hdrCache.set(src, hdr);
+  return hdr;
+}
+
+// refract_scene::tonemap: Narkowicz's ACES fit, then the sRGB transfer function.
+function display(v) {
+  const x = Math.max(v, 0);
+  const t = Math.min(Math.max((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0), 1);
+  const s = t <= 0.0031308 ? 12.92 * t : 1.055 * Math.pow(t, 1 / 2.4) - 0.055;
+  return Math.round(255 * s);
+}
+
+function drawHdr(canvas) {
+  const hdr = canvas.hdr;
+  if (!hdr) return;
+  const gain = Math.pow(2, viewer.exposure);
+  const out = canvas.getContext("2d").createImageData(hdr.w, hdr.h);
+  for (let i = 0, n = hdr.w * hdr.h; i < n; i++) {
+    out.data[4 * i] = display(gain * hdr.linear[3 * i]);
+    out.data[4 * i + 1] = display(gain * hdr.linear[3 * i + 1]);
+    out.data[4 * i + 2] = display(gain * hdr.linear[3 * i + 2]);
+    out.data[4 * i + 3] = 255;
+  }
+  canvas.getContext("2d").putImageData(out, 0, 0);
+}
+
 function layerSource(thumb) {
   const d = thumb.dataset;
   switch (viewer.layer) {
@@ -55,27 +118,52 @@ function layerSource(thumb) {
 function applyView() {
   const stage = document.getElementById("stage");
   const transform = `translate(${viewer.x}px, ${viewer.y}px) scale(${viewer.zoom})`;
-  stage.querySelectorAll("img").forEach((img) => {
-    img.style.transform = transform;
-    const colour = img.dataset.kind === "colour";
-    img.style.filter = colour ? `brightness(${Math.pow(2, viewer.exposure)})` : "none";
+  stage.querySelectorAll("img, canvas").forEach((el) => {
+    el.style.transform = transform;
+    // Colour images without linear data get a display-exposure approximation.
+    const colour = el.dataset.kind === "colour";
+    el.style.filter = colour ? `brightness(${Math.pow(2, viewer.exposure)})` : "none";
+    if (el.dataset.kind === "hdr") drawHdr(el);
   });
   const thumb = viewer.thumbs[viewer.index];
   const side = viewer.mode === "flip" ? (viewer.showReference ? "reference" : "method") : "reference | method";
   document.getElementById("bar").innerHTML =
     `<b>${thumb.dataset.title}</b> &nbsp; ${viewer.layer} · ${viewer.mode} (${side}) · exposure ${viewer.exposure >= 0 ? "+" : ""}${viewer.exposure} EV · zoom ${viewer.zoom.toFixed(2)}×<br>` +
     "<kbd>1</kbd> image <kbd>2</kbd> FLIP <kbd>3</kbd> T2 error <kbd>4</kbd> missed objects · " +
-    "<kbd>s</kbd> slider <kbd>f</kbd> flip A/B · <kbd>e</kbd>/<kbd>E</kbd> exposure · " +
+    "<kbd>s</kbd> slider <kbd>f</kbd> flip A/B · <kbd>e</kbd>/<kbd>E</kbd> exposure ±1 stop (linear radiance) · " +
     "wheel zoom, shift+drag pan, <kbd>0</kbd> reset · <kbd>←</kbd>/<kbd>→</kbd> previous/next · <kbd>Esc</kbd> close";
 }
 
-function image(src, kind, slot) {
+const DISPLAY_WIDTH = 512;
+
+// An image of the viewer: a canvas of linear colour when `hdr` names its data, else the PNG
+// (error maps carry a colour bar: they are scaled by the image width, not the bar's).
+function image(src, kind, hdr) {
+  if (hdr) {
+    const canvas = document.createElement("canvas");
+    canvas.dataset.kind = "hdr";
+    canvas.style.width = `${DISPLAY_WIDTH}px`;
+    loadHdr(hdr).then((data) => {
+      canvas.width = data.w;
+      canvas.height = data.h;
+      canvas.hdr = data;
+      drawHdr(canvas);
+    }).catch(() => {
+      const img = image(src, kind);
+      canvas.replaceWith(img);
+      applyView();
+    });
+    return canvas;
+  }
   const img = document.createElement("img");
   img.src = src;
   img.dataset.kind = kind;
   img.draggable = false;
-  img.width = 512;
-  if (slot) img.slot = slot;
+  img.style.width = `${DISPLAY_WIDTH}px`;
+  img.onload = () => {
+    const reference = viewer.referenceWidth || img.naturalWidth;
+    img.style.width = `${(DISPLAY_WIDTH * img.naturalWidth) / reference}px`;
+  };
   return img;
 }
 
@@ -84,8 +172,13 @@ function render() {
   const stage = document.getElementById("stage");
   stage.textContent = "";
   const methodKind = viewer.layer === "image" || viewer.layer === "miss" ? "colour" : "map";
-  const method = image(layerSource(thumb), methodKind);
-  const reference = image(thumb.dataset.reference, "colour");
+  const hdr = viewer.layer === "image" ? thumb.dataset.hdr : "";
+  const method = image(layerSource(thumb), methodKind, hdr);
+  const reference = image(thumb.dataset.reference, "colour", thumb.dataset.referenceHdr);
+  // The reference's pixel width sets the scale of every image (maps are wider by their bar).
+  const probe = new Image();
+  probe.onload = () => { viewer.referenceWidth = probe.naturalWidth; };
+  probe.src = thumb.dataset.reference;
   if (viewer.mode === "slider") {
     const slider = document.createElement("img-comparison-slider");
     reference.slot = "first";
@@ -167,7 +260,9 @@ document.addEventListener("DOMContentLoaded", () => {
   viewer.thumbs.forEach((thumb, i) => thumb.addEventListener("click", () => open(i)));
   panAndZoom(document.getElementById("stage"));
   document.addEventListener("keydown", key);
-  // Opening the report as index.html#view=N shows job N in the viewer (used by tests).
+  // Opening the report as index.html#view=N[&ev=S] shows job N in the viewer at exposure S.
   const match = /view=(\d+)/.exec(location.hash);
+  const ev = /ev=(-?\d+)/.exec(location.hash);
+  if (ev) viewer.exposure = Number(ev[1]);
   if (match && viewer.thumbs[Number(match[1])]) open(Number(match[1]));
 });

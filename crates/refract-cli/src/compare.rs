@@ -13,7 +13,7 @@ use refract_scene::{
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
-use crate::images::{write_color, write_error_map, write_mask};
+use crate::images::{write_color, write_error_map, write_hdr_script, write_mask};
 use crate::report::{MethodImages, SceneImages, write_reports};
 use crate::timing::time_frames;
 
@@ -102,6 +102,8 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
             reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
         references.inc(1);
         write_color(&dir.join("reference.png"), w, h, &truth.color)?;
+        let key = format!("{}/reference.hdr.js", scene.name);
+        write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
         truth.write_exr(&dir.join("reference.exr"))?;
         write_mask(
             &dir.join("tir-reference.png"),
@@ -151,6 +153,14 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                 records.push(record);
 
                 write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
+                let key = format!("{}/{stem}.hdr.js", scene.name);
+                write_hdr_script(
+                    &dir.join(format!("{stem}.hdr.js")),
+                    &key,
+                    w,
+                    h,
+                    &frame.color,
+                )?;
                 write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
                 write_error_map(
                     &dir.join(format!("t2err-{stem}.png")),

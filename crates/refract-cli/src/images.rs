@@ -13,6 +13,65 @@ pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> anyh
     Ok(write_png_rgb8(path, width, height, &pixels)?)
 }
 
+/// Linear radiance for the report's exposure control, as RGBE (a shared exponent per pixel)
+/// in a PNG twice as wide: the left half holds the mantissas `(r, g, b)·256/2^e`, the right
+/// half `e + 128` in every channel (an opaque image, so a browser decodes it exactly; 0 is
+/// black). The PNG goes into a script, `window.refractHdr["KEY"] = "data:image/png;base64,…"`,
+/// because a page opened from `file://` may read the pixels of a data URL but not of a file.
+/// Decoding: `c = (m + ½)·2^(e − 136)`.
+pub fn write_hdr_script(
+    path: &Path,
+    key: &str,
+    width: u32,
+    height: u32,
+    color: &[Vec3],
+) -> anyhow::Result<()> {
+    let w = width as usize;
+    let mut pixels = vec![0u8; 2 * w * height as usize * 3];
+    for (i, &c) in color.iter().enumerate() {
+        let (mantissas, exponent) = rgbe(c);
+        let (row, x) = (i / w, i % w);
+        let (left, right) = (3 * (row * 2 * w + x), 3 * (row * 2 * w + w + x));
+        pixels[left..left + 3].copy_from_slice(&mantissas);
+        pixels[right..right + 3].copy_from_slice(&[exponent; 3]);
+    }
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &pixels,
+        2 * width,
+        height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: cannot encode the HDR image: {e}", path.display()))?;
+    let script = format!(
+        "(window.refractHdr = window.refractHdr || {{}})[{key:?}] = \"data:image/png;base64,{}\";\n",
+        base64::encode(&png)
+    );
+    Ok(refract_scene::atomic_write::write_text_atomically(
+        path, &script,
+    )?)
+}
+
+/// RGBE of one linear colour: mantissas `⌊c·256/2^e⌋` and the biased exponent `e + 128`,
+/// `2^(e−1) ≤ max(c) < 2^e`; black (and negative, NaN) is all zero. Decoded as
+/// `(m + ½)·2^(e − 136)`, within half a mantissa step (`2^(e−9)`).
+fn rgbe(c: Vec3) -> ([u8; 3], u8) {
+    let c = c
+        .to_array()
+        .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 });
+    let m = c[0].max(c[1]).max(c[2]);
+    if m < 1e-30 {
+        return ([0; 3], 0);
+    }
+    let e = m.log2().floor() as i32 + 1;
+    let scale = 256.0 / 2f32.powi(e);
+    (
+        c.map(|v| (v * scale).min(255.0) as u8),
+        (e + 128).clamp(1, 255) as u8,
+    )
+}
+
 /// The magma colour map at `t ∈ [0, 1]` (from FLIP's own lookup table).
 fn magma(lut: &[u8], t: f32) -> [u8; 3] {
     let k = (t.clamp(0.0, 1.0) * 255.0).round() as usize;
@@ -75,4 +134,34 @@ pub fn write_mask(
         })
         .collect();
     Ok(write_png_rgb8(path, width, height, &pixels)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// RGBE round trips within half a mantissa step of the largest channel.
+    #[test]
+    fn rgbe_round_trips() {
+        let decode = |(m, e): ([u8; 3], u8)| {
+            if e == 0 {
+                Vec3::ZERO
+            } else {
+                Vec3::from_array(m.map(|m| (f32::from(m) + 0.5) * 2f32.powi(i32::from(e) - 136)))
+            }
+        };
+        for c in [
+            Vec3::new(0.5, 0.25, 0.125),
+            Vec3::new(12.0, 0.001, 3.0),
+            Vec3::new(1e-4, 2e-4, 3e-4),
+            Vec3::splat(1.0),
+            Vec3::new(250.0, 0.0, 1.0),
+        ] {
+            let d = decode(rgbe(c));
+            let step = 2f32.powi(c.max_element().log2().floor() as i32 + 1 - 9);
+            assert!((d - c).abs().max_element() <= step, "{c} -> {d}");
+        }
+        assert_eq!(rgbe(Vec3::ZERO), ([0; 3], 0));
+        assert_eq!(rgbe(Vec3::new(f32::NAN, -1.0, 0.0)), ([0; 3], 0));
+    }
 }

@@ -9,7 +9,7 @@ use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::metrics::MetricsRecord;
 
 use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
-use crate::sweep::{Job, JobResult};
+use crate::sweep::{Job, JobImages, JobResult};
 
 /// The images of one method on one backend.
 pub struct MethodImages {
@@ -283,15 +283,15 @@ fn job_results(records: &[MetricsRecord], scenes: &[SceneImages], res: u32) -> V
                 .find(|i| &i.scene == s)
                 .and_then(|i| i.methods.iter().find(|m| m.stem == stem))
                 .is_some_and(|m| m.has_miss);
-            let mut images = vec![
-                format!("{s}/{stem}.png"),
-                format!("{s}/flip-{stem}.png"),
-                format!("{s}/t2err-{stem}.png"),
-                format!("{s}/reference.png"),
-            ];
-            if has_miss {
-                images.push(format!("{s}/miss-{stem}.png"));
-            }
+            let images = JobImages {
+                color: format!("{s}/{stem}.png"),
+                flip: format!("{s}/flip-{stem}.png"),
+                t2: format!("{s}/t2err-{stem}.png"),
+                reference: format!("{s}/reference.png"),
+                miss: has_miss.then(|| format!("{s}/miss-{stem}.png")),
+                color_hdr: Some(format!("{s}/{stem}.hdr.js")),
+                reference_hdr: Some(format!("{s}/reference.hdr.js")),
+            };
             JobResult {
                 job: Job {
                     index,
@@ -311,7 +311,7 @@ fn job_results(records: &[MetricsRecord], scenes: &[SceneImages], res: u32) -> V
                 status: "ok".to_owned(),
                 error: None,
                 metrics: Some(r.clone()),
-                images,
+                images: Some(images),
             }
         })
         .collect()

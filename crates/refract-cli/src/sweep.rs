@@ -21,7 +21,7 @@ use refract_trace::ReferenceRenderer;
 use serde::{Deserialize, Serialize};
 
 use crate::backends::{self, GpuPolicy};
-use crate::images::{write_color, write_error_map, write_mask};
+use crate::images::{write_color, write_error_map, write_hdr_script, write_mask};
 use crate::timing::time_frames;
 
 /// Arguments of `refract sweep`.
@@ -146,8 +146,46 @@ pub struct JobResult {
     pub error: Option<String>,
     /// The metrics of a finished job (its `ms_per_frame` is this machine's).
     pub metrics: Option<MetricsRecord>,
-    /// The job's images, relative to the output directory: `[colour, FLIP, T2 error, reference]`.
-    pub images: Vec<String>,
+    /// The job's images, relative to the output directory (when the sweep writes them).
+    pub images: Option<JobImages>,
+}
+
+/// A job's images, paths relative to the output directory.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JobImages {
+    /// The method's tonemapped colour (PNG).
+    pub color: String,
+    /// Its FLIP map.
+    pub flip: String,
+    /// Its T2-error map.
+    pub t2: String,
+    /// The reference's tonemapped colour.
+    pub reference: String,
+    /// The missed-objects mask (nearby-geometry methods).
+    pub miss: Option<String>,
+    /// The method's linear colour for the exposure control (`images::write_hdr_script`).
+    pub color_hdr: Option<String>,
+    /// The reference's linear colour.
+    pub reference_hdr: Option<String>,
+}
+
+impl JobImages {
+    /// Every file.
+    pub fn files(&self) -> Vec<&str> {
+        let mut files = vec![
+            self.color.as_str(),
+            self.flip.as_str(),
+            self.t2.as_str(),
+            self.reference.as_str(),
+        ];
+        files.extend(
+            [&self.miss, &self.color_hdr, &self.reference_hdr]
+                .into_iter()
+                .flatten()
+                .map(String::as_str),
+        );
+        files
+    }
 }
 
 /// A parsed sweep: its jobs and run settings.
@@ -362,7 +400,8 @@ struct Prepared {
     scene: Arc<Scene>,
     camera: Camera,
     truth: Frame,
-    reference_image: String,
+    /// The reference's PNG and HDR script.
+    reference_images: (String, String),
 }
 
 /// Runs `refract sweep`.
@@ -464,7 +503,7 @@ fn record_failure(job: &Job, error: String) -> JobResult {
         status: "error".to_owned(),
         error: Some(error),
         metrics: None,
-        images: Vec::new(),
+        images: None,
     }
 }
 
@@ -511,7 +550,7 @@ fn run_job(
     prepared: &mut HashMap<(String, Option<u32>, u32), Prepared>,
     renderers: &mut HashMap<String, Box<dyn Renderer>>,
     prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
-) -> anyhow::Result<(MetricsRecord, Vec<String>)> {
+) -> anyhow::Result<(MetricsRecord, Option<JobImages>)> {
     let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
     let settings = MethodParams::Reference(TraceSettings {
         spp: sweep.spp,
@@ -544,10 +583,20 @@ fn run_job(
                 truth
             }
         };
-        let reference_image = format!("images/{stem}.png");
+        let reference_images = (
+            format!("images/{stem}.png"),
+            format!("images/{stem}.hdr.js"),
+        );
         if sweep.images {
             write_color(
-                &args.out.join(&reference_image),
+                &args.out.join(&reference_images.0),
+                job.res,
+                job.res,
+                &truth.color,
+            )?;
+            write_hdr_script(
+                &args.out.join(&reference_images.1),
+                &reference_images.1,
                 job.res,
                 job.res,
                 &truth.color,
@@ -559,7 +608,7 @@ fn run_job(
                 scene,
                 camera,
                 truth,
-                reference_image,
+                reference_images,
             },
         );
     }
@@ -601,38 +650,42 @@ fn run_job(
     record.backend = backend.id().to_owned();
     record.params = method.describe();
     record.ms_per_frame = Some(times.median);
-    let mut images = Vec::new();
-    if sweep.images {
-        let (w, h) = (job.res, job.res);
-        let names = [
-            format!("images/{}.png", job.id),
-            format!("images/{}-flip.png", job.id),
-            format!("images/{}-t2err.png", job.id),
-        ];
-        write_color(&args.out.join(&names[0]), w, h, &frame.color)?;
-        write_error_map(&args.out.join(&names[1]), w, h, &maps.flip, 1.0)?;
-        write_error_map(
-            &args.out.join(&names[2]),
+    if !sweep.images {
+        return Ok((record, None));
+    }
+    let (w, h) = (job.res, job.res);
+    let file = |suffix: &str| format!("images/{}{suffix}", job.id);
+    let images = JobImages {
+        color: file(".png"),
+        flip: file("-flip.png"),
+        t2: file("-t2err.png"),
+        reference: p.reference_images.0.clone(),
+        miss: frame.has(Aov::PGeom).then(|| file("-miss.png")),
+        color_hdr: Some(file(".hdr.js")),
+        reference_hdr: Some(p.reference_images.1.clone()),
+    };
+    write_color(&args.out.join(&images.color), w, h, &frame.color)?;
+    write_error_map(&args.out.join(&images.flip), w, h, &maps.flip, 1.0)?;
+    write_error_map(
+        &args.out.join(&images.t2),
+        w,
+        h,
+        &maps.t2_deg,
+        crate::compare::T2_SCALE_DEG,
+    )?;
+    if let Some(hdr) = &images.color_hdr {
+        write_hdr_script(&args.out.join(hdr), hdr, w, h, &frame.color)?;
+    }
+    if let Some(miss) = &images.miss {
+        write_mask(
+            &args.out.join(miss),
             w,
             h,
-            &maps.t2_deg,
-            crate::compare::T2_SCALE_DEG,
+            &crate::compare::missed_geometry(&p.truth, &frame),
+            &frame.color,
         )?;
-        images.extend(names);
-        images.push(p.reference_image.clone());
-        if frame.has(Aov::PGeom) {
-            let name = format!("images/{}-miss.png", job.id);
-            write_mask(
-                &args.out.join(&name),
-                w,
-                h,
-                &crate::compare::missed_geometry(&p.truth, &frame),
-                &frame.color,
-            )?;
-            images.push(name);
-        }
     }
-    Ok((record, images))
+    Ok((record, Some(images)))
 }
 
 #[cfg(test)]

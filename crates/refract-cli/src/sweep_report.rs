@@ -78,7 +78,12 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&images_dir)
         .with_context(|| format!("{}: cannot create the directory", images_dir.display()))?;
     for (result, dir) in &results {
-        for image in &result.images {
+        let files = result
+            .images
+            .as_ref()
+            .map(|i| i.files())
+            .unwrap_or_default();
+        for image in files {
             let (from, to) = (dir.join(image), args.out.join(image));
             if from.is_file() && !to.is_file() {
                 std::fs::copy(&from, &to)
@@ -470,7 +475,7 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
 #viewer{{display:none;position:fixed;inset:0;background:#181818;color:#eee;z-index:10}}\
 #viewer.open{{display:flex;flex-direction:column}}#bar{{padding:8px 12px;font-size:14px}}#bar kbd{{background:#444;border-radius:3px;padding:0 4px}}\
 #stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
-#stage img{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
+#stage img,#stage canvas{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
 .plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed{{color:#b00}}</style></head><body>\
 <h1>refract report</h1><p>{} jobs{}. Click a column to sort; click a thumbnail to compare it with the reference \
 (keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
@@ -520,7 +525,7 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
     }
     // Per scene group (scene, IOR, resolution): a method × backend grid of thumbnails.
     let mut groups: BTreeMap<(String, String, u32), Vec<&JobResult>> = BTreeMap::new();
-    for r in results.iter().filter(|r| r.images.len() >= 4) {
+    for r in results.iter().filter(|r| r.images.is_some()) {
         let ior = r
             .job
             .ior
@@ -554,8 +559,12 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
             (method, r.job.params.clone(), r.job.backend.clone())
         });
         for r in ordered {
-            let imgs = &r.images;
-            let miss = imgs.get(4).map_or("", String::as_str);
+            let Some(imgs) = &r.images else { continue };
+            let miss = imgs.miss.as_deref().unwrap_or("");
+            let (hdr, reference_hdr) = (
+                imgs.color_hdr.as_deref().unwrap_or(""),
+                imgs.reference_hdr.as_deref().unwrap_or(""),
+            );
             let params: Vec<String> = r
                 .job
                 .params
@@ -566,13 +575,13 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
             let _ = write!(
                 h,
                 "<figure class=\"thumb\" data-image=\"{}\" data-flip=\"{}\" data-t2=\"{}\" data-reference=\"{}\" data-miss=\"{miss}\" \
-data-title=\"{}\"><img src=\"{}\" loading=\"lazy\"><figcaption>{}</figcaption></figure>",
-                imgs[0],
-                imgs[1],
-                imgs[2],
-                imgs[3],
+data-hdr=\"{hdr}\" data-reference-hdr=\"{reference_hdr}\" data-title=\"{}\"><img src=\"{}\" loading=\"lazy\"><figcaption>{}</figcaption></figure>",
+                imgs.color,
+                imgs.flip,
+                imgs.t2,
+                imgs.reference,
                 escape(&format!("{} — {caption}", r.job.id)),
-                imgs[0],
+                imgs.color,
                 escape(&caption)
             );
         }

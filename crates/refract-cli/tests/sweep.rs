@@ -233,6 +233,18 @@ fn the_report_works_in_headless_chromium() {
         "viewer not open"
     );
     assert!(dom.contains("<img-comparison-slider"), "no A/B slider");
+    // The colour images are canvases of linear radiance (the exposure control's data).
+    assert!(dom.contains("data-kind=\"hdr\""), "no HDR canvas");
+    let bright = shots.join("viewer-ev2.png");
+    browse(
+        &[&format!("--screenshot={}", bright.display())],
+        &format!("{url}#view=1&ev=2"),
+    );
+    let (a, b) = (
+        std::fs::read(shots.join("viewer.png")).expect("png"),
+        std::fs::read(&bright).expect("png"),
+    );
+    assert!(a != b, "exposure changes the displayed image");
     assert!(
         dom.contains("<th class=") || dom.contains("<th>"),
         "no table"
