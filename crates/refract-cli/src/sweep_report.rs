@@ -388,32 +388,34 @@ fn write_plots(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String,
             true,
         )?;
     }
-    if distinct(&|r| r.job.params.get("seeds").cloned()) >= 2 {
+    // Every numeric method parameter swept over at least two values (seeds K, iterations, and
+    // whatever parameters later methods add: linear/secant steps, tessellation).
+    let mut names: Vec<&String> = results.iter().flat_map(|r| r.job.params.keys()).collect();
+    names.sort();
+    names.dedup();
+    for name in names {
+        let numeric = results
+            .iter()
+            .filter_map(|r| r.job.params.get(name))
+            .all(|v| v.parse::<f64>().is_ok());
+        if !numeric || distinct(&|r| r.job.params.get(name).cloned()) < 2 {
+            continue;
+        }
+        let title = if name == "seeds" {
+            "Error vs seeds K (iterative-seeded)".to_owned()
+        } else {
+            format!("Error vs {name}")
+        };
         add(
-            "error-vs-seeds.svg",
-            "Error vs seeds K (iterative-seeded)",
-            "seeds K",
+            &format!("error-vs-{}.svg", safe_name(name)),
+            &title,
+            name,
             "mean FLIP (refractor pixels)",
             series(
                 results,
-                |r| r.job.params.get("seeds").and_then(|v| v.parse().ok()),
+                |r| r.job.params.get(name).and_then(|v| v.parse().ok()),
                 flip,
-                |r| label_except(r, &["seeds"]),
-            ),
-            true,
-        )?;
-    }
-    if distinct(&|r| r.job.params.get("iterations").cloned()) >= 2 {
-        add(
-            "error-vs-iterations.svg",
-            "Error vs iterations",
-            "iterations",
-            "mean FLIP (refractor pixels)",
-            series(
-                results,
-                |r| r.job.params.get("iterations").and_then(|v| v.parse().ok()),
-                flip,
-                |r| label_except(r, &["iterations"]),
+                |r| label_except(r, &[name.as_str()]),
             ),
             true,
         )?;
@@ -447,6 +449,13 @@ fn write_plots(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String,
         false,
     )?;
     Ok(plots)
+}
+
+/// A parameter name as a file name part.
+fn safe_name(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect()
 }
 
 fn escape(text: &str) -> String {
