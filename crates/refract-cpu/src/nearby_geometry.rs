@@ -11,7 +11,9 @@ use glam::{UVec2, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
-use refract_core::kernel::{FrontSurface, ImageSpaceParams, two_interface};
+use refract_core::kernel::{FrontSurface, ImageSpaceParams};
+use refract_core::kernel_x8::two_interface_lanes;
+use refract_core::lanes::{LANES, Vec2x8};
 use refract_core::nearby_geometry::{
     NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
 };
@@ -19,6 +21,7 @@ use refract_core::{BackSurface, Camera};
 use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene};
 
 use crate::buffers::{BackFaces, front_faces_into};
+use crate::pixel_group::PixelGroup;
 use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize_bands};
 
 /// One texel of the NG texture: the nearest opaque surface seen through it.
@@ -273,18 +276,10 @@ impl NearbyPasses {
             self.aovs.clear();
             self.aovs.resize(n, NearbyAov::NONE);
             rows.zip(self.aovs.par_chunks_mut(width as usize))
-                .for_each(|((y, colors), aovs)| {
-                    for (x, (color, aov)) in colors.iter_mut().zip(aovs.iter_mut()).enumerate() {
-                        (*color, *aov) = pixels.shade(x as u32, y as u32);
-                    }
-                });
+                .for_each(|((y, colors), aovs)| pixels.row(y as u32, colors, Some(aovs)));
         } else {
             // Colour only, as displayed: no per-pixel AOV memory is touched.
-            rows.for_each(|(y, colors)| {
-                for (x, color) in colors.iter_mut().enumerate() {
-                    *color = pixels.shade(x as u32, y as u32).0;
-                }
-            });
+            rows.for_each(|(y, colors)| pixels.row(y as u32, colors, None));
         }
         if outputs == FrameOutputs::ColorAndAovs {
             write_layers(&self.aovs[..n], id, frame);
@@ -307,49 +302,157 @@ struct PixelContext<'a> {
     nearby: &'a NearbyTexture,
 }
 
+/// A pixel of a row, before the refraction: what it shows when it is not the refractor.
+enum Pixel {
+    /// The refractor, in front of any object: the kernel and the lookup decide.
+    Refractor(FrontSurface),
+    /// An object seen directly.
+    Object(Vec3),
+    /// The environment along the pixel's ray.
+    Environment,
+}
+
 impl PixelContext<'_> {
-    /// The colour and AOVs of pixel `(x, y)`.
-    fn shade(&self, x: u32, y: u32) -> (Vec3, NearbyAov) {
+    /// Shades row `y`: pixels that see an object or the environment directly at once, the
+    /// refractor's pixels eight at a time through the lane kernel (`two_interface_lanes`,
+    /// bit-identical to the scalar kernel), then each lane's lookup.
+    fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [NearbyAov]>) {
+        let mut group = PixelGroup::new();
+        let mut background = PixelGroup::new();
+        let mut surfaces = [FrontSurface {
+            p1_ws: Vec3::ZERO,
+            n1_ws: Vec3::ZERO,
+            d_n: 0.0,
+        }; LANES];
+        for x in 0..colors.len() as u32 {
+            match self.classify(x, y) {
+                Pixel::Refractor(surface) => {
+                    surfaces[group.len] = surface;
+                    if group.push(x) {
+                        self.refractor(&group, &surfaces, y, colors, aovs.as_deref_mut());
+                        group.len = 0;
+                    }
+                }
+                Pixel::Object(color) => {
+                    colors[x as usize] = color;
+                    if let Some(aovs) = aovs.as_deref_mut() {
+                        aovs[x as usize] = NearbyAov::NONE;
+                    }
+                }
+                Pixel::Environment => {
+                    if background.push(x) {
+                        self.background(&background, y, colors, aovs.as_deref_mut());
+                        background.len = 0;
+                    }
+                }
+            }
+        }
+        if background.len > 0 {
+            background.pad();
+            self.background(&background, y, colors, aovs.as_deref_mut());
+        }
+        if group.len > 0 {
+            let len = group.len;
+            group.pad();
+            let first = surfaces[0];
+            surfaces[len..].fill(first);
+            self.refractor(&group, &surfaces, y, colors, aovs);
+        }
+    }
+
+    /// What pixel `(x, y)` shows: the refractor when it is covered and in front of the objects.
+    #[inline]
+    fn classify(&self, x: u32, y: u32) -> Pixel {
         let index = (y * self.camera.width() + x) as usize;
-        let uv = Camera::pixel_center(x, y);
         let object = self.nearby.texel(UVec2::new(x, y) + self.pad);
         let front = self
             .front
             .texel(index)
             .filter(|f| object.is_none_or(|o| self.view_distance(f.p_ws) < o.surface.depth));
-        let Some(front) = front else {
-            // An object seen directly, or the environment.
-            return match object {
-                Some(o) => (o.color, NearbyAov::NONE),
-                None => (
-                    self.scene
-                        .environment
-                        .radiance(self.camera.pixel_ray(uv).dir),
-                    NearbyAov::NONE,
-                ),
+        match (front, object) {
+            (Some(front), _) => Pixel::Refractor(FrontSurface {
+                p1_ws: front.p_ws,
+                n1_ws: front.n_ws,
+                d_n: front.scalar,
+            }),
+            (None, Some(o)) => Pixel::Object(o.color),
+            (None, None) => Pixel::Environment,
+        }
+    }
+
+    /// Eight pixels of row `y` that see the environment: eight-lane rays and lookups
+    /// (bit-identical to the scalar ones).
+    fn background(
+        &self,
+        group: &PixelGroup,
+        y: u32,
+        colors: &mut [Vec3],
+        mut aovs: Option<&mut [NearbyAov]>,
+    ) {
+        let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
+        let dirs = self.camera.pixel_ray_dir_x8(Vec2x8::from_lanes(&uv));
+        let radiance = self.scene.environment.radiance_x8(dirs).to_lanes();
+        for (&x, &color) in group.x.iter().zip(&radiance).take(group.len) {
+            colors[x as usize] = color;
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[x as usize] = NearbyAov::NONE;
+            }
+        }
+    }
+
+    /// Eight refractor pixels of row `y`: the lane kernel, then the lookup per lane.
+    fn refractor(
+        &self,
+        group: &PixelGroup,
+        surfaces: &[FrontSurface; LANES],
+        y: u32,
+        colors: &mut [Vec3],
+        mut aovs: Option<&mut [NearbyAov]>,
+    ) {
+        let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
+        let paths = two_interface_lanes(self.camera, &uv, surfaces, self.back, self.kernel);
+        let (p2, t2, n2) = (
+            paths.p2.to_lanes(),
+            paths.t2.to_lanes(),
+            paths.n2.to_lanes(),
+        );
+        for i in 0..group.len {
+            let x = group.x[i] as usize;
+            let (color, aov) = if paths.ok[i] {
+                self.lookup(NearbyAov {
+                    covered: true,
+                    p2: p2[i],
+                    t2: t2[i],
+                    n2: n2[i],
+                    n2_source: Some(if paths.n2_from_back_face[i] {
+                        ExitNormalSource::BackFace
+                    } else {
+                        ExitNormalSource::SilhouetteFallback
+                    }),
+                    tir: paths.tir[i],
+                    ..NearbyAov::NONE
+                })
+            } else {
+                // A degenerate input: black, no path.
+                (
+                    Vec3::ZERO,
+                    NearbyAov {
+                        covered: true,
+                        ..NearbyAov::NONE
+                    },
+                )
             };
-        };
-        let covered = NearbyAov {
-            covered: true,
-            ..NearbyAov::NONE
-        };
-        let surface = FrontSurface {
-            p1_ws: front.p_ws,
-            n1_ws: front.n_ws,
-            d_n: front.scalar,
-        };
-        let Ok(path) = two_interface(self.camera, uv, &surface, self.back, self.kernel) else {
-            return (Vec3::ZERO, covered);
-        };
-        let mut aov = NearbyAov {
-            p2: path.p2,
-            t2: path.t2,
-            n2: path.n2,
-            n2_source: Some(path.n2_source),
-            tir: path.entry.tir_entry || path.tir_exit,
-            ..covered
-        };
-        if path.t2 == Vec3::ZERO {
+            colors[x] = color;
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[x] = aov;
+            }
+        }
+    }
+
+    /// The lookup of a refractor pixel whose two-interface path is in `aov`.
+    #[inline]
+    fn lookup(&self, mut aov: NearbyAov) -> (Vec3, NearbyAov) {
+        if aov.t2 == Vec3::ZERO {
             // Absorbed by the TIR policy `black`.
             return (Vec3::ZERO, aov);
         }
@@ -358,8 +461,8 @@ impl PixelContext<'_> {
             self.nearby,
             self.planes,
             self.lookup,
-            path.p2,
-            path.t2,
+            aov.p2,
+            aov.t2,
         );
         aov.iterations = result.iterations;
         aov.converged = result.converged;
@@ -370,7 +473,7 @@ impl PixelContext<'_> {
                 aov.ng_texel = Vec3::new(hit.texel.x as f32, hit.texel.y as f32, t.object as f32);
                 (t.color, aov)
             }
-            _ => (self.scene.environment.radiance(path.t2), aov),
+            _ => (self.scene.environment.radiance(aov.t2), aov),
         }
     }
 
