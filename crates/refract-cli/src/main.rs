@@ -24,6 +24,7 @@ mod report;
 mod sweep;
 mod sweep_report;
 mod timing;
+mod view;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
@@ -55,6 +56,8 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Merge sweep (shard) directories into one report: results.json, plots, index.html.
     Report(sweep_report::ReportArgs),
+    /// Open a window: fly around a scene and switch methods, IOR, TIR policy and backend live.
+    View(view::ViewArgs),
     /// Write a scene as refract renders it (OBJ meshes with normals, scene.json) for other renderers.
     Export(export::ExportArgs),
     /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
@@ -233,6 +236,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Sweep(args)) => sweep::run(&args),
         Some(Command::Report(args)) => sweep_report::run(&args),
+        Some(Command::View(args)) => view::run(args),
         Some(Command::Scenes) => {
             for (name, line, _) in BUILTIN_SCENES {
                 println!("{name:<8} {line}");

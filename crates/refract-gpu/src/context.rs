@@ -102,6 +102,16 @@ impl GpuContext {
                 .await
                 .map_err(|err| GpuError::NoAdapter(format!("; {err}")))?,
         };
+        Self::from_adapter_async(&adapter).await
+    }
+
+    /// A context on `adapter` (e.g. one compatible with a window's surface): a device with the
+    /// adapter's own limits and TIMESTAMP_QUERY when available.
+    pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
+        pollster::block_on(Self::from_adapter_async(adapter))
+    }
+
+    async fn from_adapter_async(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let required_features = if timestamps {

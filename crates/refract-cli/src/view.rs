@@ -1,0 +1,808 @@
+//! `refract view [SCENE]`: a window (winit 0.30 + a wgpu 30 surface) that renders a scene with
+//! any method of the registry on the GPU backend (or the CPU backend), with an orbit camera and
+//! live method, IOR, TIR-policy and backend switches; frame time in the title; a screenshot key
+//! that writes the PNG and the frame's metrics against the exact reference. `--frames`,
+//! `--script` and `--screenshot` run it unattended (the headless test under Xvfb).
+//! `docs/viewer.md` lists the keys.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Context;
+use glam::Vec3;
+use refract_core::exit::TirPolicy;
+use refract_core::{Camera, CameraDesc};
+use refract_cpu::CpuRenderer;
+use refract_gpu::{GpuContext, GpuRenderer};
+use refract_scene::atomic_write::{write_png_rgb8, write_text_atomically};
+use refract_scene::metrics::evaluate_method;
+use refract_scene::tonemap::to_srgb8;
+use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene};
+use refract_trace::ReferenceRenderer;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// Arguments of `refract view`.
+#[derive(Debug, clap::Args)]
+pub struct ViewArgs {
+    /// A built-in scene or a .toml scene file.
+    #[arg(default_value = "sphere")]
+    pub scene: String,
+    /// The method shown first (`m`/`n` switch).
+    #[arg(long, default_value = "wyman")]
+    pub method: MethodId,
+    /// `gpu` (default) or `cpu` (`b` switches).
+    #[arg(long, default_value = "gpu")]
+    pub backend: String,
+    /// Window size `WxH` in physical pixels (64 to 4096 a side).
+    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Exit after this many frames (with `--screenshot`, written first).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    pub frames: Option<u32>,
+    /// Actions applied one per frame (`docs/viewer.md`): `key K`, `orbit DX DY`, `pan DX DY`,
+    /// `zoom STEPS`, `wait`.
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Where `p` (and the end of an unattended run) writes the screenshot PNG; the frame's
+    /// metrics go beside it as `.json`.
+    #[arg(long, default_value = "refract-view.png")]
+    pub screenshot: PathBuf,
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let err = || format!("`{text}`: expected WxH with sides from 64 to 4096");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(err)?;
+    let (w, h) = (
+        w.trim().parse::<u32>().map_err(|_| err())?,
+        h.trim().parse::<u32>().map_err(|_| err())?,
+    );
+    if (64..=4096).contains(&w) && (64..=4096).contains(&h) {
+        Ok((w, h))
+    } else {
+        Err(err())
+    }
+}
+
+/// One scripted action.
+#[derive(Clone, Debug, PartialEq)]
+enum Action {
+    Key(String),
+    Orbit(f32, f32),
+    Pan(f32, f32),
+    Zoom(f32),
+    Wait,
+}
+
+fn parse_script(text: &str, origin: &str) -> anyhow::Result<Vec<Action>> {
+    let mut actions = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let number = |i: usize| -> anyhow::Result<f32> {
+            words
+                .get(i)
+                .and_then(|w| w.parse::<f32>().ok())
+                .filter(|v| v.is_finite() && v.abs() <= 1e4)
+                .with_context(|| {
+                    format!(
+                        "{origin}:{}: `{line}`: expected a number within ±10000",
+                        n + 1
+                    )
+                })
+        };
+        actions.push(match words[0] {
+            "key" if words.len() == 2 => Action::Key(words[1].to_owned()),
+            "orbit" => Action::Orbit(number(1)?, number(2)?),
+            "pan" => Action::Pan(number(1)?, number(2)?),
+            "zoom" => Action::Zoom(number(1)?),
+            "wait" => Action::Wait,
+            _ => anyhow::bail!(
+                "{origin}:{}: `{line}`: expected key K, orbit DX DY, pan DX DY, zoom STEPS or wait",
+                n + 1
+            ),
+        });
+    }
+    Ok(actions)
+}
+
+/// An orbit camera around a target.
+#[derive(Clone, Copy, Debug)]
+struct Orbit {
+    target: Vec3,
+    distance: f32,
+    yaw: f32,
+    pitch: f32,
+}
+
+impl Orbit {
+    fn of(desc: &CameraDesc) -> Self {
+        let offset = desc.eye - desc.target;
+        let distance = offset.length().max(1e-3);
+        Self {
+            target: desc.target,
+            distance,
+            yaw: offset.x.atan2(offset.z),
+            pitch: (offset.y / distance).clamp(-1.0, 1.0).asin(),
+        }
+    }
+
+    fn eye(&self) -> Vec3 {
+        let (sy, cy) = self.yaw.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        self.target + self.distance * Vec3::new(sy * cp, sp, cy * cp)
+    }
+
+    /// Pixels dragged to radians.
+    fn orbit(&mut self, dx: f32, dy: f32) {
+        self.yaw -= dx * 0.01;
+        self.pitch = (self.pitch + dy * 0.01).clamp(-1.5, 1.5);
+    }
+
+    fn pan(&mut self, dx: f32, dy: f32) {
+        let forward = (self.target - self.eye()).normalize();
+        let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+        let up = right.cross(forward);
+        let scale = 0.002 * self.distance;
+        self.target += (-dx * right + dy * up) * scale;
+    }
+
+    fn zoom(&mut self, steps: f32) {
+        self.distance = (self.distance * 0.9f32.powf(steps)).clamp(0.05, 1e4);
+    }
+}
+
+/// The window's wgpu state: the surface and a pipeline that shows the frame's tonemapped pixels.
+struct Display {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    texture_format: wgpu::TextureFormat,
+    copy_src: bool,
+}
+
+struct Viewer {
+    args: ViewArgs,
+    scene: Arc<Scene>,
+    actions: Vec<Action>,
+    methods: Vec<MethodId>,
+    method: usize,
+    tir: TirPolicy,
+    use_gpu: bool,
+    orbit: Orbit,
+    home: Orbit,
+    frame: Frame,
+    frames_done: u32,
+    last_ms: f64,
+    drag: Option<(MouseButton, f64, f64)>,
+    cursor: (f64, f64),
+    display: Option<Display>,
+    gpu: Option<GpuRenderer>,
+    cpu: CpuRenderer,
+    error: Option<anyhow::Error>,
+    /// The window's pixels as presented last (RGB8, unattended runs on surfaces that allow
+    /// reading them back).
+    captured: Option<(u32, u32, Vec<u8>)>,
+}
+
+const SHADER: &str = r"
+@group(0) @binding(0) var image: texture_2d<f32>;
+
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(xy * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    let size = textureDimensions(image);
+    let texel = min(vec2<u32>(p.xy), size - 1u);
+    return vec4<f32>(textureLoad(image, texel, 0).rgb, 1.0);
+}
+";
+
+impl Viewer {
+    fn params(&self) -> MethodParams {
+        MethodParams::defaults(self.methods[self.method]).with_tir_policy(self.tir)
+    }
+
+    fn camera(&self, width: u32, height: u32) -> anyhow::Result<Camera> {
+        Ok(Camera::new(CameraDesc {
+            eye: self.orbit.eye(),
+            target: self.orbit.target,
+            width,
+            height,
+            ..self.scene.camera
+        })?)
+    }
+
+    fn renderer(&mut self) -> &mut dyn Renderer {
+        match (&mut self.gpu, self.use_gpu) {
+            (Some(gpu), true) => gpu,
+            _ => &mut self.cpu,
+        }
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let (w, h) = self.args.size;
+        let window = Arc::new(
+            event_loop.create_window(
+                Window::default_attributes()
+                    .with_title("refract view")
+                    .with_inner_size(PhysicalSize::new(w, h)),
+            )?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance.create_surface(Arc::clone(&window))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: Some(&surface),
+            ..Default::default()
+        }))
+        .map_err(|err| {
+            anyhow::anyhow!(
+                "no GPU adapter can show a window here ({err}); install a Vulkan driver (Debian: mesa-vulkan-drivers)"
+            )
+        })?;
+        let context = GpuContext::from_adapter(&adapter)?;
+        eprintln!("GPU: {} ({:?})", context.info.name, context.info.backend);
+        let gpu = GpuRenderer::with_context(context)?;
+        let device = &gpu.context().device;
+        let caps = surface.get_capabilities(&adapter);
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or_else(|| caps.formats.first().copied())
+            .context("the surface supports no format")?;
+        let copy_src = caps.usages.contains(wgpu::TextureUsages::COPY_SRC);
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: if copy_src {
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC
+            } else {
+                wgpu::TextureUsages::RENDER_ATTACHMENT
+            },
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::Fifo,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: Vec::new(),
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(device, &config);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("view"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("view"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("view"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("view"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                buffers: &[],
+                compilation_options: Default::default(),
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                targets: &[Some(format.into())],
+                compilation_options: Default::default(),
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        // The frame's bytes are sRGB-encoded: an sRGB surface gets them through an sRGB
+        // texture (decoded, then encoded again), a linear one as they are.
+        let texture_format = if format.is_srgb() {
+            wgpu::TextureFormat::Rgba8UnormSrgb
+        } else {
+            wgpu::TextureFormat::Rgba8Unorm
+        };
+        let mut gpu = gpu;
+        gpu.prepare(&self.scene)?;
+        self.cpu.prepare(&self.scene)?;
+        self.gpu = Some(gpu);
+        self.display = Some(Display {
+            window,
+            surface,
+            config,
+            pipeline,
+            layout,
+            texture_format,
+            copy_src,
+        });
+        Ok(())
+    }
+
+    fn title(&self) -> String {
+        format!(
+            "refract view — {} — {} on {} — IOR {} — TIR {:?} — {:.1} ms ({:.0} fps) — m/n method, b backend, i/k IOR, t TIR, r reset, p screenshot, q quit",
+            self.scene.name,
+            self.methods[self.method],
+            if self.use_gpu { "GPU" } else { "CPU" },
+            self.scene.refractor.ior(),
+            self.tir,
+            self.last_ms,
+            1e3 / self.last_ms.max(1e-3)
+        )
+    }
+
+    fn key(&mut self, key: &str) -> anyhow::Result<bool> {
+        let n = self.methods.len();
+        match key {
+            "m" => self.method = (self.method + 1) % n,
+            "n" => self.method = (self.method + n - 1) % n,
+            "b" => self.use_gpu = !self.use_gpu && self.gpu.is_some(),
+            "t" => {
+                self.tir = match self.tir {
+                    TirPolicy::ClampToCritical => TirPolicy::ReflectOnce,
+                    TirPolicy::ReflectOnce => TirPolicy::Black,
+                    TirPolicy::Black => TirPolicy::ClampToCritical,
+                }
+            }
+            "i" | "k" => {
+                let step = if key == "i" { 0.05 } else { -0.05 };
+                let ior = (self.scene.refractor.ior() + step).clamp(1.0, 3.0);
+                Arc::make_mut(&mut self.scene).refractor.set_ior(ior)?;
+                if let Some(gpu) = &mut self.gpu {
+                    gpu.prepare(&self.scene)?;
+                }
+                self.cpu.prepare(&self.scene)?;
+            }
+            "r" => self.orbit = self.home,
+            "p" => self.screenshot()?,
+            "q" | "escape" => return Ok(false),
+            _ => {}
+        }
+        Ok(true)
+    }
+
+    fn apply(&mut self, action: &Action) -> anyhow::Result<bool> {
+        match action {
+            Action::Key(k) => return self.key(&k.to_lowercase()),
+            Action::Orbit(dx, dy) => self.orbit.orbit(*dx, *dy),
+            Action::Pan(dx, dy) => self.orbit.pan(*dx, *dy),
+            Action::Zoom(s) => self.orbit.zoom(*s),
+            Action::Wait => {}
+        }
+        Ok(true)
+    }
+
+    /// Renders the current view and shows it; returns whether to go on.
+    fn redraw(&mut self) -> anyhow::Result<bool> {
+        if let Some(action) = self.actions.get(self.frames_done as usize).cloned()
+            && !self.apply(&action)?
+        {
+            return Ok(false);
+        }
+        let Some(display) = &self.display else {
+            return Ok(true);
+        };
+        let (width, height) = (display.config.width, display.config.height);
+        let camera = self.camera(width, height)?;
+        let params = self.params();
+        let mut frame = std::mem::take(&mut self.frame);
+        let start = Instant::now();
+        self.renderer()
+            .render(&camera, &params, FrameOutputs::Color, &mut frame)?;
+        self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.frame = frame;
+        let pixels: Vec<u8> = self
+            .frame
+            .color
+            .iter()
+            .flat_map(|&c| {
+                let [r, g, b] = to_srgb8(c);
+                [r, g, b, 255]
+            })
+            .collect();
+        self.present(&pixels, width, height)?;
+        self.frames_done += 1;
+        if let Some(display) = &self.display {
+            display.window.set_title(&self.title());
+        }
+        if self.args.frames.is_some_and(|n| self.frames_done >= n) {
+            self.screenshot()?;
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    fn present(&mut self, pixels: &[u8], width: u32, height: u32) -> anyhow::Result<()> {
+        let (Some(display), Some(gpu)) = (&self.display, &self.gpu) else {
+            return Ok(());
+        };
+        let (device, queue) = (&gpu.context().device, &gpu.context().queue);
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("view frame"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: display.texture_format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        queue.write_texture(
+            texture.as_image_copy(),
+            pixels,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * width),
+                rows_per_image: Some(height),
+            },
+            size,
+        );
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("view frame"),
+            layout: &display.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        });
+        let output = match display.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                display.surface.configure(device, &display.config);
+                return Ok(());
+            }
+            // Minimised or hidden: skip the frame.
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(());
+            }
+            other => anyhow::bail!("the window surface is not available: {other:?}"),
+        };
+        let target = output
+            .texture
+            .create_view(&wgpu::TextureViewDescriptor::default());
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("view"),
+        });
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("view"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&display.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        // Unattended runs read the presented image back: the screenshot is the window's.
+        let capture = (self.args.frames.is_some() && display.copy_src).then(|| {
+            let bytes_per_row = (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+                * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("window readback"),
+                size: u64::from(bytes_per_row) * u64::from(height),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            encoder.copy_texture_to_buffer(
+                output.texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(bytes_per_row),
+                        rows_per_image: Some(height),
+                    },
+                },
+                size,
+            );
+            (buffer, bytes_per_row)
+        });
+        queue.submit([encoder.finish()]);
+        let bgra = matches!(
+            display.config.format,
+            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+        );
+        display.window.pre_present_notify();
+        queue.present(output);
+        if let Some((buffer, bytes_per_row)) = capture {
+            let data = gpu.context().read_buffer(&buffer)?;
+            let rgb: Vec<u8> = data
+                .chunks_exact(bytes_per_row as usize)
+                .flat_map(|row| {
+                    row[..4 * width as usize].chunks_exact(4).flat_map(|p| {
+                        if bgra {
+                            [p[2], p[1], p[0]]
+                        } else {
+                            [p[0], p[1], p[2]]
+                        }
+                    })
+                })
+                .collect();
+            self.captured = Some((width, height, rgb));
+        }
+        Ok(())
+    }
+
+    /// Writes the last frame as PNG and its metrics against the exact reference as JSON.
+    fn screenshot(&mut self) -> anyhow::Result<()> {
+        let (width, height) = (self.frame.width, self.frame.height);
+        if width == 0 {
+            return Ok(());
+        }
+        // The window's pixels when they were read back, else the frame's (the same bytes).
+        let (pixels, source): (Vec<u8>, &str) = match &self.captured {
+            Some((w, h, rgb)) if (*w, *h) == (width, height) => (rgb.clone(), "the window"),
+            _ => (
+                self.frame.color.iter().flat_map(|&c| to_srgb8(c)).collect(),
+                "the frame",
+            ),
+        };
+        let path = self.args.screenshot.clone();
+        write_png_rgb8(&path, width, height, &pixels)?;
+        let camera = self.camera(width, height)?;
+        let mut reference = ReferenceRenderer::new();
+        reference.prepare(&self.scene)?;
+        let mut truth = Frame::default();
+        reference.render(
+            &camera,
+            &MethodParams::defaults(MethodId::Reference),
+            FrameOutputs::ColorAndAovs,
+            &mut truth,
+        )?;
+        let params = self.params();
+        let mut frame = Frame::default();
+        self.renderer()
+            .render(&camera, &params, FrameOutputs::ColorAndAovs, &mut frame)?;
+        let (mut record, _) = evaluate_method(&truth, &frame, &camera, &self.scene, &params);
+        record.scene.clone_from(&self.scene.name);
+        record.method = params.id().name().to_owned();
+        record.backend = if self.use_gpu { "gpu" } else { "cpu" }.to_owned();
+        record.params = params.describe();
+        record.ms_per_frame = Some(self.last_ms);
+        write_text_atomically(
+            &path.with_extension("json"),
+            &serde_json::to_string_pretty(&record)?,
+        )?;
+        eprintln!(
+            "screenshot of {source}: {} ({width}x{height}), metrics: {}",
+            path.display(),
+            path.with_extension("json").display()
+        );
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for Viewer {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.display.is_none()
+            && let Err(err) = self.open(event_loop)
+        {
+            self.error = Some(err);
+            event_loop.exit();
+            return;
+        }
+        if let Some(display) = &self.display {
+            display.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let result = match event {
+            WindowEvent::CloseRequested => Ok(false),
+            WindowEvent::Resized(size) => {
+                // A minimised window (size 0) keeps its configuration and skips frames.
+                if let (Some(display), Some(gpu)) = (&mut self.display, &self.gpu)
+                    && size.width > 0
+                    && size.height > 0
+                {
+                    display.config.width = size.width;
+                    display.config.height = size.height;
+                    display
+                        .surface
+                        .configure(&gpu.context().device, &display.config);
+                }
+                Ok(true)
+            }
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                match &event.logical_key {
+                    Key::Character(c) => self.key(&c.to_lowercase()),
+                    Key::Named(NamedKey::Escape) => self.key("escape"),
+                    _ => Ok(true),
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                self.drag = (state == ElementState::Pressed).then_some((
+                    button,
+                    self.cursor.0,
+                    self.cursor.1,
+                ));
+                Ok(true)
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.cursor = (position.x, position.y);
+                if let Some((button, x, y)) = self.drag {
+                    let (dx, dy) = ((position.x - x) as f32, (position.y - y) as f32);
+                    match button {
+                        MouseButton::Left => self.orbit.orbit(dx, dy),
+                        _ => self.orbit.pan(dx, dy),
+                    }
+                    self.drag = Some((button, position.x, position.y));
+                }
+                Ok(true)
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
+                };
+                self.orbit.zoom(steps);
+                Ok(true)
+            }
+            WindowEvent::RedrawRequested => self.redraw(),
+            _ => Ok(true),
+        };
+        match result {
+            Ok(true) => {
+                if let Some(display) = &self.display {
+                    display.window.request_redraw();
+                }
+            }
+            Ok(false) => event_loop.exit(),
+            Err(err) => {
+                self.error = Some(err);
+                event_loop.exit();
+            }
+        }
+    }
+}
+
+/// Runs `refract view`.
+pub fn run(args: ViewArgs) -> anyhow::Result<()> {
+    let loaded = load_scene(&args.scene)?;
+    for warning in &loaded.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let scene = Arc::new(loaded.scene);
+    let actions = match &args.script {
+        Some(path) => parse_script(
+            &std::fs::read_to_string(path)
+                .with_context(|| format!("{}: cannot read the script", path.display()))?,
+            &path.display().to_string(),
+        )?,
+        None => Vec::new(),
+    };
+    let methods: Vec<MethodId> = MethodId::approximations().collect();
+    let method = methods.iter().position(|m| *m == args.method).context(
+        "--method: the viewer shows approximations; the reference is what `p` compares with",
+    )?;
+    let use_gpu = match args.backend.as_str() {
+        "gpu" => true,
+        "cpu" => false,
+        other => anyhow::bail!("--backend: unknown backend `{other}`; expected gpu or cpu"),
+    };
+    let home = Orbit::of(&scene.camera);
+    let event_loop = EventLoop::new().map_err(|err| {
+        anyhow::anyhow!(
+            "cannot open a window ({err}); is a display (DISPLAY or WAYLAND_DISPLAY) available?"
+        )
+    })?;
+    let mut viewer = Viewer {
+        args,
+        scene,
+        actions,
+        methods,
+        method,
+        tir: TirPolicy::ClampToCritical,
+        use_gpu,
+        orbit: home,
+        home,
+        frame: Frame::default(),
+        frames_done: 0,
+        last_ms: 0.0,
+        drag: None,
+        cursor: (0.0, 0.0),
+        display: None,
+        gpu: None,
+        cpu: CpuRenderer::new(),
+        error: None,
+        captured: None,
+    };
+    event_loop.run_app(&mut viewer)?;
+    match viewer.error {
+        Some(err) => Err(err),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scripts_parse_and_errors_name_the_line() {
+        let actions =
+            parse_script("# comment\nkey m\norbit 10 -5\nzoom 2\nwait\n", "s").expect("ok");
+        assert_eq!(
+            actions,
+            [
+                Action::Key("m".into()),
+                Action::Orbit(10.0, -5.0),
+                Action::Zoom(2.0),
+                Action::Wait
+            ]
+        );
+        let err = parse_script("key m\nspin 3\n", "s.txt")
+            .expect_err("bad")
+            .to_string();
+        assert!(err.contains("s.txt:2"), "{err}");
+        assert!(parse_script("orbit nan 1\n", "s").is_err());
+        assert_eq!(parse_size("320x240"), Ok((320, 240)));
+        assert!(parse_size("10x10").is_err());
+    }
+
+    #[test]
+    fn the_orbit_camera_starts_at_the_scene_camera() {
+        let desc = CameraDesc::default();
+        let orbit = Orbit::of(&desc);
+        assert!((orbit.eye() - desc.eye).length() < 1e-5, "{}", orbit.eye());
+        let mut moved = orbit;
+        moved.orbit(100.0, 0.0);
+        assert!((moved.eye() - moved.target).length() - orbit.distance < 1e-4);
+        moved.zoom(1.0);
+        assert!(moved.distance < orbit.distance);
+    }
+}

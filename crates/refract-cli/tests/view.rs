@@ -1,0 +1,169 @@
+//! `refract view` headless: under Xvfb (started here) with lavapipe, a scripted run of a few
+//! frames switches the method, reads the presented window back, and its screenshot must be
+//! non-blank and match an offline render of the same view within a FLIP threshold. Skipped
+//! without `Xvfb` unless `REFRACT_REQUIRE_XVFB=1` (CI installs it).
+
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// An Xvfb server on a free display, stopped on drop.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn xvfb() -> Option<Xvfb> {
+    let available = Command::new("Xvfb")
+        .arg("-help")
+        .stderr(Stdio::null())
+        .stdout(Stdio::null())
+        .status()
+        .is_ok();
+    if !available {
+        assert!(
+            !std::env::var("REFRACT_REQUIRE_XVFB").is_ok_and(|v| v == "1"),
+            "REFRACT_REQUIRE_XVFB=1 but Xvfb is not installed"
+        );
+        println!("skipped: Xvfb not found");
+        return None;
+    }
+    // A display number unlikely to be taken: from the process id.
+    for n in 0..20 {
+        let number = 200 + (std::process::id() % 500) + n;
+        if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
+            continue;
+        }
+        let mut child = Command::new("Xvfb")
+            .args([
+                format!(":{number}"),
+                "-screen".into(),
+                "0".into(),
+                "640x480x24".into(),
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start Xvfb");
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(10) {
+            if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
+                return Some(Xvfb {
+                    child,
+                    display: format!(":{number}"),
+                });
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        panic!("Xvfb :{number} did not start");
+    }
+    panic!("no free X display");
+}
+
+fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
+    let image = image::open(path).expect("png").to_rgb8();
+    (image.width(), image.height(), image.into_raw())
+}
+
+#[test]
+fn a_scripted_window_matches_the_offline_render() {
+    let Some(x) = xvfb() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("keys.txt"), "key m\nwait\nwait\n").expect("script");
+    let exe = env!("CARGO_BIN_EXE_refract");
+    let view = Command::new(exe)
+        .args([
+            "view",
+            "chart",
+            "--method",
+            "wyman",
+            "--size",
+            "160x120",
+            "--frames",
+            "3",
+            "--script",
+            "keys.txt",
+            "--screenshot",
+            "window.png",
+        ])
+        .env("DISPLAY", &x.display)
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .current_dir(dir.path())
+        .output()
+        .expect("run refract view");
+    let log = String::from_utf8_lossy(&view.stderr).into_owned();
+    assert!(view.status.success(), "{log}");
+    assert!(log.contains("screenshot of the window"), "{log}");
+    // `m` switched wyman to the next method of the registry: wyman-dv.
+    let metrics: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("window.json")).expect("metrics"),
+    )
+    .expect("json");
+    assert_eq!(metrics["method"], "wyman-dv");
+    assert!(metrics["flip_mean"].as_f64().is_some());
+    let offline = Command::new(exe)
+        .args([
+            "render",
+            "chart",
+            "--method",
+            "wyman-dv",
+            "--backend",
+            "gpu",
+            "--res",
+            "160x120",
+            "--out",
+            "offline.png",
+        ])
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .current_dir(dir.path())
+        .output()
+        .expect("render");
+    assert!(
+        offline.status.success(),
+        "{}",
+        String::from_utf8_lossy(&offline.stderr)
+    );
+    let (w, h, window) = rgb(&dir.path().join("window.png"));
+    let (w2, h2, reference) = rgb(&dir.path().join("offline.png"));
+    assert_eq!((w, h), (w2, h2));
+    // Not blank: the pixels vary.
+    let mean = window.iter().map(|&v| f64::from(v)).sum::<f64>() / window.len() as f64;
+    let var = window
+        .iter()
+        .map(|&v| (f64::from(v) - mean).powi(2))
+        .sum::<f64>()
+        / window.len() as f64;
+    assert!(var.sqrt() > 20.0, "blank window: std dev {}", var.sqrt());
+    let flip = nv_flip::flip(
+        nv_flip::FlipImageRgb8::with_data(w, h, &reference),
+        nv_flip::FlipImageRgb8::with_data(w, h, &window),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    let mean_flip = flip.to_vec().iter().map(|&v| f64::from(v)).sum::<f64>() / f64::from(w * h);
+    println!("window vs offline render: mean FLIP {mean_flip:.5}");
+    assert!(mean_flip < 0.01, "mean FLIP {mean_flip}");
+}
+
+/// Without a display the viewer stops with one message asking for one (no panic).
+#[test]
+fn without_a_display_the_viewer_says_so() {
+    let output = Command::new(env!("CARGO_BIN_EXE_refract"))
+        .args(["view", "sphere", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("run refract view");
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(err.contains("display"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
