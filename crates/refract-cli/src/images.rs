@@ -73,7 +73,7 @@ fn rgbe(c: Vec3) -> ([u8; 3], u8) {
 }
 
 /// The magma colour map at `t ∈ [0, 1]` (from FLIP's own lookup table).
-fn magma(lut: &[u8], t: f32) -> [u8; 3] {
+pub(crate) fn magma(lut: &[u8], t: f32) -> [u8; 3] {
     let k = (t.clamp(0.0, 1.0) * 255.0).round() as usize;
     [lut[3 * k], lut[3 * k + 1], lut[3 * k + 2]]
 }

@@ -25,6 +25,7 @@ mod sweep;
 mod sweep_report;
 mod timing;
 mod view;
+mod view_reference;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///

@@ -21,6 +21,8 @@ use refract_scene::tonemap::to_srgb8;
 use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene};
 use refract_trace::ReferenceRenderer;
 use winit::application::ApplicationHandler;
+
+use crate::view_reference::{Level, ProgressiveReference};
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -193,6 +195,26 @@ struct Viewer {
     /// The window's pixels as presented last (RGB8, unattended runs on surfaces that allow
     /// reading them back).
     captured: Option<(u32, u32, Vec<u8>)>,
+    /// The exact reference, refined in the background while the camera rests.
+    reference: ProgressiveReference,
+    /// The newest reference level of the current view.
+    reference_level: Option<Level>,
+    reference_generation: u64,
+    /// Bumped when the scene changes (IOR), so the reference is asked again.
+    scene_version: u64,
+    reference_scene_version: u64,
+    /// Method on the left, reference on the right.
+    split: bool,
+    /// What the method's side shows.
+    error_view: ErrorView,
+}
+
+/// The method's image or one of its error maps against the full-resolution reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ErrorView {
+    Off,
+    Flip,
+    T2,
 }
 
 const SHADER: &str = r"
@@ -355,8 +377,25 @@ impl Viewer {
     }
 
     fn title(&self) -> String {
+        let reference = if self.split || self.error_view != ErrorView::Off {
+            match &self.reference_level {
+                None => " — reference: tracing".to_owned(),
+                Some(l) if l.full => " — reference: done".to_owned(),
+                Some(l) => format!(
+                    " — reference: {}×{} (refining)",
+                    l.frame.width, l.frame.height
+                ),
+            }
+        } else {
+            String::new()
+        };
+        let view = match self.error_view {
+            ErrorView::Off => "",
+            ErrorView::Flip => " — FLIP map",
+            ErrorView::T2 => " — T2 error map (0–20°)",
+        };
         format!(
-            "refract view — {} — {} on {} — IOR {} — TIR {:?} — {:.1} ms ({:.0} fps) — m/n method, b backend, i/k IOR, t TIR, r reset, p screenshot, q quit",
+            "refract view — {} — {} on {} — IOR {} — TIR {:?} — {:.1} ms ({:.0} fps){view}{reference} — m/n method, b backend, v split, e error map, i/k IOR, t TIR, r reset, p screenshot, q quit",
             self.scene.name,
             self.methods[self.method],
             if self.use_gpu { "GPU" } else { "CPU" },
@@ -380,10 +419,19 @@ impl Viewer {
                     TirPolicy::Black => TirPolicy::ClampToCritical,
                 }
             }
+            "v" => self.split = !self.split,
+            "e" => {
+                self.error_view = match self.error_view {
+                    ErrorView::Off => ErrorView::Flip,
+                    ErrorView::Flip => ErrorView::T2,
+                    ErrorView::T2 => ErrorView::Off,
+                }
+            }
             "i" | "k" => {
                 let step = if key == "i" { 0.05 } else { -0.05 };
                 let ior = (self.scene.refractor.ior() + step).clamp(1.0, 3.0);
                 Arc::make_mut(&mut self.scene).refractor.set_ior(ior)?;
+                self.scene_version += 1;
                 if let Some(gpu) = &mut self.gpu {
                     gpu.prepare(&self.scene)?;
                 }
@@ -427,7 +475,7 @@ impl Viewer {
             .render(&camera, &params, FrameOutputs::Color, &mut frame)?;
         self.last_ms = start.elapsed().as_secs_f64() * 1e3;
         self.frame = frame;
-        let pixels: Vec<u8> = self
+        let mut pixels: Vec<u8> = self
             .frame
             .color
             .iter()
@@ -436,16 +484,105 @@ impl Viewer {
                 [r, g, b, 255]
             })
             .collect();
+        if self.split || self.error_view != ErrorView::Off {
+            self.refine_reference(*camera.desc());
+        }
+        if self.error_view != ErrorView::Off {
+            self.error_map(&camera, &params, &mut pixels)?;
+        }
+        if self.split {
+            self.compose_split(&mut pixels, width, height);
+        }
         self.present(&pixels, width, height)?;
         self.frames_done += 1;
         if let Some(display) = &self.display {
             display.window.set_title(&self.title());
         }
-        if self.args.frames.is_some_and(|n| self.frames_done >= n) {
+        // Unattended runs that show the reference end once it is complete (the run goes on
+        // past `--frames` until then).
+        let waiting = (self.split || self.error_view != ErrorView::Off)
+            && !self.reference_level.as_ref().is_some_and(|l| l.full);
+        if self.args.frames.is_some_and(|n| self.frames_done >= n) && !waiting {
             self.screenshot()?;
             return Ok(false);
         }
         Ok(true)
+    }
+
+    /// Asks the background tracer for the current view (a no-op while it is unchanged) and
+    /// keeps its newest level.
+    fn refine_reference(&mut self, camera: CameraDesc) {
+        let force = self.scene_version != self.reference_scene_version;
+        self.reference_scene_version = self.scene_version;
+        let generation = self.reference.request(&self.scene, camera, force);
+        if generation != self.reference_generation {
+            self.reference_generation = generation;
+            self.reference_level = None;
+        }
+        if let Some(level) = self.reference.poll(generation) {
+            self.reference_level = Some(level);
+        }
+    }
+
+    /// The right half of the window shows the reference (its newest level, scaled), with a
+    /// divider.
+    fn compose_split(&self, pixels: &mut [u8], width: u32, height: u32) {
+        let Some(level) = &self.reference_level else {
+            return;
+        };
+        let (lw, lh) = (level.frame.width, level.frame.height);
+        for y in 0..height {
+            for x in width / 2..width {
+                let i = 4 * (y * width + x) as usize;
+                let color = if x < width / 2 + 2 {
+                    [255, 255, 255]
+                } else {
+                    let (sx, sy) = ((x * lw / width).min(lw - 1), (y * lh / height).min(lh - 1));
+                    to_srgb8(level.frame.color[(sy * lw + sx) as usize])
+                };
+                pixels[i..i + 3].copy_from_slice(&color);
+            }
+        }
+    }
+
+    /// Replaces the method's pixels by its FLIP or T2-error map against the full-resolution
+    /// reference (magma, FLIP 0–1, T2 0–20°), once that reference has arrived.
+    fn error_map(
+        &mut self,
+        camera: &Camera,
+        params: &MethodParams,
+        pixels: &mut [u8],
+    ) -> anyhow::Result<()> {
+        let Some(level) = self.reference_level.as_ref().filter(|l| l.full) else {
+            return Ok(());
+        };
+        if (level.frame.width, level.frame.height) != (camera.width(), camera.height()) {
+            return Ok(());
+        }
+        let truth = level.frame.clone();
+        let mut frame = Frame::default();
+        self.renderer()
+            .render(camera, params, FrameOutputs::ColorAndAovs, &mut frame)?;
+        let (_, maps) = refract_scene::metrics::evaluate(
+            &truth,
+            &frame,
+            camera,
+            self.scene.refractor.diameter(),
+        );
+        let (values, max) = match self.error_view {
+            ErrorView::Flip => (maps.flip, 1.0),
+            _ => (maps.t2_deg, crate::compare::T2_SCALE_DEG),
+        };
+        let lut = nv_flip::magma_lut().to_vec();
+        for (px, v) in pixels.chunks_exact_mut(4).zip(values) {
+            let rgb = if v.is_nan() {
+                [40, 40, 40]
+            } else {
+                crate::images::magma(&lut, v / max)
+            };
+            px[..3].copy_from_slice(&rgb);
+        }
+        Ok(())
     }
 
     fn present(&mut self, pixels: &[u8], width: u32, height: u32) -> anyhow::Result<()> {
@@ -760,6 +897,13 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         cpu: CpuRenderer::new(),
         error: None,
         captured: None,
+        reference: ProgressiveReference::start(),
+        reference_level: None,
+        reference_generation: 0,
+        scene_version: 0,
+        reference_scene_version: 0,
+        split: false,
+        error_view: ErrorView::Off,
     };
     event_loop.run_app(&mut viewer)?;
     match viewer.error {

@@ -167,3 +167,92 @@ fn without_a_display_the_viewer_says_so() {
     assert!(err.contains("display"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// `v` splits the window: the method on the left, the exact reference (refined in the
+/// background until complete) on the right, each matching its offline render.
+#[test]
+fn the_split_view_shows_the_reference_on_the_right() {
+    let Some(x) = xvfb() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("keys.txt"), "key v\nwait\n").expect("script");
+    let exe = env!("CARGO_BIN_EXE_refract");
+    let run = |args: &[&str]| {
+        let output = Command::new(exe)
+            .args(args)
+            .env("DISPLAY", &x.display)
+            .env("XDG_RUNTIME_DIR", "/tmp")
+            .current_dir(dir.path())
+            .output()
+            .expect("run refract");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    };
+    run(&[
+        "view",
+        "chart",
+        "--method",
+        "ray-plane",
+        "--size",
+        "160x120",
+        "--frames",
+        "2",
+        "--script",
+        "keys.txt",
+        "--screenshot",
+        "split.png",
+    ]);
+    run(&[
+        "render",
+        "chart",
+        "--method",
+        "reference",
+        "--res",
+        "160x120",
+        "--out",
+        "ref.png",
+    ]);
+    run(&[
+        "render",
+        "chart",
+        "--method",
+        "ray-plane",
+        "--backend",
+        "gpu",
+        "--res",
+        "160x120",
+        "--out",
+        "method.png",
+    ]);
+    let (w, h, split) = rgb(&dir.path().join("split.png"));
+    let (_, _, reference) = rgb(&dir.path().join("ref.png"));
+    let (_, _, method) = rgb(&dir.path().join("method.png"));
+    // Mean absolute difference per half (the divider columns excluded).
+    let half = |image: &[u8], right: bool| -> f64 {
+        let mut sum = 0.0;
+        let mut n = 0.0;
+        for y in 0..h {
+            for xx in 0..w {
+                let on_right = xx >= w / 2 + 2;
+                let on_left = xx < w / 2;
+                if (right && on_right) || (!right && on_left) {
+                    for k in 0..3 {
+                        let i = (3 * (y * w + xx) + k) as usize;
+                        sum += (f64::from(split[i]) - f64::from(image[i])).abs();
+                        n += 1.0;
+                    }
+                }
+            }
+        }
+        sum / n
+    };
+    let (left, right) = (half(&method, false), half(&reference, true));
+    println!(
+        "split view: left vs method {left:.3}, right vs reference {right:.3} (mean |Δ| of 8-bit)"
+    );
+    assert!(left < 1.0 && right < 1.0, "left {left}, right {right}");
+    // And the halves differ from the other image (the reference is not the method).
+    assert!(half(&reference, false) > 2.0 * left.max(0.1));
+}
