@@ -17,6 +17,7 @@ use refract_cpu::CpuRenderer;
 use refract_gpu::{GpuContext, GpuRenderer};
 use refract_scene::atomic_write::{write_png_rgb8, write_text_atomically};
 use refract_scene::metrics::evaluate_method;
+use refract_scene::registry::ParamKind;
 use refract_scene::tonemap::to_srgb8;
 use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene};
 use refract_trace::ReferenceRenderer;
@@ -171,6 +172,16 @@ struct Display {
     layout: wgpu::BindGroupLayout,
     texture_format: wgpu::TextureFormat,
     copy_src: bool,
+    egui: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+/// What the panel draws this frame, tessellated.
+struct PanelFrame {
+    jobs: Vec<egui::ClippedPrimitive>,
+    textures: egui::TexturesDelta,
+    screen: egui_wgpu::ScreenDescriptor,
 }
 
 struct Viewer {
@@ -179,7 +190,6 @@ struct Viewer {
     actions: Vec<Action>,
     methods: Vec<MethodId>,
     method: usize,
-    tir: TirPolicy,
     use_gpu: bool,
     orbit: Orbit,
     home: Orbit,
@@ -207,6 +217,12 @@ struct Viewer {
     split: bool,
     /// What the method's side shows.
     error_view: ErrorView,
+    /// Each method's parameters as the panel left them.
+    method_params: Vec<MethodParams>,
+    /// Show the egui panel (`h` toggles).
+    show_panel: bool,
+    /// An IOR the panel asked for, applied before the next frame.
+    pending_ior: Option<f32>,
 }
 
 /// The method's image or one of its error maps against the full-resolution reference.
@@ -236,7 +252,126 @@ fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
 
 impl Viewer {
     fn params(&self) -> MethodParams {
-        MethodParams::defaults(self.methods[self.method]).with_tir_policy(self.tir)
+        self.method_params[self.method]
+    }
+
+    /// The panel (egui): method and its parameters, IOR, TIR policy, backend, views, frame time
+    /// and the keys. Changes are applied after the frame's UI ran.
+    fn panel(&mut self, width: u32, height: u32) -> Option<PanelFrame> {
+        if !self.show_panel {
+            return None;
+        }
+        let display = self.display.as_mut()?;
+        let raw = display.egui_state.take_egui_input(&display.window);
+        let mut method = self.method;
+        let mut params = self.method_params[self.method];
+        let mut ior = self.scene.refractor.ior();
+        let mut use_gpu = self.use_gpu;
+        let mut split = self.split;
+        let mut error_view = self.error_view;
+        let (ms, methods, has_gpu) = (self.last_ms, &self.methods, self.gpu.is_some());
+        let output = display.egui.run_ui(raw, |ui| {
+            egui::Window::new("refract")
+                .default_pos([8.0, 8.0])
+                .resizable(false)
+                .show(ui.ctx(), |ui| {
+                    ui.label(format!(
+                        "{ms:.1} ms / frame ({:.0} fps)",
+                        1e3 / ms.max(1e-3)
+                    ));
+                    egui::ComboBox::from_label("method (m/n)")
+                        .selected_text(methods[method].name())
+                        .show_ui(ui, |ui| {
+                            for (i, id) in methods.iter().enumerate() {
+                                ui.selectable_value(&mut method, i, id.name());
+                            }
+                        });
+                    for spec in methods[method].info().params {
+                        let Some(value) = params.get(spec.name) else {
+                            continue;
+                        };
+                        match spec.kind {
+                            ParamKind::Choice(choices) => {
+                                let mut chosen = value.clone();
+                                egui::ComboBox::from_label(spec.name)
+                                    .selected_text(&chosen)
+                                    .show_ui(ui, |ui| {
+                                        for c in choices {
+                                            ui.selectable_value(&mut chosen, (*c).to_owned(), *c);
+                                        }
+                                    });
+                                if chosen != value {
+                                    let _ = params.set(spec.name, &chosen, "panel");
+                                }
+                            }
+                            ParamKind::Integer { min, max } => {
+                                let mut v: u32 = value.parse().unwrap_or(min);
+                                ui.add(egui::Slider::new(&mut v, min..=max).text(spec.name));
+                                if v.to_string() != value {
+                                    let _ = params.set(spec.name, &v.to_string(), "panel");
+                                }
+                            }
+                        }
+                    }
+                    ui.add(egui::Slider::new(&mut ior, 1.0..=3.0).text("IOR (i/k)"));
+                    ui.horizontal(|ui| {
+                        ui.label("backend (b)");
+                        if has_gpu {
+                            ui.radio_value(&mut use_gpu, true, "GPU");
+                        }
+                        ui.radio_value(&mut use_gpu, false, "CPU");
+                    });
+                    ui.checkbox(&mut split, "split view with the exact reference (v)");
+                    ui.horizontal(|ui| {
+                        ui.label("show (e)");
+                        ui.radio_value(&mut error_view, ErrorView::Off, "image");
+                        ui.radio_value(&mut error_view, ErrorView::Flip, "FLIP");
+                        ui.radio_value(&mut error_view, ErrorView::T2, "T2 error");
+                    });
+                    ui.collapsing("keys", |ui| {
+                        ui.label(
+                            "left drag orbit · right drag pan · wheel zoom · r reset\n\
+                             m/n method · b backend · i/k IOR · t TIR · v split · e error map\n\
+                             p screenshot + metrics · h hide this panel · q quit",
+                        );
+                    });
+                });
+        });
+        display
+            .egui_state
+            .handle_platform_output(&display.window, output.platform_output);
+        let pixels_per_point = output.pixels_per_point;
+        let jobs = display.egui.tessellate(output.shapes, pixels_per_point);
+        // Apply what the panel changed.
+        self.method = method;
+        self.method_params[method] = params;
+        self.use_gpu = use_gpu;
+        self.split = split;
+        self.error_view = error_view;
+        if (ior - self.scene.refractor.ior()).abs() > 1e-6 {
+            self.pending_ior = Some(ior);
+        }
+        Some(PanelFrame {
+            jobs,
+            textures: output.textures_delta,
+            screen: egui_wgpu::ScreenDescriptor {
+                size_in_pixels: [width, height],
+                pixels_per_point,
+            },
+        })
+    }
+
+    /// Changes the refractor's IOR (re-uploading the scene to both renderers).
+    fn set_ior(&mut self, ior: f32) -> anyhow::Result<()> {
+        Arc::make_mut(&mut self.scene)
+            .refractor
+            .set_ior(ior.clamp(1.0, 3.0))?;
+        self.scene_version += 1;
+        if let Some(gpu) = &mut self.gpu {
+            gpu.prepare(&self.scene)?;
+        }
+        self.cpu.prepare(&self.scene)?;
+        Ok(())
     }
 
     fn camera(&self, width: u32, height: u32) -> anyhow::Result<Camera> {
@@ -360,6 +495,17 @@ impl Viewer {
         } else {
             wgpu::TextureFormat::Rgba8Unorm
         };
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(device, format, egui_wgpu::RendererOptions::default());
         let mut gpu = gpu;
         gpu.prepare(&self.scene)?;
         self.cpu.prepare(&self.scene)?;
@@ -372,6 +518,9 @@ impl Viewer {
             layout,
             texture_format,
             copy_src,
+            egui: egui_ctx,
+            egui_state,
+            egui_renderer,
         });
         Ok(())
     }
@@ -395,12 +544,12 @@ impl Viewer {
             ErrorView::T2 => " — T2 error map (0–20°)",
         };
         format!(
-            "refract view — {} — {} on {} — IOR {} — TIR {:?} — {:.1} ms ({:.0} fps){view}{reference} — m/n method, b backend, v split, e error map, i/k IOR, t TIR, r reset, p screenshot, q quit",
+            "refract view — {} — {} ({}) on {} — IOR {} — {:.1} ms ({:.0} fps){view}{reference} — h panel, m/n method, b backend, v split, e error map, i/k IOR, t TIR, r reset, p screenshot, q quit",
             self.scene.name,
             self.methods[self.method],
+            self.params().describe(),
             if self.use_gpu { "GPU" } else { "CPU" },
             self.scene.refractor.ior(),
-            self.tir,
             self.last_ms,
             1e3 / self.last_ms.max(1e-3)
         )
@@ -413,11 +562,14 @@ impl Viewer {
             "n" => self.method = (self.method + n - 1) % n,
             "b" => self.use_gpu = !self.use_gpu && self.gpu.is_some(),
             "t" => {
-                self.tir = match self.tir {
-                    TirPolicy::ClampToCritical => TirPolicy::ReflectOnce,
-                    TirPolicy::ReflectOnce => TirPolicy::Black,
-                    TirPolicy::Black => TirPolicy::ClampToCritical,
-                }
+                // The current method's exit TIR policy (methods without one ignore it).
+                let next = match self.params().get("tir").as_deref() {
+                    Some("clamp") => TirPolicy::ReflectOnce,
+                    Some("reflect") => TirPolicy::Black,
+                    _ => TirPolicy::ClampToCritical,
+                };
+                let p = &mut self.method_params[self.method];
+                *p = p.with_tir_policy(next);
             }
             "v" => self.split = !self.split,
             "e" => {
@@ -429,14 +581,9 @@ impl Viewer {
             }
             "i" | "k" => {
                 let step = if key == "i" { 0.05 } else { -0.05 };
-                let ior = (self.scene.refractor.ior() + step).clamp(1.0, 3.0);
-                Arc::make_mut(&mut self.scene).refractor.set_ior(ior)?;
-                self.scene_version += 1;
-                if let Some(gpu) = &mut self.gpu {
-                    gpu.prepare(&self.scene)?;
-                }
-                self.cpu.prepare(&self.scene)?;
+                self.set_ior(self.scene.refractor.ior() + step)?;
             }
+            "h" => self.show_panel = !self.show_panel,
             "r" => self.orbit = self.home,
             "p" => self.screenshot()?,
             "q" | "escape" => return Ok(false),
@@ -467,6 +614,10 @@ impl Viewer {
             return Ok(true);
         };
         let (width, height) = (display.config.width, display.config.height);
+        let panel = self.panel(width, height);
+        if let Some(ior) = self.pending_ior.take() {
+            self.set_ior(ior)?;
+        }
         let camera = self.camera(width, height)?;
         let params = self.params();
         let mut frame = std::mem::take(&mut self.frame);
@@ -493,7 +644,7 @@ impl Viewer {
         if self.split {
             self.compose_split(&mut pixels, width, height);
         }
-        self.present(&pixels, width, height)?;
+        self.present(&pixels, width, height, panel)?;
         self.frames_done += 1;
         if let Some(display) = &self.display {
             display.window.set_title(&self.title());
@@ -585,8 +736,14 @@ impl Viewer {
         Ok(())
     }
 
-    fn present(&mut self, pixels: &[u8], width: u32, height: u32) -> anyhow::Result<()> {
-        let (Some(display), Some(gpu)) = (&self.display, &self.gpu) else {
+    fn present(
+        &mut self,
+        pixels: &[u8],
+        width: u32,
+        height: u32,
+        panel: Option<PanelFrame>,
+    ) -> anyhow::Result<()> {
+        let (Some(display), Some(gpu)) = (&mut self.display, &self.gpu) else {
             return Ok(());
         };
         let (device, queue) = (&gpu.context().device, &gpu.context().queue);
@@ -643,6 +800,23 @@ impl Viewer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("view"),
         });
+        if let Some(panel) = &panel {
+            for (id, deltas) in &panel.textures.set {
+                for delta in deltas {
+                    display
+                        .egui_renderer
+                        .update_texture(device, queue, *id, delta);
+                }
+            }
+            let extra = display.egui_renderer.update_buffers(
+                device,
+                queue,
+                &mut encoder,
+                &panel.jobs,
+                &panel.screen,
+            );
+            queue.submit(extra);
+        }
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("view"),
@@ -663,6 +837,18 @@ impl Viewer {
             pass.set_pipeline(&display.pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.draw(0..3, 0..1);
+            if let Some(panel) = &panel {
+                display.egui_renderer.render(
+                    &mut pass.forget_lifetime(),
+                    &panel.jobs,
+                    &panel.screen,
+                );
+            }
+        }
+        if let Some(panel) = &panel {
+            for id in &panel.textures.free {
+                display.egui_renderer.free_texture(id);
+            }
         }
         // Unattended runs read the presented image back: the screenshot is the window's.
         let capture = (self.args.frames.is_some() && display.copy_src).then(|| {
@@ -778,6 +964,24 @@ impl ApplicationHandler for Viewer {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        // The panel sees every event first; what it consumes (clicks, drags on it) stops here.
+        if self.show_panel
+            && let Some(display) = &mut self.display
+        {
+            let response = display.egui_state.on_window_event(&display.window, &event);
+            if response.consumed
+                && matches!(
+                    event,
+                    WindowEvent::MouseInput { .. }
+                        | WindowEvent::CursorMoved { .. }
+                        | WindowEvent::MouseWheel { .. }
+                        | WindowEvent::KeyboardInput { .. }
+                )
+            {
+                display.window.request_redraw();
+                return;
+            }
+        }
         let result = match event {
             WindowEvent::CloseRequested => Ok(false),
             WindowEvent::Resized(size) => {
@@ -872,6 +1076,8 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         other => anyhow::bail!("--backend: unknown backend `{other}`; expected gpu or cpu"),
     };
     let home = Orbit::of(&scene.camera);
+    let methods_params: Vec<MethodParams> =
+        methods.iter().map(|&m| MethodParams::defaults(m)).collect();
     let event_loop = EventLoop::new().map_err(|err| {
         anyhow::anyhow!(
             "cannot open a window ({err}); is a display (DISPLAY or WAYLAND_DISPLAY) available?"
@@ -883,7 +1089,6 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         actions,
         methods,
         method,
-        tir: TirPolicy::ClampToCritical,
         use_gpu,
         orbit: home,
         home,
@@ -904,6 +1109,9 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         reference_scene_version: 0,
         split: false,
         error_view: ErrorView::Off,
+        method_params: methods_params,
+        show_panel: true,
+        pending_ior: None,
     };
     event_loop.run_app(&mut viewer)?;
     match viewer.error {

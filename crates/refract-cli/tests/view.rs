@@ -78,7 +78,7 @@ fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
 fn a_scripted_window_matches_the_offline_render() {
     let Some(x) = xvfb() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
-    std::fs::write(dir.path().join("keys.txt"), "key m\nwait\nwait\n").expect("script");
+    std::fs::write(dir.path().join("keys.txt"), "key h\nkey m\nwait\n").expect("script");
     let exe = env!("CARGO_BIN_EXE_refract");
     let view = Command::new(exe)
         .args([
@@ -151,6 +151,62 @@ fn a_scripted_window_matches_the_offline_render() {
     let mean_flip = flip.to_vec().iter().map(|&v| f64::from(v)).sum::<f64>() / f64::from(w * h);
     println!("window vs offline render: mean FLIP {mean_flip:.5}");
     assert!(mean_flip < 0.01, "mean FLIP {mean_flip}");
+
+    // Without `h` the panel is drawn over the image.
+    std::fs::write(dir.path().join("panel.txt"), "key m\nwait\nwait\n").expect("script");
+    let panel = Command::new(exe)
+        .args([
+            "view",
+            "chart",
+            "--method",
+            "wyman",
+            "--size",
+            "400x300",
+            "--frames",
+            "3",
+            "--script",
+            "panel.txt",
+            "--screenshot",
+            "panel.png",
+        ])
+        .env("DISPLAY", &x.display)
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .current_dir(dir.path())
+        .output()
+        .expect("run refract view");
+    assert!(
+        panel.status.success(),
+        "{}",
+        String::from_utf8_lossy(&panel.stderr)
+    );
+    let (pw, ph, with_panel) = rgb(&dir.path().join("panel.png"));
+    let offline = Command::new(exe)
+        .args([
+            "render",
+            "chart",
+            "--method",
+            "wyman-dv",
+            "--backend",
+            "gpu",
+            "--res",
+            "400x300",
+            "--out",
+            "offline400.png",
+        ])
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .current_dir(dir.path())
+        .output()
+        .expect("render");
+    assert!(offline.status.success());
+    let (_, _, plain) = rgb(&dir.path().join("offline400.png"));
+    let changed = with_panel
+        .chunks_exact(3)
+        .zip(plain.chunks_exact(3))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 16))
+        .count();
+    let share = changed as f64 / f64::from(pw * ph);
+    println!("the panel covers {:.1} % of the window", 100.0 * share);
+    assert!(share > 0.1, "no panel drawn ({share})");
 }
 
 /// Without a display the viewer stops with one message asking for one (no panic).
@@ -174,7 +230,7 @@ fn without_a_display_the_viewer_says_so() {
 fn the_split_view_shows_the_reference_on_the_right() {
     let Some(x) = xvfb() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
-    std::fs::write(dir.path().join("keys.txt"), "key v\nwait\n").expect("script");
+    std::fs::write(dir.path().join("keys.txt"), "key h\nkey v\nwait\n").expect("script");
     let exe = env!("CARGO_BIN_EXE_refract");
     let run = |args: &[&str]| {
         let output = Command::new(exe)
