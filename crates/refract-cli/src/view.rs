@@ -184,6 +184,14 @@ struct PanelFrame {
     screen: egui_wgpu::ScreenDescriptor,
 }
 
+impl Drop for PanelFrame {
+    /// A frame abandoned on an error path drops its texture changes on purpose (egui panics on
+    /// unapplied ones otherwise; `present` applies them before this runs).
+    fn drop(&mut self) {
+        self.textures.clear();
+    }
+}
+
 struct Viewer {
     args: ViewArgs,
     scene: Arc<Scene>,
@@ -741,12 +749,34 @@ impl Viewer {
         pixels: &[u8],
         width: u32,
         height: u32,
-        panel: Option<PanelFrame>,
+        mut panel: Option<PanelFrame>,
     ) -> anyhow::Result<()> {
         let (Some(display), Some(gpu)) = (&mut self.display, &self.gpu) else {
+            if let Some(panel) = &mut panel {
+                panel.textures.clear();
+            }
             return Ok(());
         };
         let (device, queue) = (&gpu.context().device, &gpu.context().queue);
+        // The panel's new textures first (egui requires every delta applied, even when this
+        // frame is then skipped); its freed ones after the frame is drawn, below.
+        let freed: Vec<egui::TextureId> = match &mut panel {
+            Some(panel) => {
+                for (id, deltas) in &panel.textures.set {
+                    for delta in deltas {
+                        display
+                            .egui_renderer
+                            .update_texture(device, queue, *id, delta);
+                    }
+                }
+                let freed = std::mem::take(&mut panel.textures.free)
+                    .into_iter()
+                    .collect();
+                panel.textures.clear();
+                freed
+            }
+            None => Vec::new(),
+        };
         let size = wgpu::Extent3d {
             width,
             height,
@@ -786,10 +816,16 @@ impl Viewer {
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 display.surface.configure(device, &display.config);
+                for id in &freed {
+                    display.egui_renderer.free_texture(id);
+                }
                 return Ok(());
             }
             // Minimised or hidden: skip the frame.
             wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                for id in &freed {
+                    display.egui_renderer.free_texture(id);
+                }
                 return Ok(());
             }
             other => anyhow::bail!("the window surface is not available: {other:?}"),
@@ -801,13 +837,6 @@ impl Viewer {
             label: Some("view"),
         });
         if let Some(panel) = &panel {
-            for (id, deltas) in &panel.textures.set {
-                for delta in deltas {
-                    display
-                        .egui_renderer
-                        .update_texture(device, queue, *id, delta);
-                }
-            }
             let extra = display.egui_renderer.update_buffers(
                 device,
                 queue,
@@ -845,10 +874,8 @@ impl Viewer {
                 );
             }
         }
-        if let Some(panel) = &panel {
-            for id in &panel.textures.free {
-                display.egui_renderer.free_texture(id);
-            }
+        for id in &freed {
+            display.egui_renderer.free_texture(id);
         }
         // Unattended runs read the presented image back: the screenshot is the window's.
         let capture = (self.args.frames.is_some() && display.copy_src).then(|| {

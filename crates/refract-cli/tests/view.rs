@@ -35,9 +35,12 @@ fn xvfb() -> Option<Xvfb> {
         println!("skipped: Xvfb not found");
         return None;
     }
-    // A display number unlikely to be taken: from the process id.
-    for n in 0..20 {
-        let number = 200 + (std::process::id() % 500) + n;
+    // A display number unlikely to be taken: from the process id and a counter (the tests of
+    // this file run in parallel threads of one process).
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    for _ in 0..20 {
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let number = 200 + (std::process::id() % 500) * 8 + n;
         if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
             continue;
         }
@@ -54,6 +57,9 @@ fn xvfb() -> Option<Xvfb> {
             .expect("start Xvfb");
         let start = Instant::now();
         while start.elapsed() < Duration::from_secs(10) {
+            if child.try_wait().ok().flatten().is_some() {
+                break; // it exited: the display was taken, try the next one
+            }
             if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
                 return Some(Xvfb {
                     child,
@@ -64,9 +70,8 @@ fn xvfb() -> Option<Xvfb> {
         }
         let _ = child.kill();
         let _ = child.wait();
-        panic!("Xvfb :{number} did not start");
     }
-    panic!("no free X display");
+    panic!("Xvfb did not start on any of 20 displays");
 }
 
 fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
