@@ -9,11 +9,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
+use refract_core::Camera;
 use refract_core::exit::TirPolicy;
 use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
 use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::{
-    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Scene, TraceSettings,
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
+    TraceSettings,
 };
 use serde::Serialize;
 
@@ -170,28 +172,11 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
         for &res in &resolutions {
             let camera = scene.camera(res, res)?;
             for renderer in &mut renderers {
-                let times = time_frames(3, frames, || {
-                    Ok(renderer
-                        .render(&camera, &method, FrameOutputs::Color, &mut frame)?
-                        .ms)
-                })?;
-                let FrameTimes { median, min, max } = times;
-                let record = BenchRecord {
-                    scene: name.to_owned(),
-                    triangles,
-                    method: method.id().name().to_owned(),
-                    backend: renderer.backend().id().to_owned(),
-                    width: res,
-                    height: res,
-                    ms_median: median,
-                    ms_min: min,
-                    ms_max: max,
-                    frames,
-                    fps: 1e3 / median,
-                };
+                let record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
+                    .record(name, triangles);
                 println!(
                     "{:<13} {:>7} tris {:<4} {:>5}² {:>9.2} ms  {:>7.1} fps",
-                    name, triangles, record.backend, res, median, record.fps
+                    name, triangles, record.backend, res, record.ms_median, record.fps
                 );
                 records.push(record);
             }
@@ -270,6 +255,59 @@ fn nearby_table(
     md
 }
 
+/// One benchmarked configuration before it is named: method, backend, size and times.
+struct Timed {
+    method: String,
+    backend: String,
+    width: u32,
+    height: u32,
+    frames: u32,
+    times: FrameTimes,
+}
+
+impl Timed {
+    fn record(self, scene: &str, triangles: usize) -> BenchRecord {
+        let FrameTimes { median, min, max } = self.times;
+        BenchRecord {
+            scene: scene.to_owned(),
+            triangles,
+            method: self.method,
+            backend: self.backend,
+            width: self.width,
+            height: self.height,
+            ms_median: median,
+            ms_min: min,
+            ms_max: max,
+            frames: self.frames,
+            fps: 1e3 / median,
+        }
+    }
+}
+
+/// `frames` colour-only frames of `method` (as displayed: the AOVs are for comparisons) after 3
+/// warm-up frames.
+fn timed(
+    renderer: &mut dyn Renderer,
+    camera: &Camera,
+    method: &MethodParams,
+    frames: u32,
+    frame: &mut Frame,
+) -> anyhow::Result<Timed> {
+    let times = time_frames(3, frames, || {
+        Ok(renderer
+            .render(camera, method, FrameOutputs::Color, frame)?
+            .ms)
+    })?;
+    Ok(Timed {
+        method: method.id().name().to_owned(),
+        backend: renderer.backend().id().to_owned(),
+        width: camera.width(),
+        height: camera.height(),
+        frames,
+        times,
+    })
+}
+
 /// Runs the benchmark and writes `bench.json` and `bench.md` (`bench-nearby.*` for
 /// `--table nearby`).
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
@@ -322,29 +360,16 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         }
         for method in &methods {
             for renderer in &mut renderers {
-                // Colour only, as displayed: the AOVs are for comparisons.
-                let times = time_frames(3, frames, || {
-                    Ok(renderer
-                        .render(&camera, method, FrameOutputs::Color, &mut frame)?
-                        .ms)
-                })?;
-                let FrameTimes { median, min, max } = times;
-                let record = BenchRecord {
-                    scene: name.clone(),
-                    triangles,
-                    method: method.id().name().to_owned(),
-                    backend: renderer.backend().id().to_owned(),
-                    width: res,
-                    height: res,
-                    ms_median: median,
-                    ms_min: min,
-                    ms_max: max,
-                    frames,
-                    fps: 1e3 / median,
-                };
+                let record = timed(renderer.as_mut(), &camera, method, frames, &mut frame)?
+                    .record(name, triangles);
                 println!(
                     "{:<8} {:>7} tris {:<9} {:<4} {:>9.2} ms  {:>7.1} fps",
-                    record.scene, triangles, record.method, record.backend, median, record.fps
+                    record.scene,
+                    triangles,
+                    record.method,
+                    record.backend,
+                    record.ms_median,
+                    record.fps
                 );
                 records.push(record);
             }

@@ -79,67 +79,89 @@ fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
     (image.width(), image.height(), image.into_raw())
 }
 
-#[test]
-fn a_scripted_window_matches_the_offline_render() {
-    let Some(x) = xvfb() else { return };
-    let dir = tempfile::tempdir().expect("tempdir");
-    std::fs::write(dir.path().join("keys.txt"), "key h\nkey m\nwait\n").expect("script");
-    let exe = env!("CARGO_BIN_EXE_refract");
-    let view = Command::new(exe)
-        .args([
+/// Runs `refract ARGS` in `dir` on X display `display`; asserts success, returns stderr.
+fn refract(dir: &Path, display: &str, args: &[&str]) -> String {
+    let output = Command::new(env!("CARGO_BIN_EXE_refract"))
+        .args(args)
+        .env("DISPLAY", display)
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .current_dir(dir)
+        .output()
+        .expect("run refract");
+    let log = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "{args:?}: {log}");
+    log
+}
+
+/// `refract view chart` at `size` with `script`, then the offline GPU render of `method` at the
+/// same size: the screenshot's and the render's pixels, and the viewer's log.
+fn window_and_offline(
+    dir: &Path,
+    display: &str,
+    size: &str,
+    script: &str,
+    method: &str,
+) -> ((u32, u32, Vec<u8>), Vec<u8>, String) {
+    std::fs::write(dir.join("keys.txt"), script).expect("script");
+    let log = refract(
+        dir,
+        display,
+        &[
             "view",
             "chart",
             "--method",
             "wyman",
             "--size",
-            "160x120",
+            size,
             "--frames",
             "3",
             "--script",
             "keys.txt",
             "--screenshot",
             "window.png",
-        ])
-        .env("DISPLAY", &x.display)
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .current_dir(dir.path())
-        .output()
-        .expect("run refract view");
-    let log = String::from_utf8_lossy(&view.stderr).into_owned();
-    assert!(view.status.success(), "{log}");
+        ],
+    );
+    refract(
+        dir,
+        display,
+        &[
+            "render",
+            "chart",
+            "--method",
+            method,
+            "--backend",
+            "gpu",
+            "--res",
+            size,
+            "--out",
+            "offline.png",
+        ],
+    );
+    let window = rgb(&dir.join("window.png"));
+    let (w, h, offline) = rgb(&dir.join("offline.png"));
+    assert_eq!((window.0, window.1), (w, h));
+    (window, offline, log)
+}
+
+#[test]
+fn a_scripted_window_matches_the_offline_render() {
+    let Some(x) = xvfb() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    // `m` switches wyman to the next method of the registry, wyman-dv.
+    let ((w, h, window), reference, log) = window_and_offline(
+        dir.path(),
+        &x.display,
+        "160x120",
+        "key h\nkey m\nwait\n",
+        "wyman-dv",
+    );
     assert!(log.contains("screenshot of the window"), "{log}");
-    // `m` switched wyman to the next method of the registry: wyman-dv.
     let metrics: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.path().join("window.json")).expect("metrics"),
     )
     .expect("json");
     assert_eq!(metrics["method"], "wyman-dv");
     assert!(metrics["flip_mean"].as_f64().is_some());
-    let offline = Command::new(exe)
-        .args([
-            "render",
-            "chart",
-            "--method",
-            "wyman-dv",
-            "--backend",
-            "gpu",
-            "--res",
-            "160x120",
-            "--out",
-            "offline.png",
-        ])
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .current_dir(dir.path())
-        .output()
-        .expect("render");
-    assert!(
-        offline.status.success(),
-        "{}",
-        String::from_utf8_lossy(&offline.stderr)
-    );
-    let (w, h, window) = rgb(&dir.path().join("window.png"));
-    let (w2, h2, reference) = rgb(&dir.path().join("offline.png"));
-    assert_eq!((w, h), (w2, h2));
     // Not blank: the pixels vary.
     let mean = window.iter().map(|&v| f64::from(v)).sum::<f64>() / window.len() as f64;
     let var = window
@@ -158,52 +180,13 @@ fn a_scripted_window_matches_the_offline_render() {
     assert!(mean_flip < 0.01, "mean FLIP {mean_flip}");
 
     // Without `h` the panel is drawn over the image.
-    std::fs::write(dir.path().join("panel.txt"), "key m\nwait\nwait\n").expect("script");
-    let panel = Command::new(exe)
-        .args([
-            "view",
-            "chart",
-            "--method",
-            "wyman",
-            "--size",
-            "400x300",
-            "--frames",
-            "3",
-            "--script",
-            "panel.txt",
-            "--screenshot",
-            "panel.png",
-        ])
-        .env("DISPLAY", &x.display)
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .current_dir(dir.path())
-        .output()
-        .expect("run refract view");
-    assert!(
-        panel.status.success(),
-        "{}",
-        String::from_utf8_lossy(&panel.stderr)
+    let ((pw, ph, with_panel), plain, _) = window_and_offline(
+        dir.path(),
+        &x.display,
+        "400x300",
+        "key m\nwait\nwait\n",
+        "wyman-dv",
     );
-    let (pw, ph, with_panel) = rgb(&dir.path().join("panel.png"));
-    let offline = Command::new(exe)
-        .args([
-            "render",
-            "chart",
-            "--method",
-            "wyman-dv",
-            "--backend",
-            "gpu",
-            "--res",
-            "400x300",
-            "--out",
-            "offline400.png",
-        ])
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .current_dir(dir.path())
-        .output()
-        .expect("render");
-    assert!(offline.status.success());
-    let (_, _, plain) = rgb(&dir.path().join("offline400.png"));
     let changed = with_panel
         .chunks_exact(3)
         .zip(plain.chunks_exact(3))
@@ -236,20 +219,8 @@ fn the_split_view_shows_the_reference_on_the_right() {
     let Some(x) = xvfb() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("keys.txt"), "key h\nkey v\nwait\n").expect("script");
-    let exe = env!("CARGO_BIN_EXE_refract");
     let run = |args: &[&str]| {
-        let output = Command::new(exe)
-            .args(args)
-            .env("DISPLAY", &x.display)
-            .env("XDG_RUNTIME_DIR", "/tmp")
-            .current_dir(dir.path())
-            .output()
-            .expect("run refract");
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        refract(dir.path(), &x.display, args);
     };
     run(&[
         "view",

@@ -250,10 +250,12 @@ fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
     }
 }
 
-fn fill<T>(out: &mut [T], aovs: &[MethodAov], get: impl Fn(&MethodAov) -> T + Sync + Send)
-where
-    T: Send,
-{
+/// One AOV layer from the per-pixel outputs `aovs` (any family's), in parallel.
+pub(crate) fn fill<A: Sync, T: Send>(
+    out: &mut [T],
+    aovs: &[A],
+    get: impl Fn(&A) -> T + Sync + Send,
+) {
     out.par_iter_mut()
         .zip(aovs.par_iter())
         .for_each(|(o, a)| *o = get(a));

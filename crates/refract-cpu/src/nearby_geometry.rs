@@ -16,11 +16,13 @@ use refract_core::kernel_x8::two_interface_lanes;
 use refract_core::lanes::{LANES, Vec2x8};
 use refract_core::nearby_geometry::{
     NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
+    view_depth,
 };
 use refract_core::{BackSurface, Camera};
 use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene};
 
 use crate::buffers::{BackFaces, front_faces_into};
+use crate::image_space::fill;
 use crate::pixel_group::PixelGroup;
 use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize_bands};
 
@@ -114,15 +116,22 @@ impl NearbyTexture {
         (texel.x < self.width).then(|| texel.y as usize * self.width as usize + texel.x as usize)
     }
 
+    /// The colour and object id of texel `(x, y)` (meaningful where it is not empty).
+    #[inline]
+    fn shading(&self, texel: UVec2) -> Option<(Vec3, u32)> {
+        let s = self.shading.get(self.index(texel)?)?;
+        Some((s.color, s.object))
+    }
+
     /// The texel at `(x, y)` (`None` where empty or outside).
     #[inline]
     pub fn texel(&self, texel: UVec2) -> Option<NearbyTexel> {
         let surface = self.surface(texel)?;
-        let shading = self.shading[self.index(texel)?];
+        let (color, object) = self.shading(texel)?;
         Some(NearbyTexel {
             surface,
-            color: shading.color,
-            object: shading.object,
+            color,
+            object,
         })
     }
 
@@ -368,7 +377,7 @@ impl PixelContext<'_> {
         let front = self
             .front
             .texel(index)
-            .filter(|f| object.is_none_or(|o| self.view_distance(f.p_ws) < o.surface.depth));
+            .filter(|f| object.is_none_or(|o| view_depth(self.camera, f.p_ws) < o.surface.depth));
         match (front, object) {
             (Some(front), _) => Pixel::Refractor(FrontSurface {
                 p1_ws: front.p_ws,
@@ -466,20 +475,18 @@ impl PixelContext<'_> {
         );
         aov.iterations = result.iterations;
         aov.converged = result.converged;
-        let texel = result.hit.and_then(|hit| self.nearby.texel(hit.texel));
-        match (result.hit, texel) {
-            (Some(hit), Some(t)) => {
+        // A hit's surface was read by the lookup: only its colour and object remain to read.
+        match result
+            .hit
+            .and_then(|hit| Some((hit, self.nearby.shading(hit.texel)?)))
+        {
+            Some((hit, (color, object))) => {
                 aov.p_geom = hit.p_geom;
-                aov.ng_texel = Vec3::new(hit.texel.x as f32, hit.texel.y as f32, t.object as f32);
-                (t.color, aov)
+                aov.ng_texel = Vec3::new(hit.texel.x as f32, hit.texel.y as f32, object as f32);
+                (color, aov)
             }
-            _ => (self.scene.environment.radiance(aov.t2), aov),
+            None => (self.scene.environment.radiance(aov.t2), aov),
         }
-    }
-
-    #[inline]
-    fn view_distance(&self, p: Vec3) -> f32 {
-        (p - self.camera.eye()).dot(self.camera.look_dir())
     }
 }
 
@@ -504,10 +511,4 @@ fn write_layers(aovs: &[NearbyAov], method: MethodId, frame: &mut Frame) {
             }
         }
     }
-}
-
-fn fill<T: Send>(out: &mut [T], aovs: &[NearbyAov], get: impl Fn(&NearbyAov) -> T + Sync + Send) {
-    out.par_iter_mut()
-        .zip(aovs.par_iter())
-        .for_each(|(o, a)| *o = get(a));
 }

@@ -10,15 +10,13 @@ use refract_core::gpu::{
     exit_normal_source_code, exit_normal_source_from_code,
 };
 use refract_core::{BackSurface, Camera};
-use refract_scene::{
-    Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY, TwoInterfaceParams,
-};
+use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, TwoInterfaceParams};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
+use crate::methods::MethodPipelines;
 use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::GpuScene;
-use crate::shaders::module_source;
 use crate::timestamps::Timestamps;
 
 /// An image-space method as the GPU runs it.
@@ -33,21 +31,17 @@ pub(crate) enum ImageSpaceKernel {
     },
 }
 
-/// The kernel pipelines: one per method, each with and without AOV stores.
-pub(crate) struct ImageSpacePipelines {
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<(MethodId, FrameOutputs, wgpu::ComputePipeline)>,
-}
+/// The kernel pipelines: `shade_single` and `shade_two_interface` (`DISTANCE_MODE` fixed per
+/// method).
+pub(crate) struct ImageSpacePipelines(MethodPipelines);
 
 impl ImageSpacePipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("image_space.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(module_source("image_space").into()),
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("image space"),
-            entries: &[
+        Self(MethodPipelines::new(
+            device,
+            "image_space",
+            Family::ImageSpace,
+            &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
                 texture_entry(2),
@@ -58,57 +52,17 @@ impl ImageSpacePipelines {
                 storage_entry(7, false),
                 storage_entry(8, false),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("image space"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let mut pipelines = Vec::new();
-        let methods = REGISTRY
-            .iter()
-            .filter(|m| m.family == Family::ImageSpace)
-            .map(|m| m.id);
-        for id in methods {
-            for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
-                let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
-                let (entry, constants) = match MethodParams::defaults(id) {
-                    MethodParams::Single => ("shade_single", vec![("WRITE_AOVS", write_aovs)]),
-                    MethodParams::TwoInterface(TwoInterfaceParams { distance, .. }) => (
-                        "shade_two_interface",
-                        vec![
-                            ("WRITE_AOVS", write_aovs),
-                            ("DISTANCE_MODE", f64::from(distance_mode_code(distance))),
-                        ],
-                    ),
-                    MethodParams::Reference(_) | MethodParams::NearbyGeometry(_) => {
-                        unreachable!("not an image-space method")
-                    }
-                };
-                let label = format!("{id} ({outputs:?})");
-                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&label),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                });
-                pipelines.push((id, outputs, pipeline));
-            }
-        }
-        Self { layout, pipelines }
-    }
-
-    fn pipeline(&self, method: MethodId, outputs: FrameOutputs) -> &wgpu::ComputePipeline {
-        self.pipelines
-            .iter()
-            .find(|(m, o, _)| *m == method && *o == outputs)
-            .map(|(_, _, p)| p)
-            .expect("a pipeline for every image-space method")
+            |params| match params {
+                MethodParams::Single => ("shade_single", Vec::new()),
+                MethodParams::TwoInterface(TwoInterfaceParams { distance, .. }) => (
+                    "shade_two_interface",
+                    vec![("DISTANCE_MODE", f64::from(distance_mode_code(distance)))],
+                ),
+                MethodParams::Reference(_) | MethodParams::NearbyGeometry(_) => {
+                    unreachable!("not an image-space method")
+                }
+            },
+        ))
     }
 }
 
@@ -318,7 +272,7 @@ impl ImageSpaceTargets {
         let shade_group = bind_group(
             device,
             "image space",
-            &pipelines.layout,
+            &pipelines.0.layout,
             &[
                 refractor.uniforms.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&refractor.front_p1),
@@ -374,7 +328,7 @@ impl ImageSpaceTargets {
                 label: Some("image-space kernel"),
                 timestamp_writes: timestamps.map(Timestamps::end_compute),
             });
-            pass.set_pipeline(pipelines.pipeline(id, outputs));
+            pass.set_pipeline(pipelines.0.get(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }

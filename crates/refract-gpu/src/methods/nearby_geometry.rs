@@ -10,34 +10,27 @@ use refract_core::gpu::{
     FrameUniforms, NearbyUniforms, exit_normal_source_code, lookup_code, seed_spacing_code,
 };
 use refract_core::nearby_geometry::{MAX_PLANES, NearbyLookup, Plane, SeedSpacing};
-use refract_scene::{
-    Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, REGISTRY,
-};
+use refract_scene::{Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
+use crate::methods::MethodPipelines;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
 use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::GpuScene;
-use crate::shaders::module_source;
 use crate::timestamps::Timestamps;
 
-/// The `shade_nearby` pipelines: one per nearby-geometry method, with and without AOV stores.
-pub(crate) struct NearbyPipelines {
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<(MethodId, FrameOutputs, wgpu::ComputePipeline)>,
-}
+/// The `shade_nearby` pipelines: one per nearby-geometry method (`LOOKUP` fixed per method).
+pub(crate) struct NearbyPipelines(MethodPipelines);
 
 impl NearbyPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("nearby_geometry.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(module_source("nearby_geometry").into()),
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("nearby geometry"),
-            entries: &[
+        Self(MethodPipelines::new(
+            device,
+            "nearby_geometry",
+            Family::NearbyGeometry,
+            &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
                 texture_entry(2),
@@ -55,51 +48,14 @@ impl NearbyPipelines {
                 texture_entry(14),
                 uniform_entry(15, wgpu::ShaderStages::COMPUTE),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("nearby geometry"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let mut pipelines = Vec::new();
-        let methods = REGISTRY
-            .iter()
-            .filter(|m| m.family == Family::NearbyGeometry)
-            .map(|m| m.id);
-        for id in methods {
-            let MethodParams::NearbyGeometry(params) = MethodParams::defaults(id) else {
-                unreachable!("a nearby-geometry method");
-            };
-            for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
-                let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
-                let constants = [
-                    ("WRITE_AOVS", write_aovs),
-                    ("LOOKUP", f64::from(lookup_code(params.lookup))),
-                ];
-                let label = format!("{id} ({outputs:?})");
-                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&label),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some("shade_nearby"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                });
-                pipelines.push((id, outputs, pipeline));
-            }
-        }
-        Self { layout, pipelines }
-    }
-
-    fn pipeline(&self, method: MethodId, outputs: FrameOutputs) -> &wgpu::ComputePipeline {
-        self.pipelines
-            .iter()
-            .find(|(m, o, _)| *m == method && *o == outputs)
-            .map(|(_, _, p)| p)
-            .expect("a pipeline for every nearby-geometry method")
+            |params| match params {
+                MethodParams::NearbyGeometry(p) => (
+                    "shade_nearby",
+                    vec![("LOOKUP", f64::from(lookup_code(p.lookup)))],
+                ),
+                _ => unreachable!("not a nearby-geometry method"),
+            },
+        ))
     }
 }
 
@@ -182,7 +138,7 @@ impl NearbyTargets {
             let shade_group = bind_group(
                 device,
                 "nearby geometry",
-                &pipelines.layout,
+                &pipelines.0.layout,
                 &[
                     refractor.uniforms.as_entire_binding(),
                     wgpu::BindingResource::TextureView(&refractor.front_p1),
@@ -278,7 +234,7 @@ impl NearbyTargets {
                 label: Some("nearby-geometry kernel"),
                 timestamp_writes: timestamps.map(Timestamps::end_compute),
             });
-            pass.set_pipeline(pipelines.pipeline(id, outputs));
+            pass.set_pipeline(pipelines.0.get(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);
             let (width, height, _, _) = self.size;
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
