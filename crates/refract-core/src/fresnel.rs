@@ -126,6 +126,105 @@ pub fn schlick_conductor(cos_i: f32, n: f32, k: f32) -> f32 {
     schlick(cos_i, f0_conductor(n, k))
 }
 
+/// Exact unpolarised Fresnel reflectance of a conductor of complex index `n + ik` seen from a
+/// medium of index 1 (the standard form, as in pbrt's `FrConductor` and Mitsuba 3's
+/// `fresnel_conductor`): with `c = cos θi`, `s² = 1 − c²`, `t0 = n² − k² − s²`,
+/// `a² + b² = √(t0² + 4n²k²)`, `a = √((a² + b² + t0)/2)`,
+/// `R_s = (a² + b² + c² − 2ac) / (a² + b² + c² + 2ac)`,
+/// `R_p = R_s (c²(a² + b²) + s⁴ − 2acs²) / (c²(a² + b²) + s⁴ + 2acs²)`, `F = (R_s + R_p)/2`.
+/// At normal incidence it is [`f0_conductor`]; for `n = 0` (a lossless "perfect mirror") it is 1
+/// at every angle. `cos_i` is clamped to `[0, 1]`.
+///
+/// ```
+/// use refract_core::fresnel::{f0_conductor, fresnel_conductor};
+/// assert!((fresnel_conductor(1.0, 0.27, 3.61) - f0_conductor(0.27, 3.61)).abs() < 1e-6);
+/// assert!((fresnel_conductor(0.3, 0.0, 1.0) - 1.0).abs() < 1e-6);
+/// ```
+#[inline]
+pub fn fresnel_conductor(cos_i: f32, n: f32, k: f32) -> f32 {
+    let c = cos_i.clamp(0.0, 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let (n2, k2) = (n * n, k * k);
+    let t0 = n2 - k2 - s2;
+    let a2b2 = crate::math::sqrt((t0 * t0 + 4.0 * n2 * k2).max(0.0));
+    let a = crate::math::sqrt((0.5 * (a2b2 + t0)).max(0.0));
+    let t1 = a2b2 + c2;
+    let t2 = 2.0 * c * a;
+    let r_s = if t1 + t2 > 0.0 {
+        (t1 - t2) / (t1 + t2)
+    } else {
+        1.0
+    };
+    let t3 = c2 * a2b2 + s2 * s2;
+    let t4 = t2 * s2;
+    let r_p = if t3 + t4 > 0.0 {
+        r_s * (t3 - t4) / (t3 + t4)
+    } else {
+        r_s
+    };
+    (0.5 * (r_s + r_p)).clamp(0.0, 1.0)
+}
+
+/// A conductor (metal or mirror): a complex index of refraction `n + ik` per RGB channel,
+/// seen from air. Umenhoffer et al. 2007 §17.3 store its `F_p` ([`Conductor::f0`]) in the
+/// distance map and use Schlick's approximation; the reference uses [`fresnel_conductor`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conductor {
+    /// Real part `n` per channel (linear R, G, B).
+    pub eta: glam::Vec3,
+    /// Extinction coefficient `k` per channel.
+    pub k: glam::Vec3,
+}
+
+impl Conductor {
+    /// An ideal mirror: `n = 0`, `k = 1`, so `F = 1` at every angle, exactly in both the exact
+    /// formula and Schlick's (`F_p = 1`).
+    pub const MIRROR: Self = Self {
+        eta: glam::Vec3::ZERO,
+        k: glam::Vec3::ONE,
+    };
+    /// Gold, at about 650 / 550 / 450 nm (the RGB values commonly tabulated for real-time
+    /// rendering from refractiveindex.info data, e.g. Gulbrandsen 2014, JCGT 3(4)).
+    pub const GOLD: Self = Self {
+        eta: glam::Vec3::new(0.183, 0.421, 1.373),
+        k: glam::Vec3::new(3.424, 2.346, 1.770),
+    };
+    /// Silver (same source as [`Self::GOLD`]).
+    pub const SILVER: Self = Self {
+        eta: glam::Vec3::new(0.159, 0.145, 0.135),
+        k: glam::Vec3::new(3.929, 3.190, 2.381),
+    };
+    /// Copper (same source as [`Self::GOLD`]).
+    pub const COPPER: Self = Self {
+        eta: glam::Vec3::new(0.271, 0.677, 1.316),
+        k: glam::Vec3::new(3.609, 2.625, 2.292),
+    };
+    /// Aluminium (same source as [`Self::GOLD`]).
+    pub const ALUMINIUM: Self = Self {
+        eta: glam::Vec3::new(1.346, 0.965, 0.617),
+        k: glam::Vec3::new(7.475, 6.400, 5.303),
+    };
+
+    /// `F_p` per channel, [`f0_conductor`] (§17.3).
+    pub fn f0(&self) -> glam::Vec3 {
+        glam::Vec3::new(
+            f0_conductor(self.eta.x, self.k.x),
+            f0_conductor(self.eta.y, self.k.y),
+            f0_conductor(self.eta.z, self.k.z),
+        )
+    }
+
+    /// The exact reflectance per channel at incidence cosine `cos_i` ([`fresnel_conductor`]).
+    pub fn reflectance(&self, cos_i: f32) -> glam::Vec3 {
+        glam::Vec3::new(
+            fresnel_conductor(cos_i, self.eta.x, self.k.x),
+            fresnel_conductor(cos_i, self.eta.y, self.k.y),
+            fresnel_conductor(cos_i, self.eta.z, self.k.z),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,5 +273,43 @@ mod tests {
             }
         }
         assert!(worst < 0.06, "worst Schlick error {worst}");
+    }
+
+    #[test]
+    fn exact_conductor_fresnel_matches_f0_and_limits() {
+        for metal in [
+            Conductor::GOLD,
+            Conductor::SILVER,
+            Conductor::COPPER,
+            Conductor::ALUMINIUM,
+        ] {
+            let f0 = metal.f0();
+            let exact = metal.reflectance(1.0);
+            assert!((exact - f0).abs().max_element() < 1e-5, "{exact} vs {f0}");
+            // Grazing incidence reflects everything; in between it stays in [0, 1] and dips
+            // below F0 only slightly (the metals' shallow minimum near 80°).
+            assert!(
+                (metal.reflectance(0.0) - glam::Vec3::ONE)
+                    .abs()
+                    .max_element()
+                    < 1e-5
+            );
+            for a in 0..=100 {
+                let r = metal.reflectance(a as f32 / 100.0);
+                assert!(r.min_element() >= 0.0 && r.max_element() <= 1.0);
+                assert!((r - f0).min_element() > -0.1, "{r} vs {f0}");
+            }
+        }
+        for a in 0..=20 {
+            let r = Conductor::MIRROR.reflectance(a as f32 / 20.0);
+            assert!((r - glam::Vec3::ONE).abs().max_element() < 1e-6, "{r}");
+        }
+        assert_eq!(Conductor::MIRROR.f0(), glam::Vec3::ONE);
+        // A conductor with k = 0 is a dielectric of index n: the dielectric formula agrees.
+        for a in 0..=20 {
+            let cos_i = a as f32 / 20.0;
+            let d = fresnel_dielectric(cos_i, 1.0 / 1.5);
+            assert!((fresnel_conductor(cos_i, 1.5, 0.0) - d).abs() < 1e-5);
+        }
     }
 }

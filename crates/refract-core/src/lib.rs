@@ -10,6 +10,7 @@
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
 //! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
+//! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
 //! * [`back_surface`]: which back surface the back-face pass keeps (Wyman 2005a §3.2).
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
 //! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear, generic
@@ -44,6 +45,7 @@ compile_error!("refract-core needs its `std` feature (the default) or, without s
 pub mod arctangent;
 pub mod back_surface;
 pub mod camera;
+pub mod distance_map;
 pub mod environment;
 pub mod exit;
 pub mod fresnel;

@@ -243,7 +243,12 @@ fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
             | Aov::Iterations
             | Aov::Converged
             | Aov::Interfaces
-            | Aov::TirFirstExit => {
+            | Aov::TirFirstExit
+            | Aov::HitLayer
+            | Aov::LinearSteps
+            | Aov::SecantSteps
+            | Aov::Bounces
+            | Aov::Miss => {
                 unreachable!("the image-space kernels do not compute {}", aov.name())
             }
         }

@@ -11,16 +11,20 @@
 //!   rows shaded right after it is rasterised).
 //! * [`nearby_geometry`]: Wyman 2005b, `kay-greenberg`, `ray-plane`, `iterative`,
 //!   `iterative-seeded` (the NG texture of the opaque objects, then the lookups per pixel).
+//! * [`distance_map`]: Umenhoffer et al. 2007, `distance-map` (layered distance cube maps
+//!   rebuilt per frame, then a path per pixel that sees a specular surface).
 //!
 //! [`surfaces`] rasterises any mesh of the scene from any camera (cube-map faces included) with
 //! its uv and object id.
 
 pub mod buffers;
+pub mod distance_map;
 pub mod image_space;
 pub mod nearby_geometry;
 mod pixel_group;
 pub mod raster;
 pub mod renderer;
+pub mod scene_meshes;
 mod shade;
 pub mod surfaces;
 

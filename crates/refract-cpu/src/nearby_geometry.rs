@@ -19,12 +19,13 @@ use refract_core::nearby_geometry::{
     view_depth,
 };
 use refract_core::{BackSurface, Camera};
-use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh};
 
 use crate::buffers::{BackFaces, front_faces_into};
 use crate::image_space::fill;
 use crate::pixel_group::PixelGroup;
-use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::raster::{DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::scene_meshes::SceneMeshes;
 
 /// One texel of the NG texture: the nearest opaque surface seen through it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,45 +49,8 @@ struct Shading {
     object: u32,
 }
 
-/// Every opaque object of a scene as one mesh for the NG pass (one rasterisation, one depth
-/// test, one interpolation per texel): the objects' vertices and triangles concatenated in
-/// object order, and for each triangle its object and its index in that object's mesh.
-#[derive(Clone, Debug, Default)]
-pub struct NearbyMeshes {
-    positions: Vec<Vec3>,
-    normals: Vec<Vec3>,
-    triangles: Vec<[u32; 3]>,
-    sources: Vec<(u32, u32)>,
-}
-
-impl NearbyMeshes {
-    /// The objects of `scene`.
-    pub fn new(scene: &Scene) -> Self {
-        let mut meshes = Self::default();
-        for (k, object) in scene.objects.iter().enumerate() {
-            let mesh = object.mesh();
-            let base = meshes.positions.len() as u32;
-            meshes.positions.extend_from_slice(&mesh.positions);
-            meshes.normals.extend_from_slice(&mesh.normals);
-            meshes
-                .triangles
-                .extend(mesh.triangles.iter().map(|t| t.map(|v| v + base)));
-            meshes
-                .sources
-                .extend((0..mesh.triangles.len() as u32).map(|t| (k as u32, t)));
-        }
-        meshes
-    }
-
-    fn raster(&self) -> RasterMesh<'_> {
-        RasterMesh {
-            positions: &self.positions,
-            normals: &self.normals,
-            scalars: &[],
-            triangles: &self.triangles,
-        }
-    }
-}
+/// Every opaque object of a scene as one mesh for the NG pass ([`SceneMeshes::objects`]).
+pub type NearbyMeshes = SceneMeshes;
 
 /// The NG texture (Wyman 2005b §4, Fig. 10): every opaque object rasterised from the NG
 /// camera (the eye's, widened by a guard band), nearest surface per texel, each band of rows
@@ -135,7 +99,7 @@ impl NearbyTexture {
         })
     }
 
-    /// Renders the objects of `scene` (as `meshes`, [`NearbyMeshes::new`] of the same scene)
+    /// Renders the objects of `scene` (as `meshes`, [`SceneMeshes::objects`] of the same scene)
     /// seen by `camera` into this texture: front faces, nearest by depth (the first object wins
     /// ties). Colours use the object's material under the scene's light
     /// ([`refract_scene::Object::shade`]), as the reference does.
@@ -166,14 +130,17 @@ impl NearbyTexture {
                             surfaces[i] = EMPTY_SURFACE;
                             continue;
                         };
-                        let (k, triangle) = meshes.sources[t.triangle as usize];
-                        let object = &scene.objects[k as usize];
+                        let (mesh, triangle) = meshes.source(t.triangle);
+                        let SceneMesh::Object(k) = mesh else {
+                            continue;
+                        };
+                        let object = &scene.objects[k];
                         let w = raster.barycentrics(&t);
                         let uv = object.uv_at(triangle, Vec2::new(w.y, w.z), t.p_ws);
                         surfaces[i] = t.p_ws.extend((t.p_ws - eye).dot(look));
                         shading[i] = Shading {
                             color: object.shade(&scene.light, uv, t.n_ws),
-                            object: 1 + k,
+                            object: mesh.object_id(),
                         };
                     }
                 }
@@ -236,7 +203,7 @@ pub struct NearbyPasses {
 impl NearbyPasses {
     /// Prepares the passes for `scene` (its objects as one mesh).
     pub fn prepare(&mut self, scene: &Scene) {
-        self.meshes = NearbyMeshes::new(scene);
+        self.meshes = SceneMeshes::objects(scene);
     }
 
     /// The NG texture of the last frame.
@@ -506,7 +473,17 @@ fn write_layers(aovs: &[NearbyAov], method: MethodId, frame: &mut Frame) {
             Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
                 a.n2_source.map_or(0, exit_normal_source_code)
             }),
-            Aov::P1 | Aov::N1 | Aov::T1 | Aov::TOut | Aov::Interfaces | Aov::TirFirstExit => {
+            Aov::P1
+            | Aov::N1
+            | Aov::T1
+            | Aov::TOut
+            | Aov::Interfaces
+            | Aov::TirFirstExit
+            | Aov::HitLayer
+            | Aov::LinearSteps
+            | Aov::SecantSteps
+            | Aov::Bounces
+            | Aov::Miss => {
                 unreachable!("the nearby-geometry methods do not compute {}", aov.name())
             }
         }

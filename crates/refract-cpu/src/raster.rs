@@ -36,6 +36,8 @@ pub enum Faces {
     Front,
     /// Clockwise on screen: the back-face pass.
     Back,
+    /// Both (no culling): the depth-peeled distance-map layers.
+    Both,
 }
 
 /// Which fragment survives the depth test.
@@ -404,7 +406,12 @@ fn setup(
     // (negative) when it faces the camera, clockwise through a mirrored camera.
     let area = edge(xy[0], xy[1], xy[2]);
     let front = (area < 0) != camera.is_mirrored();
-    if area == 0 || front != (faces == Faces::Front) {
+    let culled = match faces {
+        Faces::Front => !front,
+        Faces::Back => front,
+        Faces::Both => false,
+    };
+    if area == 0 || culled {
         return None;
     }
     let mut area = area;
@@ -686,6 +693,54 @@ pub fn rasterize_bands<O, F>(
     O: IndexedParallelIterator,
     F: Fn(&Band<'_>, O::Item) + Sync + Send,
 {
+    rasterize_bands_above(mesh, camera, faces, test, buffer, None, outputs, per_band);
+}
+
+/// [`rasterize_into`] keeping at each pixel only fragments deeper than `floor[pixel]` (window
+/// depth, row-major, one per pixel; `+∞` rejects every fragment): one step of depth peeling
+/// (Everitt 2001), as the distance-map layers beyond the first use it.
+///
+/// # Panics
+/// If `floor` does not have one value per pixel.
+pub fn rasterize_peel_into(
+    mesh: &RasterMesh<'_>,
+    camera: &Camera,
+    faces: Faces,
+    floor: &[f32],
+    buffer: &mut SurfaceBuffer,
+) {
+    assert_eq!(
+        floor.len(),
+        (camera.width() * camera.height()) as usize,
+        "one floor depth per pixel"
+    );
+    let bands = camera.height().div_ceil(BAND_ROWS) as usize;
+    rasterize_bands_above(
+        mesh,
+        camera,
+        faces,
+        DepthTest::Nearest,
+        buffer,
+        Some(floor),
+        rayon::iter::repeat_n((), bands),
+        |_, ()| {},
+    );
+}
+
+#[allow(clippy::too_many_arguments)]
+fn rasterize_bands_above<O, F>(
+    mesh: &RasterMesh<'_>,
+    camera: &Camera,
+    faces: Faces,
+    test: DepthTest,
+    buffer: &mut SurfaceBuffer,
+    floor: Option<&[f32]>,
+    outputs: O,
+    per_band: F,
+) where
+    O: IndexedParallelIterator,
+    F: Fn(&Band<'_>, O::Item) + Sync + Send,
+{
     let (width, height) = (camera.width(), camera.height());
     let bands = height.div_ceil(BAND_ROWS) as usize;
     assert_eq!(outputs.len(), bands, "one output per band of rows");
@@ -733,7 +788,8 @@ pub fn rasterize_bands<O, F>(
         .for_each(|(band, ((rows, bin), output))| {
             let first_row = band as u32 * BAND_ROWS;
             rows.fill(test.cleared());
-            rasterize_band(triangles, bin, first_row, width, rows, test);
+            let floor = floor.map(|f| &f[(first_row * width) as usize..][..rows.len()]);
+            rasterize_band(triangles, bin, first_row, width, rows, test, floor);
             let band = Band {
                 first_row,
                 width,
@@ -753,6 +809,7 @@ fn rasterize_band(
     width: u32,
     rows: &mut [Visibility],
     test: DepthTest,
+    floor: Option<&[f32]>,
 ) {
     let last_row = first_row + (rows.len() as u32 / width) - 1;
     for &id in bin {
@@ -778,6 +835,11 @@ fn rasterize_band(
                 let depth = t.depth_at(t.barycentrics(f));
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
+                }
+                if let Some(floor) = floor
+                    && depth <= floor[((y - first_row) * width + x) as usize]
+                {
+                    continue; // peeled: at or in front of the previous layer
                 }
                 let stored = &mut row[x as usize];
                 if test.passes(depth, stored.depth) {

@@ -10,6 +10,7 @@ use refract_scene::{
     Scene, TimingSource,
 };
 
+use crate::distance_map::DistancePasses;
 use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
 use crate::nearby_geometry::{NearbyMethod, NearbyPasses};
 
@@ -20,6 +21,7 @@ pub struct CpuRenderer {
     scene: Option<Arc<Scene>>,
     image_space: ImageSpacePasses,
     nearby: NearbyPasses,
+    distance_map: DistancePasses,
 }
 
 impl CpuRenderer {
@@ -39,13 +41,15 @@ impl Renderer for CpuRenderer {
             MethodParams::Reference(_) => false,
             MethodParams::Single
             | MethodParams::TwoInterface(_)
-            | MethodParams::NearbyGeometry(_) => true,
+            | MethodParams::NearbyGeometry(_)
+            | MethodParams::DistanceMap(_) => true,
         }
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         // The mesh, its BVH and d_N come built with the scene; buffers are sized per frame.
         self.nearby.prepare(scene);
+        self.distance_map.prepare(scene);
         self.scene = Some(Arc::clone(scene));
         Ok(())
     }
@@ -67,11 +71,19 @@ impl Renderer for CpuRenderer {
             backend: BackendId::Cpu,
             method: method.id(),
         };
+        refract_scene::scene_support(method.id(), scene).map_err(RenderError::UnsupportedScene)?;
+        if let MethodParams::DistanceMap(p) = method {
+            self.distance_map.render(scene, camera, p, outputs, frame)?;
+            return Ok(FrameTiming {
+                ms: start.elapsed().as_secs_f64() * 1e3,
+                source: TimingSource::Wall,
+            });
+        }
         let kernel = method
             .image_space_kernel(refractor.ior())
             .ok_or_else(unsupported)??;
         let image_space = match method {
-            MethodParams::Reference(_) => return Err(unsupported()),
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return Err(unsupported()),
             MethodParams::Single => ImageSpaceMethod::Single,
             MethodParams::TwoInterface(p) => ImageSpaceMethod::TwoInterface { back: p.back },
             MethodParams::NearbyGeometry(p) => {

@@ -274,6 +274,7 @@ impl Renderer for GpuRenderer {
             MethodParams::Single
             | MethodParams::TwoInterface(_)
             | MethodParams::NearbyGeometry(_) => true,
+            MethodParams::DistanceMap(_) => false,
         }
     }
 
@@ -308,7 +309,7 @@ impl Renderer for GpuRenderer {
         };
         let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
         let kernel = match method {
-            MethodParams::Reference(_) => return Err(unsupported()),
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return Err(unsupported()),
             MethodParams::Single => ImageSpaceKernel::Single,
             MethodParams::TwoInterface(p) => ImageSpaceKernel::TwoInterface { back: p.back },
             MethodParams::NearbyGeometry(p) => {

@@ -97,7 +97,7 @@ pub(crate) struct EnvironmentUniforms {
 pub(crate) struct GpuMaterial {
     pub a: [f32; 4],
     pub b: [f32; 4],
-    /// 0 constant, 1 checker, 2 colour chart, 3 wood.
+    /// 0 constant, 1 checker, 2 colour chart, 3 wood, 4 conductor (`a` = `F_p` per channel).
     pub kind: u32,
     /// 1: the mesh has no uvs, world `(x, z)` stand in.
     pub world_uv: u32,
@@ -118,6 +118,7 @@ impl GpuMaterial {
             Material::Diffuse(Albedo::Wood { light, dark, rings }) => {
                 (3, v(*light), v(*dark), *rings)
             }
+            Material::Conductor(c) => (4, v(c.f0()), [0.0; 4], 0.0),
         };
         Self {
             a,

@@ -49,6 +49,16 @@ pub enum Aov {
     Tir,
     /// Total internal reflection at the first exit.
     TirFirstExit,
+    /// The distance-map layer of a path's last hit, plus one (0: the last ray left every layer).
+    HitLayer,
+    /// Linear-search samples of a distance-map path, over all its rays and layers.
+    LinearSteps,
+    /// Secant steps of a distance-map path.
+    SecantSteps,
+    /// Secondary rays a distance-map path traced.
+    Bounces,
+    /// A distance-map ray left every layer (the environment was read instead).
+    Miss,
 }
 
 /// The type of an [`Aov`]'s per-pixel values.
@@ -64,7 +74,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 16] = [
+    pub const ALL: [Aov; 21] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -81,6 +91,11 @@ impl Aov {
         Aov::Tir,
         Aov::TirFirstExit,
         Aov::Converged,
+        Aov::HitLayer,
+        Aov::LinearSteps,
+        Aov::SecantSteps,
+        Aov::Bounces,
+        Aov::Miss,
     ];
 
     /// The layer name (EXR channel or channel prefix).
@@ -102,6 +117,11 @@ impl Aov {
             Aov::Interfaces => "interfaces",
             Aov::Tir => "tir",
             Aov::TirFirstExit => "tir_first_exit",
+            Aov::HitLayer => "hit_layer",
+            Aov::LinearSteps => "linear_steps",
+            Aov::SecantSteps => "secant_steps",
+            Aov::Bounces => "bounces",
+            Aov::Miss => "miss",
         }
     }
 
@@ -117,8 +137,16 @@ impl Aov {
             | Aov::TOut
             | Aov::PGeom
             | Aov::NgTexel => AovKind::Vec3,
-            Aov::ExitNormalSource | Aov::Interfaces | Aov::Iterations => AovKind::Count,
-            Aov::Covered | Aov::Tir | Aov::TirFirstExit | Aov::Converged => AovKind::Flag,
+            Aov::ExitNormalSource
+            | Aov::Interfaces
+            | Aov::Iterations
+            | Aov::HitLayer
+            | Aov::LinearSteps
+            | Aov::SecantSteps
+            | Aov::Bounces => AovKind::Count,
+            Aov::Covered | Aov::Tir | Aov::TirFirstExit | Aov::Converged | Aov::Miss => {
+                AovKind::Flag
+            }
         }
     }
 }

@@ -32,12 +32,12 @@ pub use environment::{Environment, EnvironmentReport, LatLongMap, load_latlong};
 pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
-    BackendId, Family, InterfaceRule, MethodId, MethodInfo, MethodParams, NearbyParams, REGISTRY,
-    TraceMode, TraceSettings, TwoInterfaceParams,
+    BackendId, DistanceMapParams, Family, InterfaceRule, MethodId, MethodInfo, MethodParams,
+    NearbyParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{
-    Albedo, COLOR_CHART, DirectionalLight, Material, Object, Refractor, Scene, SceneMesh,
-    SurfaceTexel,
+    Albedo, COLOR_CHART, CONDUCTORS, Conductor, DirectionalLight, Material, Object, Refractor,
+    Scene, SceneMesh, SurfaceTexel, conductor_name,
 };
 pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene, load_scene_str};

@@ -6,6 +6,7 @@
 
 use core::fmt;
 
+use refract_core::distance_map::{DielectricFresnel, MAX_LAYERS, PathParams, SearchParams};
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::nearby_geometry::{MAX_ITERATIONS, MAX_SEEDS, NearbyLookup, SeedSpacing};
 use refract_core::{BackSurface, DistanceMode, TirPolicy};
@@ -35,6 +36,8 @@ pub enum MethodId {
     Iterative,
     /// `iterative-seeded`: Wyman 2005b §4.3, the best of `K` seeds refined with the NG depth.
     IterativeSeeded,
+    /// `distance-map`: Umenhoffer et al. 2007, rays traced in layered distance cube maps.
+    DistanceMap,
 }
 
 /// A family of methods: the methods of one family share their passes.
@@ -47,6 +50,9 @@ pub enum Family {
     /// Wyman 2005b: the two-interface kernel, then a lookup in the nearby-geometry (NG)
     /// texture rendered from the eye.
     NearbyGeometry,
+    /// Umenhoffer et al. 2007: layered distance cube maps around a reference point, searched
+    /// per secondary ray (mirrors, metals, glass, several bounces).
+    DistanceMap,
 }
 
 /// A renderer implementation.
@@ -132,6 +138,96 @@ const BACK_CHOICES: &[&str] = &["furthest", "second"];
 const MODE_CHOICES: &[&str] = &["transmission", "full"];
 const INTERFACE_CHOICES: &[&str] = &["shading", "geometric"];
 const SPACING_CHOICES: &[&str] = &["screen", "world"];
+const ON_OFF: &[&str] = &["on", "off"];
+const FRESNEL_CHOICES: &[&str] = &["none", "schlick", "split"];
+
+/// The largest linear-step count of the distance-map search.
+pub const MAX_LINEAR_STEPS: u32 = 1024;
+/// The largest secant-step count.
+pub const MAX_SECANT_STEPS: u32 = 64;
+/// The largest path depth of the distance-map method.
+pub const MAX_PATH_DEPTH: u32 = 16;
+/// The smallest and largest distance-map face resolution.
+pub const DISTANCE_MAP_RESOLUTION: (u32, u32) = (8, 2048);
+
+const DISTANCE_MAP_PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "min-steps",
+        doc: "fewest linear-search steps per layer (a short segment s → e), §17.2.1",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: MAX_LINEAR_STEPS,
+        },
+        default: "15",
+    },
+    ParamSpec {
+        name: "max-steps",
+        doc: "most linear-search steps per layer (a segment spanning 180° seen from the reference point)",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: MAX_LINEAR_STEPS,
+        },
+        default: "80",
+    },
+    ParamSpec {
+        name: "secant",
+        doc: "secant refinement steps at most (Listing 17-2's NITER; 0: the linear search's overshooting sample)",
+        kind: ParamKind::Integer {
+            min: 0,
+            max: MAX_SECANT_STEPS,
+        },
+        default: "5",
+    },
+    ParamSpec {
+        name: "depth",
+        doc: "specular interactions per path, the visible surface included (Listing 17-5's MAXDEPTH); a path that needs more is black",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: MAX_PATH_DEPTH,
+        },
+        default: "2",
+    },
+    ParamSpec {
+        name: "layers",
+        doc: "distance-map layers: the specular object's front and back faces, then the other geometry in layers-2 depth-peeled layers (3: the chapter's implementation)",
+        kind: ParamKind::Integer {
+            min: 3,
+            max: MAX_LAYERS as u32,
+        },
+        default: "3",
+    },
+    ParamSpec {
+        name: "res",
+        doc: "texels per cube-map face edge (the chapter: 512)",
+        kind: ParamKind::Integer {
+            min: DISTANCE_MAP_RESOLUTION.0,
+            max: DISTANCE_MAP_RESOLUTION.1,
+        },
+        default: "512",
+    },
+    ParamSpec {
+        name: "minmax",
+        doc: "min-max acceleration (Figure 17-4): search each layer only between the spheres of its smallest and largest distance",
+        kind: ParamKind::Choice(ON_OFF),
+        default: "on",
+    },
+    ParamSpec {
+        name: "fresnel",
+        doc: "glass: none (the refracted path, as the reference's transmission mode), schlick (Listing 17-5's 1 − F), split (also the F-weighted reflection at the first interface, Figure 17-9; compare with mode=full)",
+        kind: ParamKind::Choice(FRESNEL_CHOICES),
+        default: "none",
+    },
+];
+
+const DISTANCE_MAP_AOVS: &[Aov] = &[
+    Aov::Covered,
+    Aov::HitLayer,
+    Aov::LinearSteps,
+    Aov::SecantSteps,
+    Aov::Bounces,
+    Aov::Miss,
+    Aov::Tir,
+];
 
 /// The largest guard band, in percent of the image size added on each side.
 pub const MAX_GUARD_BAND_PERCENT: u32 = 100;
@@ -213,7 +309,7 @@ const REFERENCE_PARAMS: &[ParamSpec] = &[
     },
     ParamSpec {
         name: "depth",
-        doc: "refractor interactions per path; a path that needs more is black",
+        doc: "specular interactions per path (refractor interfaces, conductor reflections); a path that needs more is black",
         kind: ParamKind::Integer { min: 1, max: 64 },
         default: "8",
     },
@@ -264,7 +360,7 @@ const ITERATIVE_AOVS: &[Aov] = &[
 ];
 
 /// Every method, in report order (the reference first).
-pub const REGISTRY: [MethodInfo; 9] = [
+pub const REGISTRY: [MethodInfo; 10] = [
     MethodInfo {
         id: MethodId::Reference,
         name: "reference",
@@ -377,7 +473,43 @@ pub const REGISTRY: [MethodInfo; 9] = [
         aovs: ITERATIVE_AOVS,
         backends: IMAGE_SPACE_BACKENDS,
     },
+    MethodInfo {
+        id: MethodId::DistanceMap,
+        name: "distance-map",
+        paper: "Umenhoffer et al. 2007",
+        section: "GPU Gems 3 §17.2-17.3",
+        family: Family::DistanceMap,
+        summary: "layered distance cube maps around the specular object's centre; linear search uniform in texture space + secant refinement; multiple reflection/refraction; Schlick Fresnel incl. metals",
+        params: DISTANCE_MAP_PARAMS,
+        aovs: DISTANCE_MAP_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
 ];
+
+/// Whether `method` can render `scene`, and why not: the image-space and nearby-geometry
+/// families refract through glass among diffuse objects only; the reference and the
+/// distance-map method render conductors (mirrors, metals) too.
+pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), String> {
+    match method.info().family {
+        Family::Reference | Family::DistanceMap => Ok(()),
+        Family::ImageSpace | Family::NearbyGeometry => {
+            if let Some(c) = scene.refractor.conductor() {
+                Err(format!(
+                    "method `{method}` refracts through glass; the specular object of scene `{}` is a conductor ({})",
+                    scene.name,
+                    crate::scene::conductor_name(&c)
+                ))
+            } else if let Some(k) = scene.objects.iter().position(|o| o.conductor().is_some()) {
+                Err(format!(
+                    "method `{method}` shades opaque objects as diffuse; object {k} of scene `{}` is a conductor",
+                    scene.name
+                ))
+            } else {
+                Ok(())
+            }
+        }
+    }
+}
 
 /// An unknown method id.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -507,6 +639,28 @@ pub struct NearbyParams {
     pub guard_band_percent: u32,
 }
 
+/// Parameters of `distance-map` (Umenhoffer et al. 2007).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DistanceMapParams {
+    /// The search and the bounce loop.
+    pub path: PathParams,
+    /// Layers: 2 for the specular object, `layers − 2` depth-peeled for the rest (3..=8).
+    pub layers: u32,
+    /// Texels per face edge.
+    pub resolution: u32,
+}
+
+impl Default for DistanceMapParams {
+    /// The chapter's setting (§17.4): 3 layers of 6 × 512², depth 2, with min-max.
+    fn default() -> Self {
+        Self {
+            path: PathParams::default(),
+            layers: 3,
+            resolution: 512,
+        }
+    }
+}
+
 /// The parameters of one run of one method: one variant per parameter set, so a backend's
 /// exhaustive `match` decides, at compile time, what it does with every method.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -519,6 +673,8 @@ pub enum MethodParams {
     TwoInterface(TwoInterfaceParams),
     /// `kay-greenberg`, `ray-plane`, `iterative`, `iterative-seeded`.
     NearbyGeometry(NearbyParams),
+    /// `distance-map`.
+    DistanceMap(DistanceMapParams),
 }
 
 fn choice<T: Copy>(
@@ -570,6 +726,12 @@ const SPACING_TABLE: [(&str, SeedSpacing); 2] = [
     ("screen", SeedSpacing::Screen),
     ("world", SeedSpacing::World),
 ];
+const ON_OFF_TABLE: [(&str, bool); 2] = [("on", true), ("off", false)];
+const FRESNEL_TABLE: [(&str, DielectricFresnel); 3] = [
+    ("none", DielectricFresnel::Ignore),
+    ("schlick", DielectricFresnel::Schlick),
+    ("split", DielectricFresnel::Split),
+];
 const MODE_TABLE: [(&str, TraceMode); 2] = [
     ("transmission", TraceMode::Transmission),
     ("full", TraceMode::Full),
@@ -612,6 +774,7 @@ impl MethodParams {
                 seeds: 7,
                 spacing: SeedSpacing::Screen,
             }),
+            MethodId::DistanceMap => MethodParams::DistanceMap(DistanceMapParams::default()),
         }
     }
 
@@ -631,6 +794,7 @@ impl MethodParams {
                 NearbyLookup::Iterative { .. } => MethodId::Iterative,
                 NearbyLookup::Seeded { .. } => MethodId::IterativeSeeded,
             },
+            MethodParams::DistanceMap(_) => MethodId::DistanceMap,
         }
     }
 
@@ -685,6 +849,29 @@ impl MethodParams {
                 }
                 _ => return Err(unknown(id)),
             },
+            MethodParams::DistanceMap(p) => {
+                let search: &mut SearchParams = &mut p.path.search;
+                match name {
+                    "min-steps" => {
+                        search.min_steps = integer(name, value, 1, MAX_LINEAR_STEPS, origin)?;
+                    }
+                    "max-steps" => {
+                        search.max_steps = integer(name, value, 1, MAX_LINEAR_STEPS, origin)?;
+                    }
+                    "secant" => {
+                        search.secant_steps = integer(name, value, 0, MAX_SECANT_STEPS, origin)?;
+                    }
+                    "minmax" => search.min_max = choice(name, value, &ON_OFF_TABLE, origin)?,
+                    "depth" => p.path.max_depth = integer(name, value, 1, MAX_PATH_DEPTH, origin)?,
+                    "layers" => p.layers = integer(name, value, 3, MAX_LAYERS as u32, origin)?,
+                    "res" => {
+                        let (lo, hi) = DISTANCE_MAP_RESOLUTION;
+                        p.resolution = integer(name, value, lo, hi, origin)?;
+                    }
+                    "fresnel" => p.path.fresnel = choice(name, value, &FRESNEL_TABLE, origin)?,
+                    _ => return Err(unknown(id)),
+                }
+            }
         }
         Ok(())
     }
@@ -714,6 +901,17 @@ impl MethodParams {
                 }
                 _ => None,
             },
+            (MethodParams::DistanceMap(p), _) => match name {
+                "min-steps" => Some(p.path.search.min_steps.to_string()),
+                "max-steps" => Some(p.path.search.max_steps.to_string()),
+                "secant" => Some(p.path.search.secant_steps.to_string()),
+                "minmax" => Some(name_of(&ON_OFF_TABLE, &p.path.search.min_max).into()),
+                "depth" => Some(p.path.max_depth.to_string()),
+                "layers" => Some(p.layers.to_string()),
+                "res" => Some(p.resolution.to_string()),
+                "fresnel" => Some(name_of(&FRESNEL_TABLE, &p.path.fresnel).into()),
+                _ => None,
+            },
             _ => None,
         }
     }
@@ -723,7 +921,7 @@ impl MethodParams {
         match &mut self {
             MethodParams::TwoInterface(p) => p.tir = tir,
             MethodParams::NearbyGeometry(p) => p.two.tir = tir,
-            MethodParams::Reference(_) | MethodParams::Single => {}
+            MethodParams::Reference(_) | MethodParams::Single | MethodParams::DistanceMap(_) => {}
         }
         self
     }
@@ -735,7 +933,7 @@ impl MethodParams {
             MethodParams::Single => (DistanceMode::Interpolated, TirPolicy::default()),
             MethodParams::TwoInterface(p) => (p.distance, p.tir),
             MethodParams::NearbyGeometry(p) => (p.two.distance, p.two.tir),
-            MethodParams::Reference(_) => return None,
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return None,
         };
         Some(
             ImageSpaceParams::new(ior, distance, tir)
@@ -748,7 +946,9 @@ impl MethodParams {
         match self {
             MethodParams::TwoInterface(p) => Some(p.back),
             MethodParams::NearbyGeometry(p) => Some(p.two.back),
-            MethodParams::Single | MethodParams::Reference(_) => None,
+            MethodParams::Single | MethodParams::Reference(_) | MethodParams::DistanceMap(_) => {
+                None
+            }
         }
     }
 

@@ -49,6 +49,10 @@ pub enum RenderError {
         /// The method.
         method: MethodId,
     },
+    /// The method cannot render this scene (e.g. an image-space method and a metal object), see
+    /// [`crate::scene_support`].
+    #[error("{0}")]
+    UnsupportedScene(String),
     /// `render` before `prepare`.
     #[error("the {0} backend has no scene: call prepare first")]
     NotPrepared(BackendId),

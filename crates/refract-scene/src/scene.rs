@@ -4,6 +4,7 @@
 
 use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
+pub use refract_core::fresnel::Conductor;
 use refract_core::nearby_geometry::{MAX_PLANES, Plane};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
 
@@ -19,6 +20,7 @@ pub struct Refractor {
     bvh: MeshBvh,
     normal_distances: NormalDistances,
     ior: f32,
+    conductor: Option<Conductor>,
 }
 
 /// The largest index of refraction accepted (beyond any material; the kernels stay finite up
@@ -40,6 +42,7 @@ impl Refractor {
             bvh,
             normal_distances,
             ior,
+            conductor: None,
         })
     }
 
@@ -73,6 +76,7 @@ impl Refractor {
             bvh,
             normal_distances,
             ior,
+            conductor: None,
         })
     }
 
@@ -94,6 +98,22 @@ impl Refractor {
     /// `d_N` with how many vertices missed (open meshes) and the value they use.
     pub fn normal_distances(&self) -> &NormalDistances {
         &self.normal_distances
+    }
+
+    /// The conductor (metal, mirror) the object is made of instead of glass, if it is: it then
+    /// reflects only ([`Conductor`]); `None` for a dielectric of index [`Self::ior`].
+    pub fn conductor(&self) -> Option<Conductor> {
+        self.conductor
+    }
+
+    /// Makes the object a conductor (`Some`) or a dielectric again (`None`).
+    pub fn set_conductor(&mut self, conductor: Option<Conductor>) {
+        self.conductor = conductor;
+    }
+
+    /// Whether it is glass (a dielectric), as the image-space methods require.
+    pub fn is_dielectric(&self) -> bool {
+        self.conductor.is_none()
     }
 
     /// Index of refraction.
@@ -230,6 +250,28 @@ impl Albedo {
 pub enum Material {
     /// View-independent diffuse shading under the scene's [`DirectionalLight`].
     Diffuse(Albedo),
+    /// A conductor: a mirror or a metal, reflecting with its Fresnel reflectance (traced by
+    /// the reference and the distance-map method; the image-space methods decline scenes with
+    /// one, see [`crate::registry::scene_support`]).
+    Conductor(Conductor),
+}
+
+/// The named conductors of scene files: `mirror` ([`Conductor::MIRROR`]), `gold`, `silver`,
+/// `copper`, `aluminium`.
+pub const CONDUCTORS: [(&str, Conductor); 5] = [
+    ("mirror", Conductor::MIRROR),
+    ("gold", Conductor::GOLD),
+    ("silver", Conductor::SILVER),
+    ("copper", Conductor::COPPER),
+    ("aluminium", Conductor::ALUMINIUM),
+];
+
+/// The name of a conductor of [`CONDUCTORS`], or `conductor` for another.
+pub fn conductor_name(conductor: &Conductor) -> &'static str {
+    CONDUCTORS
+        .iter()
+        .find(|(_, c)| c == conductor)
+        .map_or("conductor", |(n, _)| n)
 }
 
 /// An opaque object near the refractor (Wyman 2005b's "nearby geometry").
@@ -297,10 +339,20 @@ impl Object {
         !self.mesh.uvs.is_empty()
     }
 
-    /// Outgoing radiance at a point with texture coordinates `uv` and unit normal `n`.
+    /// Outgoing radiance at a point with texture coordinates `uv` and unit normal `n` of a
+    /// diffuse object; 0 for a conductor (it emits nothing: what it shows is traced).
     pub fn shade(&self, light: &DirectionalLight, uv: Vec2, n: Vec3) -> Vec3 {
         match &self.material {
             Material::Diffuse(albedo) => light.shade(albedo.at(uv), n),
+            Material::Conductor(_) => Vec3::ZERO,
+        }
+    }
+
+    /// The conductor the object is made of, `None` for a diffuse object.
+    pub fn conductor(&self) -> Option<Conductor> {
+        match self.material {
+            Material::Conductor(c) => Some(c),
+            Material::Diffuse(_) => None,
         }
     }
 }
@@ -421,6 +473,12 @@ impl Scene {
             SceneMesh::Refractor => Some(self.refractor.mesh()),
             SceneMesh::Object(k) => self.objects.get(k).map(Object::mesh),
         }
+    }
+
+    /// Whether every surface is glass or diffuse (what the image-space and nearby-geometry
+    /// methods can render): no conductor refractor and no conductor object.
+    pub fn is_dielectric_and_diffuse(&self) -> bool {
+        self.refractor.is_dielectric() && self.objects.iter().all(|o| o.conductor().is_none())
     }
 
     /// The planes standing for the opaque objects in the ray-plane and iterative lookups

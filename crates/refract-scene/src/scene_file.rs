@@ -12,8 +12,72 @@ use crate::environment::{Environment, load_latlong};
 use crate::error::SceneError;
 use crate::scene::{Albedo, Material, Object, Refractor, Scene};
 
+/// The room of the distance-map scenes (Umenhoffer et al. 2007 Figs. 17-7 to 17-9): a box of
+/// diffuse walls `x ∈ [−3, 3]`, `y ∈ [−1, 3]`, `z ∈ [−3, 5]` facing inward (red left, green
+/// right, a checker floor), an orange torus, the camera inside. Scenes append their specular
+/// object and more objects.
+macro_rules! room {
+    () => {
+        r#"[camera]
+eye = [0.0, 1.0, 4.2]
+target = [0.0, 0.0, -0.5]
+fov_y_deg = 50.0
+near = 0.05
+far = 20.0
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "checker"
+scale = 5.657
+translate = [0.0, -1.0, 1.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.7, 0.7, 0.7]
+scale = 5.657
+rotate_deg = [180.0, 0.0, 0.0]
+translate = [0.0, 3.0, 1.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.7, 0.7, 0.65]
+scale = 5.657
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 1.0, -3.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.55, 0.6, 0.7]
+scale = 5.657
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.0, 1.0, 5.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.63, 0.07, 0.05]
+scale = 5.657
+rotate_deg = [0.0, 0.0, -90.0]
+translate = [-3.0, 1.0, 1.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.14, 0.45, 0.09]
+scale = 5.657
+rotate_deg = [0.0, 0.0, 90.0]
+translate = [3.0, 1.0, 1.0]
+
+[[objects]]
+mesh = "builtin:torus"
+color = [0.9, 0.45, 0.1]
+scale = 0.55
+rotate_deg = [70.0, 0.0, 0.0]
+translate = [1.5, -0.45, 0.4]
+"#
+    };
+}
+
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 4] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 6] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -33,6 +97,41 @@ pub const BUILTIN_SCENES: [(&str, &str, &str); 4] = [
         "chart",
         "Wyman 2005b Fig. 5: a glass sphere, IOR 1.5, before a colour chart, on a wood floor",
         CHART_SCENE,
+    ),
+    (
+        "mirror-room",
+        "Umenhoffer et al. Fig. 17-8: a mirror sphere before a planar mirror in a room of diffuse walls",
+        concat!(
+            room!(),
+            r#"
+[[objects]]
+mesh = "builtin:plane"
+material = "mirror"
+scale = 2.4
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [-0.3, 0.6, -2.9]
+
+[refractor]
+mesh = "builtin:sphere"
+material = "mirror"
+scale = 0.8
+translate = [-0.5, -0.2, -0.6]
+"#
+        ),
+    ),
+    (
+        "glass-room",
+        "Umenhoffer et al. Fig. 17-9: a glass sphere (IOR 1.5) that reflects and refracts, in the room",
+        concat!(
+            room!(),
+            r#"
+[refractor]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.8
+translate = [-0.3, -0.2, -0.2]
+"#
+        ),
     ),
 ];
 
@@ -133,6 +232,10 @@ struct RefractorSection {
     mesh: String,
     #[serde(default = "default_ior")]
     ior: f32,
+    /// `glass` (default), a named conductor or `conductor` with `eta` and `k`.
+    material: Option<String>,
+    eta: Option<[f32; 3]>,
+    k: Option<[f32; 3]>,
     #[serde(default = "yes")]
     normalize: bool,
     #[serde(default)]
@@ -163,6 +266,78 @@ struct ObjectSection {
     color: Option<[f32; 3]>,
     /// `checker` or `color-chart`.
     texture: Option<String>,
+    /// `diffuse` (default), a named conductor or `conductor` with `eta` and `k`.
+    material: Option<String>,
+    eta: Option<[f32; 3]>,
+    k: Option<[f32; 3]>,
+}
+
+/// The largest real part `n` of a conductor's index in scene files.
+const MAX_CONDUCTOR_ETA: f32 = 10.0;
+/// The largest extinction coefficient `k` in scene files.
+const MAX_CONDUCTOR_K: f32 = 20.0;
+
+/// The conductor a `material` key names (`None` for the section's non-conductor default,
+/// `plain`: `glass` or `diffuse`), with `eta`/`k` for `conductor`.
+fn parse_conductor(
+    origin: &str,
+    section: &str,
+    plain: &str,
+    material: Option<&str>,
+    eta: Option<[f32; 3]>,
+    k: Option<[f32; 3]>,
+) -> Result<Option<crate::scene::Conductor>, SceneError> {
+    let name = material.unwrap_or(plain);
+    let custom = name == "conductor";
+    if !custom && (eta.is_some() || k.is_some()) {
+        return Err(SceneError::field(
+            origin,
+            format!("{section} eta/k"),
+            name,
+            "material = \"conductor\" when eta and k are given",
+        ));
+    }
+    if name == plain {
+        return Ok(None);
+    }
+    if custom {
+        let (Some(eta), Some(k)) = (eta, k) else {
+            return Err(SceneError::field(
+                origin,
+                format!("{section} material"),
+                "\"conductor\"",
+                "eta = [r, g, b] and k = [r, g, b] beside it",
+            ));
+        };
+        check_vector(
+            origin,
+            &format!("{section} eta"),
+            eta,
+            0.0,
+            MAX_CONDUCTOR_ETA,
+        )?;
+        check_vector(origin, &format!("{section} k"), k, 0.0, MAX_CONDUCTOR_K)?;
+        return Ok(Some(crate::scene::Conductor {
+            eta: Vec3::from(eta),
+            k: Vec3::from(k),
+        }));
+    }
+    crate::scene::CONDUCTORS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, c)| Some(*c))
+        .ok_or_else(|| {
+            let names: Vec<String> = crate::scene::CONDUCTORS
+                .iter()
+                .map(|(n, _)| format!("\"{n}\""))
+                .collect();
+            SceneError::field(
+                origin,
+                format!("{section} material"),
+                format!("\"{name}\""),
+                format!("\"{plain}\", {} or \"conductor\"", names.join(", ")),
+            )
+        })
 }
 
 /// The names of the built-in scenes, comma-separated.
@@ -375,7 +550,16 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
             "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
         ));
     }
-    let refractor = Refractor::new(mesh, ior)?;
+    let conductor = parse_conductor(
+        origin,
+        "[refractor]",
+        "glass",
+        r.material.as_deref(),
+        r.eta,
+        r.k,
+    )?;
+    let mut refractor = Refractor::new(mesh, ior)?;
+    refractor.set_conductor(conductor);
     let d_n = refractor.normal_distances();
     if d_n.misses > 0 {
         warnings.push(format!(
@@ -431,7 +615,19 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
                 ));
             }
         };
-        objects.push(Object::new(mesh, Material::Diffuse(albedo))?);
+        let section = format!("objects[{k}]");
+        let material = match parse_conductor(
+            origin,
+            &section,
+            "diffuse",
+            object.material.as_deref(),
+            object.eta,
+            object.k,
+        )? {
+            Some(conductor) => Material::Conductor(conductor),
+            None => Material::Diffuse(albedo),
+        };
+        objects.push(Object::new(mesh, material)?);
     }
 
     let c = &file.camera;

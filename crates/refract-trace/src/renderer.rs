@@ -56,7 +56,8 @@ impl Renderer for ReferenceRenderer {
             MethodParams::Reference(settings) => settings,
             MethodParams::Single
             | MethodParams::TwoInterface(_)
-            | MethodParams::NearbyGeometry(_) => {
+            | MethodParams::NearbyGeometry(_)
+            | MethodParams::DistanceMap(_) => {
                 return Err(RenderError::Unsupported {
                     backend: BackendId::Trace,
                     method: method.id(),

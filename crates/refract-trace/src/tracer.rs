@@ -1,10 +1,12 @@
 //! Exact recursive ray tracing through the refractor: Snell at every interface with the same
 //! interpolated shading normals as the approximate methods, total internal reflection as
-//! internal reflection, a depth limit.
+//! internal reflection, conductors (mirrors, metals: the refractor or opaque objects) as
+//! reflection weighted by the exact conductor Fresnel reflectance per channel, a depth limit on
+//! specular interactions.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use refract_core::fresnel::fresnel_dielectric;
+use refract_core::fresnel::{Conductor, fresnel_dielectric};
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::{Camera, Ray};
 use refract_geometry::Hit;
@@ -173,6 +175,29 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// The conductor at a hit, if the surface is one.
+    fn conductor(&self, surface: Surface) -> Option<Conductor> {
+        match surface {
+            Surface::Refractor => self.scene.refractor.conductor(),
+            Surface::Object(k) => self.scene.objects[k].conductor(),
+        }
+    }
+
+    /// Mirror reflection at a conductor: the reflected direction about the shading normal
+    /// turned toward the ray, and the exact reflectance per channel at that angle.
+    fn conductor_bounce(ray: &Ray, hit: &Hit, conductor: &Conductor) -> (Vec3, Vec3) {
+        let facing = face_forward_shading_normal(
+            if ray.dir.dot(hit.geometric_normal) < 0.0 {
+                hit.shading_normal
+            } else {
+                -hit.shading_normal
+            },
+            ray.dir,
+        );
+        let dir = reflect(ray.dir, facing).normalize();
+        (dir, conductor.reflectance(-ray.dir.dot(facing)))
+    }
+
     fn shade_object(&self, index: usize, ray: &Ray, hit: &Hit) -> Vec3 {
         let object = &self.scene.objects[index];
         let uv = object.uv_at(hit.triangle, hit.barycentrics, ray.at(hit.t));
@@ -185,7 +210,7 @@ impl<'a> Tracer<'a> {
         let mut aov = PathRecord::EMPTY;
         let mut ray = ray;
         let mut depth = 0;
-        let mut scale = 1.0;
+        let mut scale = Vec3::ONE;
         loop {
             let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
                 if aov.covers_refractor() {
@@ -194,6 +219,21 @@ impl<'a> Tracer<'a> {
                 return (scale * self.scene.environment.radiance_exact(ray.dir), aov);
             };
             let p = ray.at(hit.t);
+            if let Some(conductor) = self.conductor(surface) {
+                if depth == self.settings.max_depth {
+                    return (Vec3::ZERO, aov);
+                }
+                depth += 1;
+                let (next, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor);
+                scale *= reflectance;
+                if !aov.covers_refractor() && surface == Surface::Refractor {
+                    aov.p1 = p;
+                    aov.n1 = hit.shading_normal;
+                    aov.t1 = next;
+                }
+                ray = self.continue_ray(&ray, &hit, next);
+                continue;
+            }
             let Surface::Object(index) = surface else {
                 if depth == self.settings.max_depth {
                     return (Vec3::ZERO, aov);
@@ -242,6 +282,18 @@ impl<'a> Tracer<'a> {
         let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
             return self.scene.environment.radiance_exact(ray.dir);
         };
+        if let Some(conductor) = self.conductor(surface) {
+            if depth >= self.settings.max_depth {
+                return Vec3::ZERO;
+            }
+            let (dir, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor);
+            let next = self.continue_ray(&ray, &hit, dir);
+            let weight = throughput * reflectance.max_element();
+            if weight <= self.settings.throughput_cutoff {
+                return Vec3::ZERO;
+            }
+            return reflectance * self.full_radiance(next, depth + 1, weight, rays);
+        }
         if let Surface::Object(index) = surface {
             return self.shade_object(index, &ray, &hit);
         }

@@ -387,3 +387,111 @@ fn t2_is_the_first_exit_direction_and_tout_the_last() {
     println!("torus: T2 ≠ Tout on {differ} of {covered} refractor pixels");
     assert!(differ > 50, "{differ} of {covered}");
 }
+
+/// A mirror sphere (UV sphere: the pole vertex has the exact normal) reflects a ray that hits
+/// the pole at 30° into the mirrored direction, and the radiance is the environment's there
+/// (F = 1 at every angle). A copper sphere at normal incidence returns F_p of each channel
+/// times the environment behind the eye.
+#[test]
+fn conductor_sphere_reflects_the_known_direction() {
+    use refract_core::fresnel::Conductor;
+    let sphere = shapes::uv_sphere(64, 32, 1.0).expect("sphere");
+    let mut refractor = Refractor::new(sphere, 1.5).expect("ior");
+    refractor.set_conductor(Some(Conductor::MIRROR));
+    let scene = Scene::new("test", refractor.clone(), Environment::Procedural);
+    let tracer = Tracer::new(&scene, TraceSettings::default());
+    let dir = Vec3::new(0.5, -(0.75f32).sqrt(), 0.0);
+    let ray = Ray {
+        origin: Vec3::new(0.0, 1.0, 0.0) - 4.0 * dir,
+        dir,
+    };
+    let (radiance, aov) = tracer.transmission_path(ray, &mut 0);
+    let expected = Vec3::new(0.5, (0.75f32).sqrt(), 0.0);
+    assert!((aov.p1 - Vec3::Y).length() < 1e-5, "{}", aov.p1);
+    assert!((aov.t1 - expected).length() < 1e-5, "{}", aov.t1);
+    let env = scene.environment.radiance_exact(aov.t1);
+    assert!((radiance - env).abs().max_element() < 1e-5 * env.max_element().max(1.0));
+    assert!(aov.p2.is_nan(), "a conductor has no exit point");
+
+    let mut copper = refractor;
+    copper.set_conductor(Some(Conductor::COPPER));
+    let scene = Scene::new(
+        "test",
+        copper,
+        Environment::Constant(Vec3::new(1.0, 2.0, 4.0)),
+    );
+    let tracer = Tracer::new(&scene, TraceSettings::default());
+    let ray = Ray {
+        origin: Vec3::new(0.0, 5.0, 0.0),
+        dir: Vec3::NEG_Y,
+    };
+    let (radiance, _) = tracer.transmission_path(ray, &mut 0);
+    let expected = Conductor::COPPER.f0() * Vec3::new(1.0, 2.0, 4.0);
+    assert!(
+        (radiance - expected).abs().max_element() < 1e-5,
+        "{radiance} vs {expected}"
+    );
+    // The full mode (Fresnel splitting at dielectrics) treats conductors the same way.
+    let full = Tracer::new(
+        &scene,
+        TraceSettings {
+            mode: TraceMode::Full,
+            ..TraceSettings::default()
+        },
+    );
+    let radiance = full.full_radiance(ray, 0, 1.0, &mut 0);
+    assert!(
+        (radiance - expected).abs().max_element() < 1e-5,
+        "{radiance}"
+    );
+}
+
+/// Two perpendicular mirror planes (x = 0 facing +x and y = 0 facing +y) send a ray back
+/// anti-parallel in the xy plane after two bounces; with a depth limit of 1 the path is black.
+#[test]
+fn two_mirrors_retroreflect_and_the_depth_limit_counts_bounces() {
+    use refract_core::fresnel::Conductor;
+    use refract_scene::{Material, Object};
+    let sphere = shapes::icosphere(2, 0.1).expect("sphere");
+    let mut refractor = Refractor::new(sphere, 1.5).expect("ior");
+    // The refractor is far away, out of the ray's way.
+    refractor = {
+        let mut mesh = refractor.mesh().clone();
+        mesh.transform(&glam::Affine3A::from_translation(Vec3::new(0.0, 0.0, 50.0)));
+        Refractor::new(mesh, 1.5).expect("ior")
+    };
+    let mut scene = Scene::new("test", refractor, Environment::Procedural);
+    let mut floor = shapes::plane(8.0, 1).expect("plane"); // y = 0, normal +y
+    floor.transform(&glam::Affine3A::from_translation(Vec3::new(4.0, 0.0, 0.0)));
+    let mut wall = shapes::plane(8.0, 1).expect("plane");
+    wall.transform(&glam::Affine3A::from_rotation_z(
+        -core::f32::consts::FRAC_PI_2,
+    ));
+    wall.transform(&glam::Affine3A::from_translation(Vec3::new(0.0, 4.0, 0.0)));
+    for mesh in [floor, wall] {
+        scene
+            .objects
+            .push(Object::new(mesh, Material::Conductor(Conductor::MIRROR)).expect("object"));
+    }
+    let dir = Vec3::new(-0.6, -0.7, 0.2).normalize();
+    let ray = Ray {
+        origin: Vec3::new(2.0, 2.5, 0.0),
+        dir,
+    };
+    let tracer = Tracer::new(&scene, TraceSettings::default());
+    let (radiance, _) = tracer.transmission_path(ray, &mut 0);
+    let back = Vec3::new(-dir.x, -dir.y, dir.z);
+    let env = scene.environment.radiance_exact(back);
+    assert!(
+        (radiance - env).abs().max_element() < 1e-4,
+        "{radiance} vs {env}"
+    );
+    let shallow = Tracer::new(
+        &scene,
+        TraceSettings {
+            max_depth: 1,
+            ..TraceSettings::default()
+        },
+    );
+    assert_eq!(shallow.transmission_path(ray, &mut 0).0, Vec3::ZERO);
+}

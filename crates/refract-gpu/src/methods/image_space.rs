@@ -58,7 +58,9 @@ impl ImageSpacePipelines {
                     "shade_two_interface",
                     vec![("DISTANCE_MODE", f64::from(distance_mode_code(distance)))],
                 ),
-                MethodParams::Reference(_) | MethodParams::NearbyGeometry(_) => {
+                MethodParams::Reference(_)
+                | MethodParams::NearbyGeometry(_)
+                | MethodParams::DistanceMap(_) => {
                     unreachable!("not an image-space method")
                 }
             },
@@ -387,7 +389,12 @@ impl ImageSpaceTargets {
                 | Aov::Iterations
                 | Aov::Converged
                 | Aov::Interfaces
-                | Aov::TirFirstExit => {
+                | Aov::TirFirstExit
+                | Aov::HitLayer
+                | Aov::LinearSteps
+                | Aov::SecantSteps
+                | Aov::Bounces
+                | Aov::Miss => {
                     unreachable!("the image-space kernels do not compute {}", aov.name())
                 }
             }

@@ -311,7 +311,17 @@ impl NearbyTargets {
                 Aov::Converged => fill(frame.flag_mut(aov), |i| {
                     pixels[i].covered && p_geom[i][3] as u32 & 2 == 2
                 }),
-                Aov::P1 | Aov::N1 | Aov::T1 | Aov::TOut | Aov::Interfaces | Aov::TirFirstExit => {
+                Aov::P1
+                | Aov::N1
+                | Aov::T1
+                | Aov::TOut
+                | Aov::Interfaces
+                | Aov::TirFirstExit
+                | Aov::HitLayer
+                | Aov::LinearSteps
+                | Aov::SecantSteps
+                | Aov::Bounces
+                | Aov::Miss => {
                     unreachable!("the nearby-geometry methods do not compute {}", aov.name())
                 }
             }

@@ -1,0 +1,496 @@
+//! Umenhoffer et al. 2007 (GPU Gems 3 ch. 17) on the CPU, method `distance-map`: every frame
+//! the layered distance map around the specular object's centre is rebuilt with the shared
+//! rasteriser (six mirrored 90° cube-face cameras per layer: the specular object's faces
+//! toward the reference point, its faces away from it, then the other geometry, depth-peeled
+//! into `layers − 2` layers), the scene is rasterised from the eye, and every pixel that sees a
+//! specular surface runs [`refract_core::distance_map::trace_path`].
+//!
+//! A layer keeps, per texel, the Euclidean distance from the reference point (−1 where empty;
+//! what the searches read, 4 bytes) and the rasteriser's visibility (which triangle), from
+//! which the normal and material of a hit are interpolated once per hit.
+
+use glam::{UVec2, Vec2, Vec3};
+use rayon::prelude::*;
+use refract_core::distance_map::{
+    DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
+    TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, trace_path,
+};
+use refract_core::fresnel::f0_dielectric;
+use refract_core::{Camera, CubeFace};
+use refract_scene::{
+    Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh,
+};
+
+use crate::image_space::fill;
+use crate::raster::{
+    DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
+};
+use crate::scene_meshes::SceneMeshes;
+
+/// What geometry a layer holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerContent {
+    /// The specular object's faces turned toward the reference point.
+    SpecularFront,
+    /// The specular object's faces turned away from it (all of a convex object).
+    SpecularBack,
+    /// The other geometry: depth-peeling layer `k`. Layer 0 is the nearest face turned toward
+    /// the reference point (the chapter's single diffuse layer); layers `k ≥ 1` are the
+    /// nearest face of either orientation behind layer `k − 1`. All are hit only from the
+    /// reference point's side (a crossing from behind is a depth discontinuity of the layer far
+    /// more often than a real hit: measured, `docs/methods.md`).
+    Others(u32),
+}
+
+impl LayerContent {
+    /// The content of layer `index` of a map with `layers` layers.
+    pub fn of(index: usize) -> Self {
+        match index {
+            0 => Self::SpecularFront,
+            1 => Self::SpecularBack,
+            k => Self::Others(k as u32 - 2),
+        }
+    }
+}
+
+/// One layer: six faces of `size²` texels.
+#[derive(Default)]
+struct Layer {
+    /// Distance per texel, [`cube_texel_index`] order; −1 where empty.
+    distance: Vec<f32>,
+    /// The rasteriser's visibility per face.
+    faces: Vec<SurfaceBuffer>,
+    /// Smallest and largest valid distance.
+    range: Option<(f32, f32)>,
+}
+
+/// The layered distance map of one frame.
+#[derive(Default)]
+pub struct DistanceMap {
+    size: u32,
+    center: Vec3,
+    layers: Vec<Layer>,
+    specular: SceneMeshes,
+    others: SceneMeshes,
+    floor_depth: Vec<f32>,
+}
+
+/// Distances of the reference point's surroundings: the near plane of the face cameras (a
+/// thousandth of the specular object's radius) and a far plane beyond every vertex.
+fn clip_planes(scene: &Scene, center: Vec3) -> (f32, f32) {
+    let radius = scene.refractor.mesh().bounding_sphere().radius;
+    let mut far: f32 = 0.0;
+    for mesh in
+        core::iter::once(scene.refractor.mesh()).chain(scene.objects.iter().map(|o| o.mesh()))
+    {
+        for p in &mesh.positions {
+            far = far.max((*p - center).length());
+        }
+    }
+    (1e-3 * radius.max(1e-6), 2.0 * far + 1.0)
+}
+
+impl DistanceMap {
+    /// Prepares the meshes of `scene` (once per scene).
+    pub fn prepare(&mut self, scene: &Scene) {
+        self.specular = SceneMeshes::of(scene, [SceneMesh::Refractor]);
+        self.others = SceneMeshes::objects(scene);
+    }
+
+    /// The reference point: the specular object's bounding-sphere centre (§17.1.1).
+    pub fn center(&self) -> Vec3 {
+        self.center
+    }
+
+    /// Rebuilds the map: `layers` layers of six `size²` faces around the specular object's
+    /// centre. Layers beyond the first of the other geometry are depth-peeled: the nearest
+    /// surface farther than the previous layer's (by a relative `10⁻³`).
+    pub fn render(&mut self, scene: &Scene, layers: usize, size: u32) -> Result<(), RenderError> {
+        let layers = layers.clamp(3, MAX_LAYERS);
+        self.size = size;
+        self.center = scene.refractor.mesh().bounding_sphere().center;
+        let (near, far) = clip_planes(scene, self.center);
+        self.layers.resize_with(layers, Layer::default);
+        let texels = (size * size) as usize;
+        for index in 0..layers {
+            let content = LayerContent::of(index);
+            let (previous, rest) = self.layers.split_at_mut(index);
+            let layer = &mut rest[0];
+            layer.distance.resize(6 * texels, -1.0);
+            layer.faces.resize_with(6, SurfaceBuffer::new);
+            let floor = match content {
+                LayerContent::Others(k) if k > 0 => Some(&previous[index - 1].distance[..]),
+                _ => None,
+            };
+            let (mesh, faces) = match content {
+                LayerContent::SpecularFront => (&self.specular, Faces::Front),
+                LayerContent::SpecularBack => (&self.specular, Faces::Back),
+                LayerContent::Others(0) => (&self.others, Faces::Front),
+                LayerContent::Others(_) => (&self.others, Faces::Both),
+            };
+            let raster = mesh.raster();
+            for face in CubeFace::ALL {
+                let camera = Camera::cube_face(self.center, face, size, near, far)
+                    .map_err(|e| RenderError::Parameter(format!("distance map: {e}")))?;
+                let out = &mut layer.distance[face as usize * texels..][..texels];
+                let buffer = &mut layer.faces[face as usize];
+                let center = self.center;
+                let floor = floor.map(|f| &f[face as usize * texels..][..texels]);
+                match floor {
+                    None => rasterize_bands(
+                        &raster,
+                        &camera,
+                        faces,
+                        DepthTest::Nearest,
+                        buffer,
+                        out.par_chunks_mut(band_pixels(size)),
+                        |band, out| {
+                            for row in 0..band.rows() {
+                                let y = band.first_row + row;
+                                for x in 0..size {
+                                    out[(row * size + x) as usize] = band
+                                        .texel(x, y)
+                                        .map_or(-1.0, |t| (t.p_ws - center).length());
+                                }
+                            }
+                        },
+                    ),
+                    Some(floor) => rasterize_peeled(
+                        &raster,
+                        &camera,
+                        face,
+                        faces,
+                        buffer,
+                        floor,
+                        &mut self.floor_depth,
+                        center,
+                        out,
+                    ),
+                }
+            }
+            layer.range = range_of(&layer.distance);
+        }
+        Ok(())
+    }
+}
+
+/// Depth peeling of one face: the window depth of the point a relative `10⁻³` beyond the
+/// previous layer's distance on each texel's centre ray (`+∞` where that layer is empty, so
+/// nothing is behind it), then the nearest fragment deeper than that.
+#[allow(clippy::too_many_arguments)]
+fn rasterize_peeled(
+    raster: &crate::raster::RasterMesh<'_>,
+    camera: &Camera,
+    face: CubeFace,
+    faces: Faces,
+    buffer: &mut SurfaceBuffer,
+    floor: &[f32],
+    floor_depth: &mut Vec<f32>,
+    center: Vec3,
+    out: &mut [f32],
+) {
+    let size = camera.width();
+    floor_depth.resize(floor.len(), f32::INFINITY);
+    floor_depth
+        .par_iter_mut()
+        .zip(floor.par_iter())
+        .enumerate()
+        .for_each(|(i, (depth, d))| {
+            *depth = if *d > 0.0 {
+                let texel = UVec2::new(i as u32 % size, i as u32 / size);
+                let dir = cube_texel_direction(face, texel, size).normalize();
+                camera
+                    .world_to_pixel(center + dir * (*d * (1.0 + PEEL_MARGIN)))
+                    .map_or(f32::INFINITY, |p| p.z)
+            } else {
+                f32::INFINITY
+            };
+        });
+    crate::raster::rasterize_peel_into(raster, camera, faces, floor_depth, buffer);
+    out.par_iter_mut().enumerate().for_each(|(i, o)| {
+        *o = buffer.texel(i).map_or(-1.0, |t| (t.p_ws - center).length());
+    });
+}
+
+/// Depth peeling keeps surfaces farther than the previous layer by this relative margin.
+pub const PEEL_MARGIN: f32 = 1e-3;
+
+fn range_of(distance: &[f32]) -> Option<(f32, f32)> {
+    let (lo, hi) = distance
+        .par_iter()
+        .filter(|d| **d > 0.0)
+        .fold(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |(lo, hi), d| (lo.min(*d), hi.max(*d)),
+        )
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// The distance map of one frame with the scene whose surfaces it samples.
+struct MapScene<'a> {
+    map: &'a DistanceMap,
+    scene: &'a Scene,
+}
+
+impl DistanceLayers for MapScene<'_> {
+    fn layer_count(&self) -> usize {
+        self.map.layers.len()
+    }
+
+    fn face_size(&self) -> u32 {
+        self.map.size
+    }
+
+    #[inline]
+    fn distance(&self, layer: usize, dir: Vec3) -> f32 {
+        let Some((face, texel)) = cube_texel(dir, self.map.size) else {
+            return -1.0;
+        };
+        self.map.layers[layer].distance[cube_texel_index(face, texel, self.map.size) as usize]
+    }
+
+    fn range(&self, layer: usize) -> Option<(f32, f32)> {
+        self.map.layers[layer].range
+    }
+
+    fn two_sided(&self, layer: usize) -> bool {
+        layer < 2
+    }
+}
+
+/// The material of the specular object (the sign code of §17.3).
+pub fn refractor_material(scene: &Scene) -> TexelMaterial {
+    match scene.refractor.conductor() {
+        Some(c) => TexelMaterial {
+            rgb: c.f0(),
+            ior: -1.0,
+        },
+        None => {
+            let ior = scene.refractor.ior();
+            TexelMaterial {
+                rgb: Vec3::splat(f0_dielectric(1.0 / ior)),
+                ior,
+            }
+        }
+    }
+}
+
+/// The material and normal of the surface of mesh `mesh` at triangle `triangle` with
+/// barycentrics `w` (diffuse: its radiance under the scene light).
+pub fn surface_material(
+    scene: &Scene,
+    mesh: SceneMesh,
+    triangle: u32,
+    w: Vec3,
+    p_ws: Vec3,
+    n_ws: Vec3,
+) -> TexelMaterial {
+    match mesh {
+        SceneMesh::Refractor => refractor_material(scene),
+        SceneMesh::Object(k) => {
+            let object = &scene.objects[k];
+            match object.conductor() {
+                Some(c) => TexelMaterial {
+                    rgb: c.f0(),
+                    ior: -1.0,
+                },
+                None => TexelMaterial {
+                    rgb: object.shade(
+                        &scene.light,
+                        object.uv_at(triangle, Vec2::new(w.y, w.z), p_ws),
+                        n_ws,
+                    ),
+                    ior: 0.0,
+                },
+            }
+        }
+    }
+}
+
+impl DistanceMapScene for MapScene<'_> {
+    fn surface(&self, layer: usize, dir: Vec3) -> TexelSurface {
+        let size = self.map.size;
+        let empty = TexelSurface {
+            normal: Vec3::Z,
+            material: TexelMaterial {
+                rgb: Vec3::ZERO,
+                ior: 0.0,
+            },
+        };
+        let Some((face, texel)) = cube_texel(dir, size) else {
+            return empty;
+        };
+        let buffer = &self.map.layers[layer].faces[face as usize];
+        let Some(t) = buffer.texel((texel.y * size + texel.x) as usize) else {
+            return empty;
+        };
+        let meshes = match LayerContent::of(layer) {
+            LayerContent::SpecularFront | LayerContent::SpecularBack => &self.map.specular,
+            LayerContent::Others(_) => &self.map.others,
+        };
+        let (mesh, triangle) = meshes.source(t.triangle);
+        let w = meshes.raster().barycentrics(&t);
+        TexelSurface {
+            normal: t.n_ws,
+            material: surface_material(self.scene, mesh, triangle, w, t.p_ws, t.n_ws),
+        }
+    }
+
+    #[inline]
+    fn background(&self, dir: Vec3) -> Vec3 {
+        self.scene.environment.radiance(dir)
+    }
+}
+
+/// Per-pixel outputs beside the colour.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct DistanceAov {
+    covered: bool,
+    hit_layer: u32,
+    linear_steps: u32,
+    secant_steps: u32,
+    bounces: u32,
+    miss: bool,
+    tir: bool,
+}
+
+impl DistanceAov {
+    fn of(result: &PathResult) -> Self {
+        Self {
+            covered: true,
+            hit_layer: result.last_layer.map_or(0, |l| l + 1),
+            linear_steps: result.work.linear_steps,
+            secant_steps: result.work.secant_steps,
+            bounces: result.bounces,
+            miss: result.miss,
+            tir: result.tir,
+        }
+    }
+}
+
+/// The layer a surface seen from the eye lies in: the specular object's faces turned away
+/// from the reference point are in the back layer, those toward it in the front layer; other
+/// geometry in the first of the others.
+pub fn start_layer(mesh: SceneMesh, p_ws: Vec3, n_ws: Vec3, center: Vec3) -> usize {
+    match mesh {
+        SceneMesh::Refractor if n_ws.dot(p_ws - center) >= 0.0 => 1,
+        SceneMesh::Refractor => 0,
+        SceneMesh::Object(_) => 2,
+    }
+}
+
+/// The CPU passes of `distance-map`; buffers are kept between frames.
+#[derive(Default)]
+pub struct DistancePasses {
+    map: DistanceMap,
+    everything: SceneMeshes,
+    camera: SurfaceBuffer,
+    aovs: Vec<DistanceAov>,
+}
+
+impl DistancePasses {
+    /// Prepares the meshes of `scene`.
+    pub fn prepare(&mut self, scene: &Scene) {
+        self.map.prepare(scene);
+        self.everything = SceneMeshes::everything(scene);
+    }
+
+    /// The distance map of the last frame.
+    pub fn map(&self) -> &DistanceMap {
+        &self.map
+    }
+
+    /// One frame: the distance map, the eye pass, the paths.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        params: &DistanceMapParams,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        self.map
+            .render(scene, params.layers as usize, params.resolution)?;
+        let (width, height) = (camera.width(), camera.height());
+        let n = (width * height) as usize;
+        frame.resize_for_overwrite(width, height);
+        let raster = self.everything.raster();
+        rasterize_into(
+            &raster,
+            camera,
+            Faces::Front,
+            DepthTest::Nearest,
+            &mut self.camera,
+        );
+        let with_aovs = outputs == FrameOutputs::ColorAndAovs;
+        self.aovs
+            .resize(if with_aovs { n } else { 0 }, DistanceAov::default());
+        let map_scene = MapScene {
+            map: &self.map,
+            scene,
+        };
+        let center = self.map.center;
+        let everything = &self.everything;
+        let buffer = &self.camera;
+        let path = params.path;
+        let shade = |i: usize| -> (Vec3, DistanceAov) {
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            let Some(t) = buffer.texel(i) else {
+                let dir = camera.pixel_ray(Camera::pixel_center(x, y)).dir;
+                return (scene.environment.radiance(dir), DistanceAov::default());
+            };
+            let (mesh, triangle) = everything.source(t.triangle);
+            let w = raster.barycentrics(&t);
+            let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
+            if material.ior == 0.0 {
+                return (material.rgb, DistanceAov::default());
+            }
+            let v = (t.p_ws - camera.eye()).normalize();
+            let start = PathStart {
+                x: t.p_ws - center,
+                v,
+                n: t.n_ws,
+                material,
+                layer: Some(start_layer(mesh, t.p_ws, t.n_ws, center)),
+            };
+            let result = trace_path(&map_scene, &start, &path);
+            (result.radiance, DistanceAov::of(&result))
+        };
+        if with_aovs {
+            frame
+                .color
+                .par_iter_mut()
+                .zip(self.aovs.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (c, a))| (*c, *a) = shade(i));
+            write_layers(&self.aovs, MethodId::DistanceMap, frame);
+        } else {
+            frame
+                .color
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, c)| *c = shade(i).0);
+        }
+        Ok(())
+    }
+}
+
+/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
+fn write_layers(aovs: &[DistanceAov], method: MethodId, frame: &mut Frame) {
+    for &aov in method.info().aovs {
+        match aov {
+            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
+            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
+            Aov::Miss => fill(frame.flag_mut(aov), aovs, |a| a.miss),
+            Aov::HitLayer => fill(frame.count_mut(aov), aovs, |a| a.hit_layer),
+            Aov::LinearSteps => fill(frame.count_mut(aov), aovs, |a| a.linear_steps),
+            Aov::SecantSteps => fill(frame.count_mut(aov), aovs, |a| a.secant_steps),
+            Aov::Bounces => fill(frame.count_mut(aov), aovs, |a| a.bounces),
+            other => unreachable!("distance-map does not compute {}", other.name()),
+        }
+    }
+}
