@@ -110,3 +110,88 @@ fn test_seed_fraction(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= arrayLength(&out_v) { return; }
     out_v[i] = vec4<f32>(screen_fraction_to_segment(in_a[i].x, in_a[i].y, in_a[i].z), 0.0, 0.0, 0.0);
 }
+
+// ---- distance maps: refract_core::distance_map::AnalyticRoom (64² faces) ----
+
+const ANALYTIC_SIZE: u32 = 64u;
+
+fn analytic_centre(dir: vec3<f32>) -> vec3<f32> {
+    let t = dm_cube_texel(dir, ANALYTIC_SIZE);
+    if t.w == 0 {
+        return vec3<f32>(0.0, 0.0, 1.0);
+    }
+    return normalize(dm_cube_texel_direction(t.x, t.yz, ANALYTIC_SIZE));
+}
+
+fn dm_layer_count() -> u32 { return 2u; }
+fn dm_face_size() -> u32 { return ANALYTIC_SIZE; }
+fn dm_two_sided(layer: u32) -> bool { return layer == 0u; }
+fn dm_background(dir: vec3<f32>) -> vec3<f32> { return vec3<f32>(7.0); }
+
+fn dm_distance(layer: u32, dir: vec3<f32>) -> f32 {
+    let c = analytic_centre(dir);
+    if layer == 0u {
+        return select(1.0, -1.0, c.y > 0.8);
+    }
+    return 3.0 / max(abs(c.x), max(abs(c.y), abs(c.z)));
+}
+
+fn dm_range(layer: u32) -> vec3<f32> {
+    if layer == 0u {
+        return vec3<f32>(1.0, 1.0, 1.0);
+    }
+    return vec3<f32>(3.0, 3.0 * sqrt(3.0), 1.0);
+}
+
+fn dm_surface(layer: u32, dir: vec3<f32>) -> DmSurface {
+    let c = analytic_centre(dir);
+    var out: DmSurface;
+    if layer == 0u {
+        out.normal = c;
+        out.rgb = vec3<f32>(1.0);
+        out.ior = -1.0;
+        return out;
+    }
+    let a = abs(c);
+    if a.x >= a.y && a.x >= a.z {
+        out.normal = vec3<f32>(-sign(c.x), 0.0, 0.0);
+    } else if a.y >= a.z {
+        out.normal = vec3<f32>(0.0, -sign(c.y), 0.0);
+    } else {
+        out.normal = vec3<f32>(0.0, 0.0, -sign(c.z));
+    }
+    out.rgb = vec3<f32>(0.5, 0.25, 0.125);
+    out.ior = 0.0;
+    return out;
+}
+
+// a = (dir, size) -> (face, x, y, valid) of dm_cube_texel
+@compute @workgroup_size(64)
+fn test_dm_texel(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(dm_cube_texel(in_a[i].xyz, u32(in_a[i].w)));
+}
+
+// a = (x, start layer or -1), b = (R, min_max) -> (d or -1, layer, linear steps, secant steps)
+// with the default search (15..80 linear steps, 5 secant steps)
+@compute @workgroup_size(64)
+fn test_dm_hit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let search = DmSearch(15u, 80u, 5u, in_b[i].w > 0.5);
+    let h = dm_hit(in_a[i].xyz, in_b[i].xyz, i32(in_a[i].w), search);
+    out_v[i] = vec4<f32>(select(-1.0, h.d, h.found), f32(h.layer), f32(h.linear_steps), f32(h.secant_steps));
+}
+
+// a = (x on the mirror sphere, max depth), b = (V, _) -> (radiance, bounces) of dm_trace_path
+// from a mirror (F_p 0.9) with outward normal normalize(x), start layer 0
+@compute @workgroup_size(64)
+fn test_dm_path(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let x = in_a[i].xyz;
+    let search = DmSearch(15u, 80u, 5u, true);
+    let path = dm_trace_path(x, in_b[i].xyz, normalize(x), vec3<f32>(0.9), -1.0, 0, search, u32(in_a[i].w), DM_FRESNEL_IGNORE);
+    out_v[i] = vec4<f32>(path.radiance, f32(path.bounces));
+}

@@ -64,9 +64,40 @@ struct SurfaceOut {
 // Any surface: (P, scalar), (normalised N, 1), (uv, object id, 1). Empty texels are cleared to 0.
 @fragment
 fn fs_surface(in: VertexOut) -> SurfaceOut {
+    return surface_out(in);
+}
+
+fn surface_out(in: VertexOut) -> SurfaceOut {
     var out: SurfaceOut;
     out.p_scalar = vec4<f32>(in.p_ws, in.d_n);
     out.n_covered = vec4<f32>(try_normalize(in.n_ws).xyz, 1.0);
     out.uv_object = vec4<f32>(in.uv, f32(in.object), 1.0);
     return out;
+}
+
+// Depth peeling (the distance-map layers beyond the first of the other geometry): the previous
+// layer's face (P, N) and the reference point. A fragment survives when the previous layer has
+// a surface at this texel and the fragment is farther from the reference point by more than
+// the relative margin (refract_cpu::distance_map::PEEL_MARGIN).
+struct PeelUniforms {
+    center: vec4<f32>,
+    margin: f32,
+    _padding: vec3<f32>,
+}
+
+@group(1) @binding(0) var peel_prev_p: texture_2d<f32>;
+@group(1) @binding(1) var peel_prev_n: texture_2d<f32>;
+@group(1) @binding(2) var<uniform> peel: PeelUniforms;
+
+@fragment
+fn fs_surface_peel(in: VertexOut) -> SurfaceOut {
+    let texel = vec2<i32>(in.clip.xy);
+    if textureLoad(peel_prev_n, texel, 0).w < 0.5 {
+        discard;
+    }
+    let previous = length(textureLoad(peel_prev_p, texel, 0).xyz - peel.center.xyz);
+    if length(in.p_ws - peel.center.xyz) <= previous * (1.0 + peel.margin) {
+        discard;
+    }
+    return surface_out(in);
 }

@@ -19,7 +19,7 @@ fn nearby_geometry(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu/chart");
     group.sample_size(10);
     group.throughput(Throughput::Elements(u64::from(RES * RES)));
-    let (mut texture, meshes) = (NearbyTexture::default(), NearbyMeshes::new(&scene));
+    let (mut texture, meshes) = (NearbyTexture::default(), NearbyMeshes::objects(&scene));
     group.bench_function("ng-pass", |b| {
         b.iter(|| texture.render_into(&scene, &meshes, &camera))
     });

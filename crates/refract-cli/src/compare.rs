@@ -122,6 +122,11 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
             renderer.prepare(scene)?;
         }
         for method in &options.methods {
+            if let Err(reason) = refract_scene::scene_support(method.id(), scene) {
+                eprintln!("note: {reason}: skipped");
+                progress.inc(renderers.len() as u64);
+                continue;
+            }
             for renderer in &mut renderers {
                 let mut frame = Frame::default();
                 renderer.render(&camera, method, FrameOutputs::ColorAndAovs, &mut frame)?;

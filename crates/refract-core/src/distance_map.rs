@@ -412,6 +412,15 @@ pub enum DielectricFresnel {
     Split,
 }
 
+/// The code of a [`DielectricFresnel`] in the WGSL twin (`DM_FRESNEL_*`).
+pub const fn fresnel_code(fresnel: DielectricFresnel) -> u32 {
+    match fresnel {
+        DielectricFresnel::Ignore => 0,
+        DielectricFresnel::Schlick => 1,
+        DielectricFresnel::Split => 2,
+    }
+}
+
 /// The settings of [`trace_path`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PathParams {
@@ -588,84 +597,90 @@ fn continue_path<S: DistanceMapScene + ?Sized>(
     }
 }
 
+/// Analytic layers for tests and the WGSL conformance harness (`shaders/conformance.wgsl`
+/// has the same): layer 0 a mirror sphere of radius 1 around `o` (`F_p` = 1; empty where the
+/// texel-centre direction has `y > 0.8`), two-sided; layer 1 the diffuse cube `|p|∞ = 3` of
+/// radiance `(0.5, 0.25, 0.125)`; a background of 7. Both sampled at texel centres of a
+/// `size²` cube map, like a rasterised map.
+pub struct AnalyticRoom {
+    /// Texels per face edge.
+    pub size: u32,
+}
+
+fn analytic_texel_centre(dir: Vec3, size: u32) -> (Vec3, u32) {
+    match cube_texel(dir, size) {
+        Some((face, texel)) => (
+            cube_texel_direction(face, texel, size).normalize(),
+            cube_texel_index(face, texel, size),
+        ),
+        None => (Vec3::Z, 0),
+    }
+}
+
+impl DistanceLayers for AnalyticRoom {
+    fn layer_count(&self) -> usize {
+        2
+    }
+    fn face_size(&self) -> u32 {
+        self.size
+    }
+    fn distance(&self, layer: usize, dir: Vec3) -> f32 {
+        let (c, _) = analytic_texel_centre(dir, self.size);
+        match layer {
+            0 if c.y > 0.8 => -1.0,
+            0 => 1.0,
+            _ => 3.0 / c.abs().max_element(),
+        }
+    }
+    fn two_sided(&self, layer: usize) -> bool {
+        layer == 0
+    }
+    fn range(&self, layer: usize) -> Option<(f32, f32)> {
+        Some(if layer == 0 {
+            (1.0, 1.0)
+        } else {
+            (3.0, 3.0 * 3f32.sqrt())
+        })
+    }
+}
+
+impl DistanceMapScene for AnalyticRoom {
+    fn surface(&self, layer: usize, dir: Vec3) -> TexelSurface {
+        let (c, _) = analytic_texel_centre(dir, self.size);
+        if layer == 0 {
+            TexelSurface {
+                normal: c,
+                material: TexelMaterial {
+                    rgb: Vec3::ONE,
+                    ior: -1.0,
+                },
+            }
+        } else {
+            let a = c.abs();
+            let n = if a.x >= a.y && a.x >= a.z {
+                Vec3::new(-c.x.signum(), 0.0, 0.0)
+            } else if a.y >= a.z {
+                Vec3::new(0.0, -c.y.signum(), 0.0)
+            } else {
+                Vec3::new(0.0, 0.0, -c.z.signum())
+            };
+            TexelSurface {
+                normal: n,
+                material: TexelMaterial {
+                    rgb: Vec3::new(0.5, 0.25, 0.125),
+                    ior: 0.0,
+                },
+            }
+        }
+    }
+    fn background(&self, _dir: Vec3) -> Vec3 {
+        Vec3::splat(7.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Analytic layers: layer 0 a sphere of radius 1 around `o` (empty where `dir.y > 0.8`),
-    /// layer 1 the cube `|p|∞ = 3`; both sampled at the texel centre of a 64² cube map.
-    struct Analytic {
-        size: u32,
-    }
-
-    fn texel_centre(dir: Vec3, size: u32) -> (Vec3, u32) {
-        let (face, texel) = cube_texel(dir, size).expect("direction");
-        (
-            cube_texel_direction(face, texel, size).normalize(),
-            cube_texel_index(face, texel, size),
-        )
-    }
-
-    impl DistanceLayers for Analytic {
-        fn layer_count(&self) -> usize {
-            2
-        }
-        fn face_size(&self) -> u32 {
-            self.size
-        }
-        fn distance(&self, layer: usize, dir: Vec3) -> f32 {
-            let (c, _) = texel_centre(dir, self.size);
-            match layer {
-                0 if c.y > 0.8 => -1.0,
-                0 => 1.0,
-                _ => 3.0 / c.abs().max_element(),
-            }
-        }
-        fn two_sided(&self, layer: usize) -> bool {
-            layer == 0
-        }
-        fn range(&self, layer: usize) -> Option<(f32, f32)> {
-            Some(if layer == 0 {
-                (1.0, 1.0)
-            } else {
-                (3.0, 3.0 * 3f32.sqrt())
-            })
-        }
-    }
-
-    impl DistanceMapScene for Analytic {
-        fn surface(&self, layer: usize, dir: Vec3) -> TexelSurface {
-            let (c, _) = texel_centre(dir, self.size);
-            if layer == 0 {
-                TexelSurface {
-                    normal: c,
-                    material: TexelMaterial {
-                        rgb: Vec3::ONE,
-                        ior: -1.0,
-                    },
-                }
-            } else {
-                let a = c.abs();
-                let n = if a.x >= a.y && a.x >= a.z {
-                    Vec3::new(-c.x.signum(), 0.0, 0.0)
-                } else if a.y >= a.z {
-                    Vec3::new(0.0, -c.y.signum(), 0.0)
-                } else {
-                    Vec3::new(0.0, 0.0, -c.z.signum())
-                };
-                TexelSurface {
-                    normal: n,
-                    material: TexelMaterial {
-                        rgb: Vec3::new(0.5, 0.25, 0.125),
-                        ior: 0.0,
-                    },
-                }
-            }
-        }
-        fn background(&self, _dir: Vec3) -> Vec3 {
-            Vec3::splat(7.0)
-        }
-    }
 
     #[test]
     fn texel_selection_round_trips_through_texel_centres() {
@@ -720,7 +735,7 @@ mod tests {
     /// outward it meets the cube wall at `|p|∞ = 3`, within a texel after the secant steps.
     #[test]
     fn hits_land_on_the_analytic_surfaces() {
-        let layers = Analytic { size: 64 };
+        let layers = AnalyticRoom { size: 64 };
         for min_max in [false, true] {
             let params = SearchParams {
                 min_max,
@@ -746,7 +761,7 @@ mod tests {
 
     #[test]
     fn secant_steps_refine_the_linear_bracket() {
-        let layers = Analytic { size: 64 };
+        let layers = AnalyticRoom { size: 64 };
         let x = Vec3::new(0.0, -0.6, 0.8);
         let r = Vec3::new(0.2, -0.3, 0.9).normalize();
         let exact = {
@@ -776,7 +791,7 @@ mod tests {
 
     #[test]
     fn paths_reflect_and_end_on_diffuse_or_background() {
-        let scene = Analytic { size: 64 };
+        let scene = AnalyticRoom { size: 64 };
         // A mirror point on the sphere, seen from outside along −z: reflected back toward +z,
         // where the cube wall is diffuse.
         let start = PathStart {

@@ -205,6 +205,39 @@ pub fn wgsl_constants() -> String {
         format!("const ENVIRONMENT_LATLONG: u32 = {ENVIRONMENT_LATLONG}u;"),
         format!("const ENVIRONMENT_CONSTANT: u32 = {ENVIRONMENT_CONSTANT}u;"),
         format!(
+            "const DM_T_START: f32 = {};",
+            f(crate::distance_map::T_START)
+        ),
+        format!("const DM_T_END: f32 = {};", f(crate::distance_map::T_END)),
+        format!(
+            "const DM_SECANT_TOLERANCE: f32 = {};",
+            f(crate::distance_map::SECANT_TOLERANCE)
+        ),
+        format!(
+            "const DM_MIN_MAX_MARGIN: f32 = {};",
+            f(crate::distance_map::MIN_MAX_MARGIN)
+        ),
+        format!(
+            "const DM_START_SKIP_TEXELS: f32 = {};",
+            f(crate::distance_map::START_SKIP_TEXELS)
+        ),
+        format!(
+            "const DM_MAX_LAYERS: u32 = {}u;",
+            crate::distance_map::MAX_LAYERS
+        ),
+        format!(
+            "const DM_FRESNEL_IGNORE: u32 = {}u;",
+            crate::distance_map::fresnel_code(crate::distance_map::DielectricFresnel::Ignore)
+        ),
+        format!(
+            "const DM_FRESNEL_SCHLICK: u32 = {}u;",
+            crate::distance_map::fresnel_code(crate::distance_map::DielectricFresnel::Schlick)
+        ),
+        format!(
+            "const DM_FRESNEL_SPLIT: u32 = {}u;",
+            crate::distance_map::fresnel_code(crate::distance_map::DielectricFresnel::Split)
+        ),
+        format!(
             "const EXIT_NORMAL_BACK_FACE: u32 = {}u;",
             exit_normal_source_code(ExitNormalSource::BackFace)
         ),

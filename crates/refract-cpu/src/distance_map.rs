@@ -75,21 +75,6 @@ pub struct DistanceMap {
     floor_depth: Vec<f32>,
 }
 
-/// Distances of the reference point's surroundings: the near plane of the face cameras (a
-/// thousandth of the specular object's radius) and a far plane beyond every vertex.
-fn clip_planes(scene: &Scene, center: Vec3) -> (f32, f32) {
-    let radius = scene.refractor.mesh().bounding_sphere().radius;
-    let mut far: f32 = 0.0;
-    for mesh in
-        core::iter::once(scene.refractor.mesh()).chain(scene.objects.iter().map(|o| o.mesh()))
-    {
-        for p in &mesh.positions {
-            far = far.max((*p - center).length());
-        }
-    }
-    (1e-3 * radius.max(1e-6), 2.0 * far + 1.0)
-}
-
 impl DistanceMap {
     /// Prepares the meshes of `scene` (once per scene).
     pub fn prepare(&mut self, scene: &Scene) {
@@ -109,7 +94,7 @@ impl DistanceMap {
         let layers = layers.clamp(3, MAX_LAYERS);
         self.size = size;
         self.center = scene.refractor.mesh().bounding_sphere().center;
-        let (near, far) = clip_planes(scene, self.center);
+        let (near, far) = scene.cube_map_clip_planes(self.center);
         self.layers.resize_with(layers, Layer::default);
         let texels = (size * size) as usize;
         for index in 0..layers {

@@ -9,7 +9,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::shaders::module_source;
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 12] = [
+pub const ENTRY_POINTS: [&str; 15] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
@@ -22,6 +22,9 @@ pub const ENTRY_POINTS: [&str; 12] = [
     "test_procedural_sky",
     "test_plane",
     "test_seed_fraction",
+    "test_dm_texel",
+    "test_dm_hit",
+    "test_dm_path",
 ];
 
 /// Evaluates `entry` on `a[i], b[i]` for every row and returns one `Vec4` per row.

@@ -14,6 +14,7 @@ use refract_scene::{
 
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
+use crate::methods::distance_map::{DistanceMapPipelines, DistanceMapTargets};
 use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines, ImageSpaceTargets};
 use crate::methods::nearby_geometry::{NearbyFrame, NearbyPipelines, NearbyTargets};
 use crate::passes::raster::RasterPipelines;
@@ -34,10 +35,12 @@ pub struct GpuRenderer {
     raster: RasterPipelines,
     image_space: ImageSpacePipelines,
     nearby: NearbyPipelines,
+    distance_map: DistanceMapPipelines,
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     targets: Option<ImageSpaceTargets>,
     nearby_targets: Option<NearbyTargets>,
+    distance_targets: Option<DistanceMapTargets>,
 }
 
 impl GpuRenderer {
@@ -48,11 +51,12 @@ impl GpuRenderer {
 
     /// Compiles the pipelines on `context`.
     pub fn with_context(context: GpuContext) -> Result<Self, GpuError> {
-        let (raster, image_space, nearby) = context.checked(|| {
+        let (raster, image_space, nearby, distance_map) = context.checked(|| {
             (
                 RasterPipelines::new(&context.device),
                 ImageSpacePipelines::new(&context.device),
                 NearbyPipelines::new(&context.device),
+                DistanceMapPipelines::new(&context.device),
             )
         })?;
         let timestamps = Timestamps::new(&context);
@@ -61,10 +65,12 @@ impl GpuRenderer {
             raster,
             image_space,
             nearby,
+            distance_map,
             timestamps,
             scene: None,
             targets: None,
             nearby_targets: None,
+            distance_targets: None,
         })
     }
 
@@ -185,6 +191,61 @@ impl GpuRenderer {
         })
     }
 
+    /// One frame of `distance-map` (Umenhoffer et al. 2007).
+    fn distance_map(
+        &mut self,
+        camera: &Camera,
+        params: &refract_scene::DistanceMapParams,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        let (scene, gpu_scene) = self
+            .scene
+            .as_ref()
+            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
+        let size = (camera.width(), camera.height());
+        if !self
+            .distance_targets
+            .as_ref()
+            .is_some_and(|t| t.fits(size, params))
+        {
+            self.distance_targets = None;
+            self.distance_targets = Some(DistanceMapTargets::new(
+                &self.context,
+                &self.raster,
+                &self.distance_map,
+                gpu_scene,
+                size,
+                params,
+            )?);
+        }
+        let Some(targets) = &self.distance_targets else {
+            unreachable!("allocated above")
+        };
+        let start = Instant::now();
+        let mut encoder =
+            self.context
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("distance-map frame"),
+                });
+        targets.encode(
+            &self.context,
+            &self.raster,
+            &self.distance_map,
+            gpu_scene,
+            scene,
+            camera,
+            params,
+            outputs,
+            self.timestamps.as_ref(),
+            &mut encoder,
+        )?;
+        let timing = self.submit(encoder, start)?;
+        targets.read(&self.context, outputs, frame)?;
+        Ok(timing)
+    }
+
     /// One frame of a nearby-geometry method (Wyman 2005b).
     fn nearby_geometry(
         &mut self,
@@ -273,8 +334,8 @@ impl Renderer for GpuRenderer {
             MethodParams::Reference(_) => false,
             MethodParams::Single
             | MethodParams::TwoInterface(_)
-            | MethodParams::NearbyGeometry(_) => true,
-            MethodParams::DistanceMap(_) => false,
+            | MethodParams::NearbyGeometry(_)
+            | MethodParams::DistanceMap(_) => true,
         }
     }
 
@@ -284,6 +345,7 @@ impl Renderer for GpuRenderer {
             .checked(|| GpuScene::new(&self.context.device, scene))?;
         self.targets = None; // bound to the old scene's environment buffer
         self.nearby_targets = None;
+        self.distance_targets = None;
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }
@@ -295,14 +357,17 @@ impl Renderer for GpuRenderer {
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<FrameTiming, RenderError> {
-        let ior = self
+        let scene = &self
             .scene
             .as_ref()
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?
-            .0
-            .refractor
-            .ior();
+            .0;
+        let ior = scene.refractor.ior();
         let id = method.id();
+        refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
+        if let MethodParams::DistanceMap(p) = method {
+            return self.distance_map(camera, p, outputs, frame);
+        }
         let unsupported = || RenderError::Unsupported {
             backend: BackendId::Gpu,
             method: id,

@@ -5,7 +5,7 @@ use refract_core::gpu::wgsl_constants;
 
 /// Every `.wgsl` file, by name: the core twin from `refract_core::wgsl`, the passes and
 /// methods from `shaders/`.
-pub const FILES: [(&str, &str); 8] = [
+pub const FILES: [(&str, &str); 11] = [
     ("core.wgsl", refract_core::wgsl::CORE),
     ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY),
     ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
@@ -17,6 +17,18 @@ pub const FILES: [(&str, &str); 8] = [
     (
         "image_space.wgsl",
         include_str!("../../../shaders/image_space.wgsl"),
+    ),
+    (
+        "materials.wgsl",
+        include_str!("../../../shaders/materials.wgsl"),
+    ),
+    (
+        "distance_search.wgsl",
+        include_str!("../../../shaders/distance_search.wgsl"),
+    ),
+    (
+        "distance_map.wgsl",
+        include_str!("../../../shaders/distance_map.wgsl"),
     ),
     (
         "nearby_geometry.wgsl",
@@ -58,7 +70,7 @@ fn compose(parts: &[&str]) -> String {
 }
 
 /// The modules the backend compiles: `(name, files it is made of)`.
-pub const MODULES: [(&str, &[&str]); 4] = [
+pub const MODULES: [(&str, &[&str]); 5] = [
     ("raster", &["core.wgsl", "frame.wgsl", "raster.wgsl"]),
     (
         "image_space",
@@ -78,12 +90,30 @@ pub const MODULES: [(&str, &[&str]); 4] = [
             "frame.wgsl",
             "environment.wgsl",
             "image_space.wgsl",
+            "materials.wgsl",
             "nearby_geometry.wgsl",
         ],
     ),
     (
+        "distance_map",
+        &[
+            "core.wgsl",
+            "procedural_sky.wgsl",
+            "frame.wgsl",
+            "environment.wgsl",
+            "materials.wgsl",
+            "distance_search.wgsl",
+            "distance_map.wgsl",
+        ],
+    ),
+    (
         "conformance",
-        &["core.wgsl", "procedural_sky.wgsl", "conformance.wgsl"],
+        &[
+            "core.wgsl",
+            "procedural_sky.wgsl",
+            "distance_search.wgsl",
+            "conformance.wgsl",
+        ],
     ),
 ];
 

@@ -199,4 +199,84 @@ proptest! {
             prop_assert!(close(lambdas[k].x, lambda, 1e-5), "{} vs {}", lambdas[k].x, lambda);
         }
     }
+
+    /// Umenhoffer et al. 2007 on analytic layers (`AnalyticRoom`): cube texels exactly; hits
+    /// (distance, layer, step counts) and mirror paths (radiance, bounces). A sample that lands
+    /// within rounding of a texel edge or of `|r|/|r'| = 1` may decide differently: at most two
+    /// such rows of 256 per batch.
+    #[test]
+    fn distance_map_search_and_paths_agree(
+        rows in prop::collection::vec((unit(), 0.0f32..0.95, unit(), any::<bool>(), 1u32..4), ROWS)
+    ) {
+        use refract_core::distance_map::{
+            AnalyticRoom, PathParams, PathStart, SearchParams, TexelMaterial, cube_texel,
+            cube_texel_index, hit, trace_path,
+        };
+        let context = gpu_or_skip!();
+        let room = AnalyticRoom { size: 64 };
+        let texels_in: Vec<Vec4> = rows.iter().map(|(d, ..)| d.extend(64.0)).collect();
+        let texels = evaluate(context, "test_dm_texel", &texels_in, &texels_in).expect("gpu");
+        for (k, (d, ..)) in rows.iter().enumerate() {
+            let (face, t) = cube_texel(*d, 64).expect("direction");
+            let gpu = texels[k];
+            prop_assert_eq!(
+                (gpu.x as u32, gpu.y as u32, gpu.z as u32, gpu.w),
+                (face as u32, t.x, t.y, 1.0)
+            );
+        }
+        let _ = cube_texel_index;
+        // Rays from inside the sphere (start layer none) and from its surface (layer 0).
+        let a: Vec<Vec4> = rows
+            .iter()
+            .map(|(d, s, _, on_surface, _)| {
+                if *on_surface { d.extend(0.0) } else { (*d * *s).extend(-1.0) }
+            })
+            .collect();
+        let b: Vec<Vec4> = rows
+            .iter()
+            .enumerate()
+            .map(|(k, (_, _, r, _, _))| r.extend((k % 2) as f32))
+            .collect();
+        let hits = evaluate(context, "test_dm_hit", &a, &b).expect("gpu");
+        let mut mismatches = 0;
+        for k in 0..ROWS {
+            let search = SearchParams { min_max: k % 2 == 1, ..SearchParams::default() };
+            let start = (a[k].w >= 0.0).then_some(0);
+            let (h, work) = hit(&room, a[k].truncate(), b[k].truncate(), start, &search);
+            let gpu = hits[k];
+            let same = match h {
+                None => gpu.x < 0.0,
+                Some(h) => close(gpu.x, h.d, 1e-4) && gpu.y as u32 == h.layer,
+            } && gpu.z as u32 == work.linear_steps && gpu.w as u32 == work.secant_steps;
+            mismatches += usize::from(!same);
+        }
+        prop_assert!(mismatches <= 2, "{} hit mismatches", mismatches);
+        // Mirror paths from the sphere toward the inside of the room (V with V·N < 0).
+        let a: Vec<Vec4> = rows.iter().map(|(d, .., depth)| d.extend(*depth as f32)).collect();
+        let b: Vec<Vec4> = rows
+            .iter()
+            .map(|(d, _, r, ..)| {
+                let v = if r.dot(*d) < 0.0 { *r } else { -*r };
+                v.extend(0.0)
+            })
+            .collect();
+        let paths = evaluate(context, "test_dm_path", &a, &b).expect("gpu");
+        let mut mismatches = 0;
+        for k in 0..ROWS {
+            let x = a[k].truncate();
+            let start = PathStart {
+                x,
+                v: b[k].truncate(),
+                n: x.normalize(),
+                material: TexelMaterial { rgb: Vec3::splat(0.9), ior: -1.0 },
+                layer: Some(0),
+            };
+            let params = PathParams { max_depth: a[k].w as u32, ..PathParams::default() };
+            let rust = trace_path(&room, &start, &params);
+            let gpu = paths[k];
+            let same = close3(gpu, rust.radiance, 1e-4) && gpu.w as u32 == rust.bounces;
+            mismatches += usize::from(!same);
+        }
+        prop_assert!(mismatches <= 2, "{} path mismatches", mismatches);
+    }
 }

@@ -481,6 +481,18 @@ impl Scene {
         self.refractor.is_dielectric() && self.objects.iter().all(|o| o.conductor().is_none())
     }
 
+    /// The near and far planes of cube-map face cameras at `center` (the distance-map layers):
+    /// a thousandth of the refractor's bounding radius, and twice the distance of the farthest
+    /// vertex of any mesh plus one.
+    pub fn cube_map_clip_planes(&self, center: Vec3) -> (f32, f32) {
+        let radius = self.refractor.mesh().bounding_sphere().radius;
+        let far = core::iter::once(self.refractor.mesh())
+            .chain(self.objects.iter().map(Object::mesh))
+            .flat_map(|m| m.positions.iter())
+            .fold(0.0f32, |far, p| far.max((*p - center).length()));
+        (1e-3 * radius.max(1e-6), 2.0 * far + 1.0)
+    }
+
     /// The planes standing for the opaque objects in the ray-plane and iterative lookups
     /// (Wyman 2005b §4.2) for a camera looking along `look_dir`, one per object
     /// ([`Object::stand_in_plane`]), at most

@@ -1,5 +1,6 @@
 //! One module per method family, the same names as the CPU backend's.
 
+pub(crate) mod distance_map;
 pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
 
@@ -69,5 +70,12 @@ impl MethodPipelines {
             .find(|(m, o, _)| *m == method && *o == outputs)
             .map(|(_, _, p)| p)
             .expect("a pipeline for every method of the family")
+    }
+}
+
+/// Fills a frame layer from a per-pixel getter (the decoded output buffers).
+pub(crate) fn fill<T>(out: &mut [T], get: impl Fn(usize) -> T) {
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = get(i);
     }
 }

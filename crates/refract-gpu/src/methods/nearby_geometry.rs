@@ -15,8 +15,8 @@ use refract_scene::{Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
-use crate::methods::MethodPipelines;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
+use crate::methods::{MethodPipelines, fill};
 use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
@@ -327,12 +327,6 @@ impl NearbyTargets {
             }
         }
         Ok(())
-    }
-}
-
-fn fill<T>(out: &mut [T], get: impl Fn(usize) -> T) {
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = get(i);
     }
 }
 

@@ -23,6 +23,13 @@ pub(crate) enum RasterKind {
     FrontFaces,
     /// Nearest front faces of any surface: (P, scalar), (N, 1), (uv, object, 1).
     Surface,
+    /// [`RasterKind::Surface`] of the nearest back faces (a distance-map layer).
+    SurfaceBack,
+    /// [`RasterKind::Surface`] of the nearest face of either orientation.
+    SurfaceBoth,
+    /// [`RasterKind::SurfaceBoth`] behind the previous layer (depth peeling, `fs_surface_peel`,
+    /// with the [`RasterPipelines::peel_layout`] group 1).
+    SurfacePeel,
 }
 
 impl RasterKind {
@@ -30,7 +37,10 @@ impl RasterKind {
         match self {
             RasterKind::BackFaces(_) => 1,
             RasterKind::FrontFaces => 2,
-            RasterKind::Surface => 3,
+            RasterKind::Surface
+            | RasterKind::SurfaceBack
+            | RasterKind::SurfaceBoth
+            | RasterKind::SurfacePeel => 3,
         }
     }
 
@@ -57,17 +67,22 @@ impl RasterKind {
     }
 }
 
-const KINDS: [RasterKind; 4] = [
+const KINDS: [RasterKind; 7] = [
     RasterKind::BackFaces(BackSurface::Furthest),
     RasterKind::BackFaces(BackSurface::Second),
     RasterKind::FrontFaces,
     RasterKind::Surface,
+    RasterKind::SurfaceBack,
+    RasterKind::SurfaceBoth,
+    RasterKind::SurfacePeel,
 ];
 
 /// The raster pipelines: every [`RasterKind`] for both windings.
 pub(crate) struct RasterPipelines {
     /// Binding 0: the frame uniforms.
     pub layout: wgpu::BindGroupLayout,
+    /// Group 1 of [`RasterKind::SurfacePeel`]: the previous layer's P and N, the peel uniforms.
+    pub peel_layout: wgpu::BindGroupLayout,
     pipelines: Vec<(RasterKind, bool, wgpu::RenderPipeline)>,
 }
 
@@ -86,6 +101,23 @@ impl RasterPipelines {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let fragment_texture = |binding| wgpu::BindGroupLayoutEntry {
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ..crate::bindings::texture_entry(binding)
+        };
+        let peel_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raster peel"),
+            entries: &[
+                fragment_texture(0),
+                fragment_texture(1),
+                uniform_entry(2, wgpu::ShaderStages::FRAGMENT),
+            ],
+        });
+        let peel_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raster peel"),
+            bind_group_layouts: &[Some(&layout), Some(&peel_layout)],
+            immediate_size: 0,
+        });
         let vertex_layout = wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<Vertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -99,20 +131,37 @@ impl RasterPipelines {
         let mut pipelines = Vec::new();
         for kind in KINDS {
             for mirrored in [false, true] {
-                let (cull, compare, fragment) = match kind {
+                let (cull, compare, fragment): (Option<wgpu::Face>, _, _) = match kind {
                     // Wyman 2005a §3.2: the furthest surface (cull front faces, depth Greater
                     // cleared to 0) or the second surface (the nearest back face, Less).
-                    RasterKind::BackFaces(BackSurface::Furthest) => {
-                        (wgpu::Face::Front, wgpu::CompareFunction::Greater, "fs_back")
-                    }
-                    RasterKind::BackFaces(BackSurface::Second) => {
-                        (wgpu::Face::Front, wgpu::CompareFunction::Less, "fs_back")
-                    }
-                    RasterKind::FrontFaces => {
-                        (wgpu::Face::Back, wgpu::CompareFunction::Less, "fs_front")
-                    }
-                    RasterKind::Surface => {
-                        (wgpu::Face::Back, wgpu::CompareFunction::Less, "fs_surface")
+                    RasterKind::BackFaces(BackSurface::Furthest) => (
+                        Some(wgpu::Face::Front),
+                        wgpu::CompareFunction::Greater,
+                        "fs_back",
+                    ),
+                    RasterKind::BackFaces(BackSurface::Second) => (
+                        Some(wgpu::Face::Front),
+                        wgpu::CompareFunction::Less,
+                        "fs_back",
+                    ),
+                    RasterKind::FrontFaces => (
+                        Some(wgpu::Face::Back),
+                        wgpu::CompareFunction::Less,
+                        "fs_front",
+                    ),
+                    RasterKind::Surface => (
+                        Some(wgpu::Face::Back),
+                        wgpu::CompareFunction::Less,
+                        "fs_surface",
+                    ),
+                    RasterKind::SurfaceBack => (
+                        Some(wgpu::Face::Front),
+                        wgpu::CompareFunction::Less,
+                        "fs_surface",
+                    ),
+                    RasterKind::SurfaceBoth => (None, wgpu::CompareFunction::Less, "fs_surface"),
+                    RasterKind::SurfacePeel => {
+                        (None, wgpu::CompareFunction::Less, "fs_surface_peel")
                     }
                 };
                 let targets = vec![target.clone(); kind.targets()];
@@ -122,7 +171,11 @@ impl RasterPipelines {
                 );
                 let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(&label),
-                    layout: Some(&pipeline_layout),
+                    layout: Some(if kind == RasterKind::SurfacePeel {
+                        &peel_pipeline_layout
+                    } else {
+                        &pipeline_layout
+                    }),
                     vertex: wgpu::VertexState {
                         module: &module,
                         entry_point: Some("vs_mesh"),
@@ -137,7 +190,7 @@ impl RasterPipelines {
                         } else {
                             wgpu::FrontFace::Ccw
                         },
-                        cull_mode: Some(cull),
+                        cull_mode: cull,
                         ..Default::default()
                     },
                     depth_stencil: Some(wgpu::DepthStencilState {
@@ -160,7 +213,11 @@ impl RasterPipelines {
                 pipelines.push((kind, mirrored, pipeline));
             }
         }
-        Self { layout, pipelines }
+        Self {
+            layout,
+            peel_layout,
+            pipelines,
+        }
     }
 
     fn pipeline(&self, kind: RasterKind, camera: &Camera) -> &wgpu::RenderPipeline {
@@ -181,6 +238,25 @@ impl RasterPipelines {
         kind: RasterKind,
         camera: &Camera,
         uniforms: &wgpu::BindGroup,
+        meshes: &[&GpuMesh],
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::TextureView,
+        timestamp: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        self.encode_with(
+            encoder, kind, camera, uniforms, None, meshes, targets, depth, timestamp,
+        );
+    }
+
+    /// [`Self::encode`] with group 1 bound (`peel`, for [`RasterKind::SurfacePeel`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode_with(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kind: RasterKind,
+        camera: &Camera,
+        uniforms: &wgpu::BindGroup,
+        peel: Option<&wgpu::BindGroup>,
         meshes: &[&GpuMesh],
         targets: &[&wgpu::TextureView],
         depth: &wgpu::TextureView,
@@ -218,6 +294,9 @@ impl RasterPipelines {
         });
         pass.set_pipeline(self.pipeline(kind, camera));
         pass.set_bind_group(0, uniforms, &[]);
+        if let Some(peel) = peel {
+            pass.set_bind_group(1, peel, &[]);
+        }
         for mesh in meshes {
             mesh.draw(&mut pass);
         }

@@ -1,0 +1,501 @@
+//! Umenhoffer et al. 2007 (GPU Gems 3 ch. 17) on the GPU, method `distance-map`: every frame
+//! the layered distance map is rendered (per layer six surface passes through mirrored 90°
+//! cube-face cameras into array layers `layer·6 + face` of three `Rgba32Float` 2D array
+//! textures: P, N, uv + object; WebGPU's face order and orientation), each layer's distance
+//! range is reduced with atomics (min-max), the eye's surface pass of every mesh gives the
+//! visible surface, and `shaders/distance_map.wgsl` runs the bounce loop per pixel. The twin of
+//! `refract_cpu::distance_map`.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use refract_core::distance_map::{MAX_LAYERS, fresnel_code};
+use refract_core::fresnel::f0_dielectric;
+use refract_core::{Camera, CubeFace, TirPolicy};
+use refract_scene::{Aov, DistanceMapParams, Family, Frame, FrameOutputs, MethodId, Scene};
+
+use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
+use crate::context::{GpuContext, GpuError};
+use crate::frame_uniforms::frame_uniforms;
+use crate::methods::image_space::{OutputBuffers, check_limits};
+use crate::methods::{MethodPipelines, fill};
+use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::scene_buffers::GpuScene;
+use crate::shaders::module_source;
+use crate::timestamps::Timestamps;
+use refract_core::gpu::FrameUniforms;
+
+/// Depth peeling keeps surfaces farther than the previous layer by this relative margin (the
+/// CPU backend's `PEEL_MARGIN`).
+const PEEL_MARGIN: f32 = 1e-3;
+
+/// The uniform block of `shaders/distance_map.wgsl` (`DmUniforms`, field for field).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct DmUniforms {
+    center: [f32; 4],
+    /// The specular object's material: `F0` (or `F_p`) and the sign code.
+    refractor: [f32; 4],
+    light_direction: [f32; 4],
+    light_radiance: [f32; 4],
+    light_ambient: [f32; 4],
+    layers: u32,
+    size: u32,
+    min_steps: u32,
+    max_steps: u32,
+    secant_steps: u32,
+    min_max: u32,
+    max_depth: u32,
+    fresnel: u32,
+}
+
+const _: () = assert!(core::mem::size_of::<DmUniforms>() == 112);
+
+/// `PeelUniforms` of `shaders/raster.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct PeelUniforms {
+    center: [f32; 4],
+    margin: f32,
+    _padding: [f32; 3],
+}
+
+const _: () = assert!(core::mem::size_of::<PeelUniforms>() == 32);
+
+fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        ..texture_entry(binding)
+    }
+}
+
+/// The per-pixel pipelines and the range reduction.
+pub(crate) struct DistanceMapPipelines {
+    methods: MethodPipelines,
+    ranges: wgpu::ComputePipeline,
+}
+
+impl DistanceMapPipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let methods = MethodPipelines::new(
+            device,
+            "distance_map",
+            Family::DistanceMap,
+            &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                texture_entry(1),
+                texture_entry(2),
+                texture_entry(3),
+                storage_entry(4, true),
+                storage_entry(5, false),
+                storage_entry(6, false),
+                storage_entry(7, false),
+                storage_entry(8, true),
+                array_entry(9),
+                array_entry(10),
+                array_entry(11),
+                storage_entry(12, false),
+                uniform_entry(13, wgpu::ShaderStages::COMPUTE),
+            ],
+            |_| ("shade_distance_map", Vec::new()),
+        );
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("distance_map ranges"),
+            source: wgpu::ShaderSource::Wgsl(module_source("distance_map").into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("distance_map ranges"),
+            bind_group_layouts: &[Some(&methods.layout)],
+            immediate_size: 0,
+        });
+        let ranges = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("distance-map ranges"),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some("dm_ranges"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { methods, ranges }
+    }
+}
+
+/// The targets of distance-map frames at one frame size, face size and layer count.
+pub(crate) struct DistanceMapTargets {
+    key: (u32, u32, u32, u32),
+    camera_uniforms: wgpu::Buffer,
+    camera_group: wgpu::BindGroup,
+    camera_targets: [wgpu::TextureView; 3],
+    camera_depth: wgpu::TextureView,
+    face_uniforms: Vec<wgpu::Buffer>,
+    face_groups: Vec<wgpu::BindGroup>,
+    /// Per layer and face: the P, N, uv+object views of array layer `layer·6 + face`.
+    slices: Vec<[wgpu::TextureView; 3]>,
+    face_depth: wgpu::TextureView,
+    peel_uniforms: wgpu::Buffer,
+    /// Per layer ≥ 3 and face: the previous layer's face, for depth peeling.
+    peel_groups: Vec<wgpu::BindGroup>,
+    dm_uniforms: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    shade_group: wgpu::BindGroup,
+    /// Colour; (hit layer + 1, linear steps, secant steps, bounces); (covered, miss, tir, truncated).
+    outputs: OutputBuffers,
+}
+
+impl DistanceMapTargets {
+    pub(crate) fn new(
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &DistanceMapPipelines,
+        scene: &GpuScene,
+        (width, height): (u32, u32),
+        params: &DistanceMapParams,
+    ) -> Result<Self, GpuError> {
+        check_limits(context, width, height)?;
+        let size = params.resolution;
+        check_limits(context, size, size)?;
+        let layers = params.layers.clamp(3, MAX_LAYERS as u32);
+        let device = &context.device;
+        context.checked(|| {
+            let uniform = |label, bytes: usize| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: bytes as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let frame_size = std::mem::size_of::<FrameUniforms>();
+            let camera_uniforms = uniform("distance-map camera uniforms", frame_size);
+            let camera_group = bind_group(
+                device,
+                "distance-map camera",
+                &raster.layout,
+                &[camera_uniforms.as_entire_binding()],
+            );
+            let camera_targets = ["eye P", "eye N", "eye uv, object"].map(|label| {
+                target(device, label, width, height, TARGET_FORMAT)
+                    .create_view(&wgpu::TextureViewDescriptor::default())
+            });
+            let camera_depth = target(device, "eye depth", width, height, DEPTH_FORMAT)
+                .create_view(&wgpu::TextureViewDescriptor::default());
+            let face_uniforms: Vec<_> = (0..6)
+                .map(|_| uniform("cube face uniforms", frame_size))
+                .collect();
+            let face_groups = face_uniforms
+                .iter()
+                .map(|u| {
+                    bind_group(
+                        device,
+                        "cube face",
+                        &raster.layout,
+                        &[u.as_entire_binding()],
+                    )
+                })
+                .collect();
+            let arrays = ["layers P", "layers N", "layers uv, object"].map(|label| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: size,
+                        height: size,
+                        depth_or_array_layers: 6 * layers,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: TARGET_FORMAT,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+            });
+            let slices: Vec<[wgpu::TextureView; 3]> = (0..6 * layers)
+                .map(|slice| {
+                    arrays.each_ref().map(|t| {
+                        t.create_view(&wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2),
+                            base_array_layer: slice,
+                            array_layer_count: Some(1),
+                            ..Default::default()
+                        })
+                    })
+                })
+                .collect();
+            let array_views = arrays.each_ref().map(|t| {
+                t.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                })
+            });
+            let face_depth = target(device, "cube face depth", size, size, DEPTH_FORMAT)
+                .create_view(&wgpu::TextureViewDescriptor::default());
+            let peel_uniforms = uniform("peel uniforms", std::mem::size_of::<PeelUniforms>());
+            let peel_groups = (3..layers)
+                .flat_map(|layer| (0..6).map(move |face| (layer, face)))
+                .map(|(layer, face)| {
+                    let previous = &slices[((layer - 1) * 6 + face) as usize];
+                    bind_group(
+                        device,
+                        "peel",
+                        &raster.peel_layout,
+                        &[
+                            wgpu::BindingResource::TextureView(&previous[0]),
+                            wgpu::BindingResource::TextureView(&previous[1]),
+                            peel_uniforms.as_entire_binding(),
+                        ],
+                    )
+                })
+                .collect();
+            let dm_uniforms = uniform("distance-map uniforms", std::mem::size_of::<DmUniforms>());
+            let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("layer ranges"),
+                size: u64::from(2 * MAX_LAYERS as u32 * 4),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let outputs = OutputBuffers::new(
+                device,
+                &["colour", "counts", "flags"],
+                u64::from(width) * u64::from(height),
+            );
+            let shade_group = bind_group(
+                device,
+                "distance map",
+                &pipelines.methods.layout,
+                &[
+                    camera_uniforms.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&camera_targets[0]),
+                    wgpu::BindingResource::TextureView(&camera_targets[1]),
+                    wgpu::BindingResource::TextureView(&camera_targets[2]),
+                    scene.environment_texels.as_entire_binding(),
+                    outputs.outputs[0].as_entire_binding(),
+                    outputs.outputs[1].as_entire_binding(),
+                    outputs.outputs[2].as_entire_binding(),
+                    scene.materials.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&array_views[0]),
+                    wgpu::BindingResource::TextureView(&array_views[1]),
+                    wgpu::BindingResource::TextureView(&array_views[2]),
+                    ranges.as_entire_binding(),
+                    dm_uniforms.as_entire_binding(),
+                ],
+            );
+            Self {
+                key: (width, height, size, layers),
+                camera_uniforms,
+                camera_group,
+                camera_targets,
+                camera_depth,
+                face_uniforms,
+                face_groups,
+                slices,
+                face_depth,
+                peel_uniforms,
+                peel_groups,
+                dm_uniforms,
+                ranges,
+                shade_group,
+                outputs,
+            }
+        })
+    }
+
+    /// Whether these targets fit a frame of `size` with `params`.
+    pub(crate) fn fits(&self, (width, height): (u32, u32), params: &DistanceMapParams) -> bool {
+        self.key
+            == (
+                width,
+                height,
+                params.resolution,
+                params.layers.clamp(3, MAX_LAYERS as u32),
+            )
+    }
+
+    /// Encodes one frame: the layers, their ranges, the eye pass, the per-pixel paths.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode(
+        &self,
+        context: &GpuContext,
+        raster: &RasterPipelines,
+        pipelines: &DistanceMapPipelines,
+        gpu_scene: &GpuScene,
+        scene: &Scene,
+        camera: &Camera,
+        params: &DistanceMapParams,
+        outputs: FrameOutputs,
+        timestamps: Option<&Timestamps>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        let (width, height, size, layers) = self.key;
+        let queue = &context.queue;
+        let center = scene.refractor.mesh().bounding_sphere().center;
+        let (near, far) = scene.cube_map_clip_planes(center);
+        let ior = scene.refractor.ior();
+        let frame = frame_uniforms(camera, &gpu_scene.environment, ior, TirPolicy::default());
+        queue.write_buffer(&self.camera_uniforms, 0, bytemuck::bytes_of(&frame));
+        for face in CubeFace::ALL {
+            let face_camera = Camera::cube_face(center, face, size, near, far)
+                .map_err(|e| GpuError::Wgpu(format!("distance map face camera: {e}")))?;
+            let u = frame_uniforms(
+                &face_camera,
+                &gpu_scene.environment,
+                ior,
+                TirPolicy::default(),
+            );
+            queue.write_buffer(
+                &self.face_uniforms[face as usize],
+                0,
+                bytemuck::bytes_of(&u),
+            );
+        }
+        queue.write_buffer(
+            &self.peel_uniforms,
+            0,
+            bytemuck::bytes_of(&PeelUniforms {
+                center: center.extend(1.0).to_array(),
+                margin: PEEL_MARGIN,
+                _padding: [0.0; 3],
+            }),
+        );
+        let refractor = match scene.refractor.conductor() {
+            Some(c) => c.f0().extend(-1.0),
+            None => Vec3::splat(f0_dielectric(1.0 / ior)).extend(ior),
+        };
+        let light = &scene.light;
+        let search = &params.path.search;
+        let uniforms = DmUniforms {
+            center: center.extend(1.0).to_array(),
+            refractor: refractor.to_array(),
+            light_direction: light.direction.extend(0.0).to_array(),
+            light_radiance: light.radiance.extend(0.0).to_array(),
+            light_ambient: light.ambient.extend(0.0).to_array(),
+            layers,
+            size,
+            min_steps: search.min_steps,
+            max_steps: search.max_steps,
+            secant_steps: search.secant_steps,
+            min_max: u32::from(search.min_max),
+            max_depth: params.path.max_depth,
+            fresnel: fresnel_code(params.path.fresnel),
+        };
+        queue.write_buffer(&self.dm_uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let cleared: Vec<u32> = (0..MAX_LAYERS)
+            .flat_map(|_| [f32::INFINITY.to_bits(), 0])
+            .collect();
+        queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
+
+        let face_cameras: Vec<Camera> = CubeFace::ALL
+            .iter()
+            .map(|&face| Camera::cube_face(center, face, size, near, far))
+            .collect::<Result<_, _>>()
+            .map_err(|e| GpuError::Wgpu(format!("distance map face camera: {e}")))?;
+        let objects: Vec<_> = gpu_scene.objects.iter().collect();
+        let mut first = timestamps.map(Timestamps::begin_render);
+        for layer in 0..layers {
+            let (kind, meshes): (RasterKind, Vec<_>) = match layer {
+                0 => (RasterKind::Surface, vec![&gpu_scene.refractor]),
+                1 => (RasterKind::SurfaceBack, vec![&gpu_scene.refractor]),
+                2 => (RasterKind::Surface, objects.clone()),
+                _ => (RasterKind::SurfacePeel, objects.clone()),
+            };
+            for face in CubeFace::ALL {
+                let f = face as usize;
+                let slice = &self.slices[(layer * 6) as usize + f];
+                let peel = (layer >= 3).then(|| &self.peel_groups[((layer - 3) * 6) as usize + f]);
+                raster.encode_with(
+                    encoder,
+                    kind,
+                    &face_cameras[f],
+                    &self.face_groups[f],
+                    peel,
+                    &meshes,
+                    &[&slice[0], &slice[1], &slice[2]],
+                    &self.face_depth,
+                    first.take(),
+                );
+            }
+        }
+        let everything: Vec<_> = std::iter::once(&gpu_scene.refractor)
+            .chain(gpu_scene.objects.iter())
+            .collect();
+        raster.encode(
+            encoder,
+            RasterKind::Surface,
+            camera,
+            &self.camera_group,
+            &everything,
+            &[
+                &self.camera_targets[0],
+                &self.camera_targets[1],
+                &self.camera_targets[2],
+            ],
+            &self.camera_depth,
+            None,
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("distance-map ranges"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipelines.ranges);
+            pass.set_bind_group(0, &self.shade_group, &[]);
+            pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6 * layers);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("distance-map kernel"),
+                timestamp_writes: timestamps.map(Timestamps::end_compute),
+            });
+            pass.set_pipeline(pipelines.methods.get(MethodId::DistanceMap, outputs));
+            pass.set_bind_group(0, &self.shade_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        if let Some(timestamps) = timestamps {
+            timestamps.resolve(encoder);
+        }
+        let copies = match outputs {
+            FrameOutputs::ColorAndAovs => 3,
+            FrameOutputs::Color => 1,
+        };
+        self.outputs.copy(encoder, copies);
+        Ok(())
+    }
+
+    /// Reads the last submitted frame into `frame`.
+    pub(crate) fn read(
+        &self,
+        context: &GpuContext,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        let (width, height, _, _) = self.key;
+        let color = self.outputs.read(context, 0)?;
+        frame.resize_for_overwrite(width, height);
+        for (out, c) in frame.color.iter_mut().zip(&color) {
+            *out = Vec3::new(c[0], c[1], c[2]);
+        }
+        if outputs == FrameOutputs::Color {
+            return Ok(());
+        }
+        let counts = self.outputs.read(context, 1)?;
+        let flags = self.outputs.read(context, 2)?;
+        let count = |i: usize, k: usize| counts[i][k].round() as u32;
+        let flag = |i: usize, k: usize| flags[i][k] > 0.5;
+        for &aov in MethodId::DistanceMap.info().aovs {
+            match aov {
+                Aov::Covered => fill(frame.flag_mut(aov), |i| flag(i, 0)),
+                Aov::Miss => fill(frame.flag_mut(aov), |i| flag(i, 1)),
+                Aov::Tir => fill(frame.flag_mut(aov), |i| flag(i, 2)),
+                Aov::HitLayer => fill(frame.count_mut(aov), |i| count(i, 0)),
+                Aov::LinearSteps => fill(frame.count_mut(aov), |i| count(i, 1)),
+                Aov::SecantSteps => fill(frame.count_mut(aov), |i| count(i, 2)),
+                Aov::Bounces => fill(frame.count_mut(aov), |i| count(i, 3)),
+                other => unreachable!("distance-map does not compute {}", other.name()),
+            }
+        }
+        Ok(())
+    }
+}
