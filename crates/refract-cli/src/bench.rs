@@ -69,6 +69,8 @@ pub enum Table {
     ImageSpace,
     /// Wyman 2005b Table 1.
     Nearby,
+    /// Umenhoffer et al. 2007 §17.4: the chapter's setting with and without min-max.
+    DistanceMap,
 }
 
 /// One row of `bench.json`.
@@ -187,6 +189,92 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
     let md = nearby_table(&records, &resolutions, frames, &method);
     write(&args.out.join("bench-nearby.md"), &md)?;
     println!("\n{md}");
+    Ok(())
+}
+
+/// The chapter's figures (§17.4, GeForce 8800 GTX, 800 × 600, 3 layers of 6 × 512² rebuilt
+/// every frame, depth 2): fps without and with min-max.
+const DISTANCE_MAP_PAPER: [(&str, f64); 2] = [("off", 25.0), ("on", 50.0)];
+
+/// Runs the distance-map row: the chapter's setting (`--quick`: 160 × 120, 64² faces, 3
+/// frames) on `teapot-box` (the copper teapot in the room; `mirror-room` without the shared
+/// data), min-max off and on, every backend.
+fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
+    let ((width, height), face, frames) = if args.quick {
+        ((160, 120), 64, 3)
+    } else {
+        ((800, 600), 512, args.frames)
+    };
+    crate::cleanup::create_dir(&args.out)
+        .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
+    let scene = match data_scenes::load("teapot-box", &args.data)? {
+        Some(scene) => scene,
+        None => refract_scene::load_scene("mirror-room")?.scene,
+    };
+    let scene = Arc::new(scene);
+    let triangles = scene.refractor.mesh().triangles.len()
+        + scene
+            .objects
+            .iter()
+            .map(|o| o.mesh().triangles.len())
+            .sum::<usize>();
+    let backend_ids = backends::parse_backends(&args.backends)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    let camera = scene.camera(width, height)?;
+    let mut records = Vec::new();
+    let mut frame = Frame::default();
+    for renderer in &mut renderers {
+        renderer.prepare(&scene)?;
+        for (minmax, _) in DISTANCE_MAP_PAPER {
+            let mut method = MethodParams::defaults(MethodId::DistanceMap);
+            for (name, value) in [
+                ("minmax", minmax),
+                ("res", &face.to_string()),
+                ("layers", "3"),
+                ("depth", "2"),
+            ] {
+                method.set(name, value, "bench")?;
+            }
+            let mut record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
+                .record(&scene.name, triangles);
+            record.method = format!("distance-map minmax={minmax}");
+            println!(
+                "{:<12} {:<4} {width}x{height} faces {face}² minmax={minmax:<3} {:>9.2} ms {:>7.1} fps",
+                scene.name, record.backend, record.ms_median, record.fps
+            );
+            records.push(record);
+        }
+    }
+    let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
+    write(&args.out.join("bench-distance-map.json"), &json)?;
+    let mut md = format!(
+        "# Umenhoffer et al. 2007, the chapter's setting
+
+`distance-map` on `{}` ({triangles}          triangles), {width} × {height}, 3 layers of 6 × {face}² rebuilt every frame, depth 2,          colour only, median of {frames} frames after 3 warm-up frames. Paper: GeForce 8800 GTX,          a reflective teapot in a complex environment.
+
+         | backend | min-max | ms | fps | paper fps | ours / paper |
+|---|---|---|---|---|---|
+",
+        scene.name
+    );
+    for r in &records {
+        let on = r.method.ends_with("on");
+        let paper = DISTANCE_MAP_PAPER[usize::from(on)].1;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.1} | {:.1} | {paper} | {:.2}× |",
+            r.backend,
+            if on { "on" } else { "off" },
+            r.ms_median,
+            r.fps,
+            r.fps / paper
+        );
+    }
+    write(&args.out.join("bench-distance-map.md"), &md)?;
+    println!(
+        "
+{md}"
+    );
     Ok(())
 }
 
@@ -313,6 +401,9 @@ fn timed(
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.table == Table::Nearby {
         return run_nearby(args);
+    }
+    if args.table == Table::DistanceMap {
+        return run_distance_map(args);
     }
     let (res, frames) = if args.quick {
         (128, 3)

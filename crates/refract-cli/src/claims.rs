@@ -18,6 +18,7 @@ use refract_trace::ReferenceRenderer;
 
 use crate::timing::time_frames;
 
+mod distance_map;
 mod nearby;
 
 /// Arguments of `refract claims`.
@@ -142,10 +143,11 @@ pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
     }
     let mut md = document(args, &measured, &notes, cow_fps);
     md.push_str(&nearby::section(args)?);
+    md.push_str(&distance_map::section(args)?);
     md.push_str(
-        "\n## Umenhoffer et al. 2007, Kakimoto et al. 2007\n\n\
-         Not measured yet: the distance-map and PVRR methods are not implemented. Their claims get \
-         rows here when their methods land.\n",
+        "\n## Kakimoto et al. 2007\n\n\
+         Not measured yet: the PVRR method is not implemented. Its claims get rows here when it \
+         lands.\n",
     );
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         crate::cleanup::create_dir(dir)

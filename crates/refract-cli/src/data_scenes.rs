@@ -9,7 +9,7 @@ use refract_scene::{Scene, load_scene_str};
 const SCENE_DATA_PREFIX: &str = "../../shared/data";
 
 /// Name and text of every embedded scene file.
-pub const DATA_SCENES: [(&str, &str); 5] = [
+pub const DATA_SCENES: [(&str, &str); 6] = [
     (
         "igea-bunny",
         include_str!("../../../scenes/igea-bunny.toml"),
@@ -29,6 +29,10 @@ pub const DATA_SCENES: [(&str, &str); 5] = [
     (
         "horse-igea",
         include_str!("../../../scenes/horse-igea.toml"),
+    ),
+    (
+        "teapot-box",
+        include_str!("../../../scenes/teapot-box.toml"),
     ),
 ];
 

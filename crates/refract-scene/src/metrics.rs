@@ -108,6 +108,15 @@ pub struct MetricsRecord {
     pub feature_guarantee_3px_share: Option<f64>,
     /// The same for features of at least 10 pixels.
     pub feature_guarantee_10px_share: Option<f64>,
+    /// Distance maps: mean linear-search samples per pixel that starts a path (Umenhoffer et
+    /// al. 2007 §17.2.1), over all its rays and layers.
+    pub linear_steps_mean: Option<f64>,
+    /// Distance maps: mean secant steps per such pixel.
+    pub secant_steps_mean: Option<f64>,
+    /// Distance maps: mean secondary rays per such pixel.
+    pub bounces_mean: Option<f64>,
+    /// Distance maps: share of such pixels where a ray left every layer (environment read).
+    pub layer_miss_share: Option<f64>,
     /// Median time per frame (all per-frame passes), milliseconds.
     pub ms_per_frame: Option<f64>,
 }
@@ -418,6 +427,20 @@ pub fn evaluate_method(
             };
             evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
         }
+    }
+    if let (MethodParams::DistanceMap(_), Some(covered)) = (method, frame.flag(Aov::Covered)) {
+        let paths: Vec<usize> = (0..frame.pixel_count()).filter(|&i| covered[i]).collect();
+        let count_mean = |aov| {
+            frame
+                .count(aov)
+                .and_then(|c| mean(paths.iter().map(|&i| f64::from(c[i]))))
+        };
+        record.linear_steps_mean = count_mean(Aov::LinearSteps);
+        record.secant_steps_mean = count_mean(Aov::SecantSteps);
+        record.bounces_mean = count_mean(Aov::Bounces);
+        record.layer_miss_share = frame
+            .flag(Aov::Miss)
+            .and_then(|m| mean(paths.iter().map(|&i| f64::from(u8::from(m[i])))));
     }
     (record, maps)
 }
