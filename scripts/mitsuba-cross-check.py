@@ -4,7 +4,7 @@
 For every case: write a refract scene file, export it with `refract export` (the meshes exactly
 as refract renders them: normalised, transformed, with refract's vertex normals), render it
 with `refract render --method reference --param mode=full` and with Mitsuba 3 (`scalar_rgb`,
-path tracer, dielectric, envmap, box filter) twice with different seeds, and print the mean
+path tracer, dielectric or conductor, envmap, box filter) twice with different seeds, and print the mean
 relative difference and the PSNR of ours against Mitsuba beside Mitsuba against itself (its
 noise floor at that sample count).
 
@@ -38,6 +38,9 @@ CASES = {
     "cow": ("meshes/cow.obj", 1.5, "forest.exr", "", ""),
     "horse": ("meshes/horse.obj", 1.5, "apartment.exr", "", ""),
     "cow-sun": ("meshes/cow.obj", 1.5, "esplanade.exr", "", ""),
+    # Conductors (issue 17): refract's exact conductor Fresnel vs Mitsuba's `conductor`.
+    "copper": ("builtin:sphere", 1.5, "venice.exr", "material = \"copper\"\n", ""),
+    "gold-torus": ("builtin:torus", 1.5, "apartment.exr", "material = \"gold\"\nrotate_deg = [60.0, 0.0, 0.0]\n", ""),
 }
 
 
@@ -52,6 +55,19 @@ def scene_toml(case):
 
 def run(args):
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+
+
+def bsdf(desc):
+    """The refractor's BSDF: Mitsuba's smooth `dielectric`, or its smooth `conductor` with the
+    RGB complex index refract used."""
+    conductor = desc.get("conductor")
+    if conductor is None:
+        return {"type": "dielectric", "int_ior": desc["ior"], "ext_ior": 1.0}
+    return {
+        "type": "conductor",
+        "eta": {"type": "rgb", "value": conductor["eta"]},
+        "k": {"type": "rgb", "value": conductor["k"]},
+    }
 
 
 def mitsuba_render(mi, exported, res, spp, seed):
@@ -91,7 +107,7 @@ def mitsuba_render(mi, exported, res, spp, seed):
                 "type": "obj",
                 "filename": os.path.join(exported, desc["refractor"]),
                 "face_normals": False,
-                "bsdf": {"type": "dielectric", "int_ior": desc["ior"], "ext_ior": 1.0},
+                "bsdf": bsdf(desc),
             },
         }
     )

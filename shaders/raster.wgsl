@@ -82,7 +82,9 @@ fn surface_out(in: VertexOut) -> SurfaceOut {
 struct PeelUniforms {
     center: vec4<f32>,
     margin: f32,
-    _padding: vec3<f32>,
+    _padding0: f32,
+    _padding1: f32,
+    _padding2: f32,
 }
 
 @group(1) @binding(0) var peel_prev_p: texture_2d<f32>;

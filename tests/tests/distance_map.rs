@@ -120,16 +120,18 @@ fn depth_and_secant_steps_approach_the_reference() {
 }
 
 /// Depth peeling: with 5 layers some paths end in the peeled layers (4 and 5), which hold
-/// what the reference point does not see; the AOVs count the work.
+/// what the reference point does not see (here the wall behind the torus and the mirror,
+/// reached by rays passing behind them: measured 8 of 4,913 paths at 128²); the AOVs count
+/// the work.
 #[test]
 fn peeled_layers_are_hit() {
     let scene = Arc::new(load_scene("mirror-room").expect("scene").scene);
-    let cam = scene.camera(64, 64).expect("camera");
+    let cam = scene.camera(128, 128).expect("camera");
     let frame = render(
         &mut CpuRenderer::new(),
         &scene,
         &cam,
-        &dm(&[("res", "64"), ("layers", "5"), ("depth", "4")]),
+        &dm(&[("res", "128"), ("layers", "5"), ("depth", "4")]),
     );
     let layers = frame.count(Aov::HitLayer).expect("hit layer");
     assert!(

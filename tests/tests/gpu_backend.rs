@@ -310,7 +310,7 @@ fn gpu_latlong_lookups_match_the_cpu() {
 /// `distance-map` on both backends, on the room scenes (mirrors, glass, diffuse walls) and a
 /// glass sphere in the environment, with depth peeling and min-max off: colours differ by more
 /// than 1/255 on at most 2 % of the pixels and the bounce counts on at most 2 % of the pixels
-/// that start a path (measured: see the printed values; differences sit on texel edges, where a
+/// that start a path (measured on lavapipe: colours 0.02–1.5 %, bounces ≤ 0.05 %; differences sit on texel edges, where a
 /// sample's direction rounds to the other texel).
 #[test]
 fn gpu_distance_maps_agree_with_cpu_distance_maps() {

@@ -48,9 +48,18 @@ struct SceneJson {
     name: String,
     camera: CameraJson,
     ior: f32,
+    /// The refractor's conductor (`eta`, `k` per RGB channel) when it is one, else `null`.
+    conductor: Option<ConductorJson>,
     refractor: String,
     objects: Vec<String>,
     environment: EnvironmentJson,
+}
+
+#[derive(Serialize)]
+struct ConductorJson {
+    name: String,
+    eta: [f32; 3],
+    k: [f32; 3],
 }
 
 /// A mesh as OBJ with per-vertex normals (`f a//a b//b c//c`, 1-based).
@@ -126,6 +135,11 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             fov_y_deg: c.fov_y.to_degrees(),
         },
         ior: scene.refractor.ior(),
+        conductor: scene.refractor.conductor().map(|c| ConductorJson {
+            name: refract_scene::conductor_name(&c).to_owned(),
+            eta: c.eta.to_array(),
+            k: c.k.to_array(),
+        }),
         refractor: "refractor.obj".into(),
         objects,
         environment,

@@ -1093,10 +1093,26 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         )?,
         None => Vec::new(),
     };
-    let methods: Vec<MethodId> = MethodId::approximations().collect();
-    let method = methods.iter().position(|m| *m == args.method).context(
-        "--method: the viewer shows approximations; the reference is what `p` compares with",
-    )?;
+    // The methods that can render this scene (glass-only families skip mirrors and metals).
+    let methods: Vec<MethodId> = MethodId::approximations()
+        .filter(|m| refract_scene::scene_support(*m, &scene).is_ok())
+        .collect();
+    anyhow::ensure!(
+        args.method != MethodId::Reference,
+        "--method: the viewer shows approximations; the reference is what `p` compares with"
+    );
+    let method = match methods.iter().position(|m| *m == args.method) {
+        Some(k) => k,
+        None => {
+            if let Err(reason) = refract_scene::scene_support(args.method, &scene) {
+                eprintln!("note: {reason}; showing distance-map");
+            }
+            methods
+                .iter()
+                .position(|m| *m == MethodId::DistanceMap)
+                .context("no method renders this scene")?
+        }
+    };
     let use_gpu = match args.backend.as_str() {
         "gpu" => true,
         "cpu" => false,

@@ -46,8 +46,8 @@ fn compare_writes_metrics_images_and_reports() {
     }
     assert_eq!(
         records.len(),
-        2 * (1 + 8 * backends.len()),
-        "reference + 8 methods per backend per scene"
+        2 * (1 + 9 * backends.len()),
+        "reference + 9 methods per backend per scene"
     );
     let fields = [
         "scene",
@@ -87,6 +87,10 @@ fn compare_writes_metrics_images_and_reports() {
         "converged_share",
         "feature_guarantee_3px_share",
         "feature_guarantee_10px_share",
+        "linear_steps_mean",
+        "secant_steps_mean",
+        "bounces_mean",
+        "layer_miss_share",
         "ms_per_frame",
     ];
     for record in records {
@@ -189,8 +193,8 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
             "reference",
         ),
         (
-            &["compare", "sphere", "--param", "secant=7", "--res", "8"],
-            "secant",
+            &["compare", "sphere", "--param", "sharpness=7", "--res", "8"],
+            "sharpness",
         ),
         (
             &[

@@ -140,7 +140,7 @@ pub fn texture_parameter(d: f32, a: f32) -> f32 {
 #[inline]
 pub fn linear_steps(s: Vec3, e: Vec3, params: &SearchParams) -> u32 {
     let theta = angle_between(s, e);
-    let steps = (params.max_steps as f32 * theta / core::f32::consts::PI).ceil();
+    let steps = -crate::math::floor(-(params.max_steps as f32 * theta / core::f32::consts::PI));
     let lo = params.min_steps.max(1);
     (steps as u32).clamp(lo, params.max_steps.max(lo))
 }
@@ -639,7 +639,7 @@ impl DistanceLayers for AnalyticRoom {
         Some(if layer == 0 {
             (1.0, 1.0)
         } else {
-            (3.0, 3.0 * 3f32.sqrt())
+            (3.0, 3.0 * crate::math::sqrt(3.0))
         })
     }
 }

@@ -73,6 +73,8 @@ pub struct DistanceMap {
     specular: SceneMeshes,
     others: SceneMeshes,
     floor_depth: Vec<f32>,
+    /// `|(s, t, 1)|` per face texel: the distance of a texel's point over its view depth.
+    stretch: Vec<f32>,
 }
 
 impl DistanceMap {
@@ -97,6 +99,15 @@ impl DistanceMap {
         let (near, far) = scene.cube_map_clip_planes(self.center);
         self.layers.resize_with(layers, Layer::default);
         let texels = (size * size) as usize;
+        if self.stretch.len() != texels {
+            self.stretch = (0..texels as u32)
+                .map(|i| {
+                    cube_texel_direction(CubeFace::PosZ, UVec2::new(i % size, i / size), size)
+                        .length()
+                })
+                .collect();
+        }
+        let stretch = &self.stretch;
         for index in 0..layers {
             let content = LayerContent::of(index);
             let (previous, rest) = self.layers.split_at_mut(index);
@@ -130,12 +141,16 @@ impl DistanceMap {
                         buffer,
                         out.par_chunks_mut(band_pixels(size)),
                         |band, out| {
+                            // |p − o| = −z_view · |(s, t, 1)| at the texel centre: exact for the
+                            // interpolated plane of the fragment, no attribute interpolation.
                             for row in 0..band.rows() {
                                 let y = band.first_row + row;
+                                let stretch = &stretch[(y * size) as usize..][..size as usize];
                                 for x in 0..size {
-                                    out[(row * size + x) as usize] = band
-                                        .texel(x, y)
-                                        .map_or(-1.0, |t| (t.p_ws - center).length());
+                                    out[(row * size + x) as usize] =
+                                        band.depth(x, y).map_or(-1.0, |depth| {
+                                            -camera.view_z_from_depth(depth) * stretch[x as usize]
+                                        });
                                 }
                             }
                         },

@@ -617,6 +617,14 @@ impl Band<'_> {
         (v.triangle != EMPTY).then(|| self.triangles.get(v.triangle).texel(x, y))
     }
 
+    /// The window depth of the fragment covering pixel `(x, y)` (`y` an image row inside this
+    /// band), `None` where the pixel is empty: no interpolation.
+    #[inline]
+    pub fn depth(&self, x: u32, y: u32) -> Option<f32> {
+        let v = self.visibility[((y - self.first_row) * self.width + x) as usize];
+        (v.triangle != EMPTY).then_some(v.depth)
+    }
+
     /// The number of rows of this band.
     pub fn rows(&self) -> u32 {
         (self.visibility.len() / self.width as usize) as u32

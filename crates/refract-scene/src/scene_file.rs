@@ -921,4 +921,55 @@ mod tests {
         );
         assert!((scene.camera.fov_y.to_degrees() - 30.0).abs() < 1e-4);
     }
+
+    /// Materials: named conductors on the refractor and on objects, custom `eta`/`k`, and
+    /// errors naming the file, the key and the choices (regression guard for issue 17's
+    /// scenes).
+    #[test]
+    fn materials_are_read_and_checked() {
+        use crate::scene::Conductor;
+        let load = |text: &str| load_scene_str("m", text, Path::new("."), "m.toml");
+        let scene = load(
+            "[refractor]\nmesh = \"builtin:sphere\"\nmaterial = \"copper\"\n\
+             [[objects]]\nmesh = \"builtin:plane\"\nmaterial = \"mirror\"\n\
+             [[objects]]\nmesh = \"builtin:plane\"\nmaterial = \"conductor\"\neta = [0.2, 0.3, 0.4]\nk = [3.0, 2.0, 1.0]\n\
+             [[objects]]\nmesh = \"builtin:plane\"\n",
+        )
+        .expect("materials")
+        .scene;
+        assert_eq!(scene.refractor.conductor(), Some(Conductor::COPPER));
+        assert_eq!(
+            scene.objects[0].material,
+            Material::Conductor(Conductor::MIRROR)
+        );
+        assert_eq!(
+            scene.objects[2].material,
+            Material::Diffuse(Albedo::Constant(Vec3::splat(0.6)))
+        );
+        let Material::Conductor(custom) = &scene.objects[1].material else {
+            panic!("a conductor");
+        };
+        assert_eq!(custom.k, Vec3::new(3.0, 2.0, 1.0));
+        for (text, needle) in [
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nmaterial = \"brass\"\n",
+                "gold",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nmaterial = \"conductor\"\neta = [0.2, 0.3, 0.4]\n",
+                "k = [r, g, b]",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\nmaterial = \"conductor\"\neta = [0.2, 0.3, 11.0]\nk = [1.0, 1.0, 1.0]\n",
+                "eta",
+            ),
+            (
+                "[refractor]\nmesh = \"builtin:sphere\"\n[[objects]]\nmesh = \"builtin:plane\"\neta = [0.2, 0.3, 0.4]\n",
+                "objects[0] eta/k",
+            ),
+        ] {
+            let err = format!("{:#}", load(text).expect_err(needle));
+            assert!(err.contains("m.toml") && err.contains(needle), "{err}");
+        }
+    }
 }
