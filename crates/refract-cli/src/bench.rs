@@ -248,13 +248,11 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
     let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
     write(&args.out.join("bench-distance-map.json"), &json)?;
     let mut md = format!(
-        "# Umenhoffer et al. 2007, the chapter's setting
-
-`distance-map` on `{}` ({triangles}          triangles), {width} × {height}, 3 layers of 6 × {face}² rebuilt every frame, depth 2,          colour only, median of {frames} frames after 3 warm-up frames. Paper: GeForce 8800 GTX,          a reflective teapot in a complex environment.
-
-         | backend | min-max | ms | fps | paper fps | ours / paper |
-|---|---|---|---|---|---|
-",
+        "# Umenhoffer et al. 2007, the chapter's setting\n\n`distance-map` on `{}` ({triangles} \
+         triangles), {width} × {height}, 3 layers of 6 × {face}² rebuilt every frame, depth 2, \
+         colour only, median of {frames} frames after 3 warm-up frames. Paper: GeForce 8800 GTX, \
+         a reflective teapot in a complex environment.\n\n\
+         | backend | min-max | ms | fps | paper fps | ours / paper |\n|---|---|---|---|---|---|\n",
         scene.name
     );
     for r in &records {
