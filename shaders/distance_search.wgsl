@@ -97,7 +97,7 @@ fn dm_linear_steps(s: vec3<f32>, e: vec3<f32>, search: DmSearch) -> u32 {
     return clamp(u32(steps), lo, max(search.max_steps, lo));
 }
 
-// (d_lo, d_hi, 1) or w... z = 0 when the ray misses the outer sphere.
+// shell_segment: (d_lo, d_hi, 1), or z = 0 when the ray misses the outer sphere.
 fn dm_shell_segment(x: vec3<f32>, r: vec3<f32>, r_min: f32, r_max: f32) -> vec3<f32> {
     let b = dot(x, r);
     let xx = dot(x, x);

@@ -139,6 +139,16 @@ const SPHERE_PLANE: &str = "[camera]\neye = [0.0, 0.9, 4.2]\ntarget = [0.0, -0.1
      [refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\nscale = 0.8\n\n\
      [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"wood\"\nscale = 6.0\ntranslate = [0.0, -0.8, 0.6]\n";
 
+/// Triangles of every mesh of `scene`.
+fn triangles(scene: &refract_scene::Scene) -> usize {
+    scene.refractor.mesh().triangles.len()
+        + scene
+            .objects
+            .iter()
+            .map(|o| o.mesh().triangles.len())
+            .sum::<usize>()
+}
+
 /// Runs Wyman 2005b Table 1.
 fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
     let (resolutions, frames, rows) = if args.quick {
@@ -162,12 +172,7 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
         };
         let Some(scene) = loaded else { continue };
         let scene = Arc::new(scene);
-        let triangles = scene.refractor.mesh().triangles.len()
-            + scene
-                .objects
-                .iter()
-                .map(|o| o.mesh().triangles.len())
-                .sum::<usize>();
+        let triangles = triangles(&scene);
         for renderer in &mut renderers {
             renderer.prepare(&scene)?;
         }
@@ -212,12 +217,7 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
         None => refract_scene::load_scene("mirror-room")?.scene,
     };
     let scene = Arc::new(scene);
-    let triangles = scene.refractor.mesh().triangles.len()
-        + scene
-            .objects
-            .iter()
-            .map(|o| o.mesh().triangles.len())
-            .sum::<usize>();
+    let triangles = triangles(&scene);
     let backend_ids = backends::parse_backends(&args.backends)?;
     let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
     let camera = scene.camera(width, height)?;

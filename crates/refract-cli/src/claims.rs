@@ -6,13 +6,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Context;
+use refract_core::Camera;
 use refract_cpu::CpuRenderer;
 use refract_geometry::{LoadOptions, load_mesh};
 use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::metrics::{MetricsRecord, evaluate};
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
-    load_scene,
+    TraceMode, load_scene,
 };
 use refract_trace::ReferenceRenderer;
 
@@ -156,6 +157,84 @@ pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
     write_text_atomically(&args.out, &md)?;
     println!("{md}");
     Ok(())
+}
+
+/// The CPU backend and the reference, for the sections that measure methods per scene.
+pub(crate) struct Bench {
+    pub cpu: CpuRenderer,
+    reference: ReferenceRenderer,
+}
+
+/// A scene with its reference frame at one resolution.
+pub(crate) struct Truth {
+    pub scene: Arc<Scene>,
+    pub camera: Camera,
+    pub frame: Frame,
+}
+
+impl Bench {
+    pub fn new() -> Self {
+        Self {
+            cpu: CpuRenderer::new(),
+            reference: ReferenceRenderer::new(),
+        }
+    }
+
+    /// The reference (default settings) of `scene` at `res`², the CPU prepared for it.
+    pub fn truth(&mut self, scene: Scene, res: u32) -> anyhow::Result<Truth> {
+        self.truth_with(Arc::new(scene), res, TraceMode::Transmission)
+    }
+
+    /// [`Self::truth`] with the reference in `mode`.
+    pub fn truth_with(
+        &mut self,
+        scene: Arc<Scene>,
+        res: u32,
+        mode: TraceMode,
+    ) -> anyhow::Result<Truth> {
+        let camera = scene.camera(res, res)?;
+        self.reference.prepare(&scene)?;
+        let mut frame = Frame::default();
+        let settings = refract_scene::TraceSettings {
+            mode,
+            ..refract_scene::TraceSettings::default()
+        };
+        self.reference.render(
+            &camera,
+            &MethodParams::Reference(settings),
+            FrameOutputs::ColorAndAovs,
+            &mut frame,
+        )?;
+        self.cpu.prepare(&scene)?;
+        Ok(Truth {
+            scene,
+            camera,
+            frame,
+        })
+    }
+
+    /// One CPU frame of `params` with its metrics against `truth`.
+    pub fn measure(
+        &mut self,
+        truth: &Truth,
+        params: &MethodParams,
+    ) -> anyhow::Result<(Frame, MetricsRecord)> {
+        let mut frame = Frame::default();
+        self.cpu.render(
+            &truth.camera,
+            params,
+            FrameOutputs::ColorAndAovs,
+            &mut frame,
+        )?;
+        let (record, _) = refract_scene::metrics::evaluate_method(
+            &truth.frame,
+            &frame,
+            &truth.camera,
+            &truth.scene,
+            params,
+        );
+        Ok((frame, record))
+    }
 }
 
 /// A claim: its text, and per scene whether it holds with the numbers that say so.

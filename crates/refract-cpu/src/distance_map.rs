@@ -15,7 +15,6 @@ use refract_core::distance_map::{
     DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
     TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, trace_path,
 };
-use refract_core::fresnel::f0_dielectric;
 use refract_core::{Camera, CubeFace};
 use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh,
@@ -108,6 +107,11 @@ impl DistanceMap {
                 .collect();
         }
         let stretch = &self.stretch;
+        let cameras: Vec<Camera> = CubeFace::ALL
+            .iter()
+            .map(|&face| Camera::cube_face(self.center, face, size, near, far))
+            .collect::<Result<_, _>>()
+            .map_err(|e| RenderError::Parameter(format!("distance map: {e}")))?;
         for index in 0..layers {
             let content = LayerContent::of(index);
             let (previous, rest) = self.layers.split_at_mut(index);
@@ -126,8 +130,7 @@ impl DistanceMap {
             };
             let raster = mesh.raster();
             for face in CubeFace::ALL {
-                let camera = Camera::cube_face(self.center, face, size, near, far)
-                    .map_err(|e| RenderError::Parameter(format!("distance map: {e}")))?;
+                let camera = &cameras[face as usize];
                 let out = &mut layer.distance[face as usize * texels..][..texels];
                 let buffer = &mut layer.faces[face as usize];
                 let center = self.center;
@@ -135,7 +138,7 @@ impl DistanceMap {
                 match floor {
                     None => rasterize_bands(
                         &raster,
-                        &camera,
+                        camera,
                         faces,
                         DepthTest::Nearest,
                         buffer,
@@ -157,7 +160,7 @@ impl DistanceMap {
                     ),
                     Some(floor) => rasterize_peeled(
                         &raster,
-                        &camera,
+                        camera,
                         face,
                         faces,
                         buffer,
@@ -262,23 +265,6 @@ impl DistanceLayers for MapScene<'_> {
     }
 }
 
-/// The material of the specular object (the sign code of §17.3).
-pub fn refractor_material(scene: &Scene) -> TexelMaterial {
-    match scene.refractor.conductor() {
-        Some(c) => TexelMaterial {
-            rgb: c.f0(),
-            ior: -1.0,
-        },
-        None => {
-            let ior = scene.refractor.ior();
-            TexelMaterial {
-                rgb: Vec3::splat(f0_dielectric(1.0 / ior)),
-                ior,
-            }
-        }
-    }
-}
-
 /// The material and normal of the surface of mesh `mesh` at triangle `triangle` with
 /// barycentrics `w` (diffuse: its radiance under the scene light).
 pub fn surface_material(
@@ -290,7 +276,7 @@ pub fn surface_material(
     n_ws: Vec3,
 ) -> TexelMaterial {
     match mesh {
-        SceneMesh::Refractor => refractor_material(scene),
+        SceneMesh::Refractor => scene.refractor.texel_material(),
         SceneMesh::Object(k) => {
             let object = &scene.objects[k];
             match object.conductor() {

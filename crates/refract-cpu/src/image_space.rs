@@ -234,23 +234,7 @@ fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
             Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
                 a.n2_source.map_or(0, exit_normal_source_code)
             }),
-            Aov::P1
-            | Aov::N1
-            | Aov::T1
-            | Aov::TOut
-            | Aov::PGeom
-            | Aov::NgTexel
-            | Aov::Iterations
-            | Aov::Converged
-            | Aov::Interfaces
-            | Aov::TirFirstExit
-            | Aov::HitLayer
-            | Aov::LinearSteps
-            | Aov::SecantSteps
-            | Aov::Bounces
-            | Aov::Miss => {
-                unreachable!("the image-space kernels do not compute {}", aov.name())
-            }
+            other => unreachable!("the image-space kernels do not compute {}", other.name()),
         }
     }
 }

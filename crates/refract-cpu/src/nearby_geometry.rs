@@ -473,19 +473,10 @@ fn write_layers(aovs: &[NearbyAov], method: MethodId, frame: &mut Frame) {
             Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
                 a.n2_source.map_or(0, exit_normal_source_code)
             }),
-            Aov::P1
-            | Aov::N1
-            | Aov::T1
-            | Aov::TOut
-            | Aov::Interfaces
-            | Aov::TirFirstExit
-            | Aov::HitLayer
-            | Aov::LinearSteps
-            | Aov::SecantSteps
-            | Aov::Bounces
-            | Aov::Miss => {
-                unreachable!("the nearby-geometry methods do not compute {}", aov.name())
-            }
+            other => unreachable!(
+                "the nearby-geometry methods do not compute {}",
+                other.name()
+            ),
         }
     }
 }

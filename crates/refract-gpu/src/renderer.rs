@@ -28,6 +28,20 @@ impl From<GpuError> for RenderError {
     }
 }
 
+/// Keeps the targets in `slot` when they fit (`fits`), else replaces them with new ones from
+/// `make` (the old ones are freed first): targets live across frames of one size.
+fn reuse_or_allocate<T>(
+    slot: &mut Option<T>,
+    fits: impl Fn(&T) -> bool,
+    make: impl FnOnce() -> Result<T, GpuError>,
+) -> Result<(), GpuError> {
+    if !slot.as_ref().is_some_and(fits) {
+        *slot = None;
+        *slot = Some(make()?);
+    }
+    Ok(())
+}
+
 /// The GPU renderer: a device, the compiled pipelines, the uploaded scene and the targets of
 /// the last resolution (reused for every camera and method at that size).
 pub struct GpuRenderer {
@@ -129,17 +143,20 @@ impl GpuRenderer {
             .as_ref()
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let (width, height) = (camera.width(), camera.height());
-        if !self.targets.as_ref().is_some_and(|t| t.fits(width, height)) {
-            self.targets = None; // free the old targets first
-            self.targets = Some(ImageSpaceTargets::new(
-                &self.context,
-                &self.raster,
-                &self.image_space,
-                scene,
-                width,
-                height,
-            )?);
-        }
+        reuse_or_allocate(
+            &mut self.targets,
+            |t| t.fits(width, height),
+            || {
+                ImageSpaceTargets::new(
+                    &self.context,
+                    &self.raster,
+                    &self.image_space,
+                    scene,
+                    width,
+                    height,
+                )
+            },
+        )?;
         let Some(targets) = &self.targets else {
             unreachable!("allocated above")
         };
@@ -204,21 +221,20 @@ impl GpuRenderer {
             .as_ref()
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let size = (camera.width(), camera.height());
-        if !self
-            .distance_targets
-            .as_ref()
-            .is_some_and(|t| t.fits(size, params))
-        {
-            self.distance_targets = None;
-            self.distance_targets = Some(DistanceMapTargets::new(
-                &self.context,
-                &self.raster,
-                &self.distance_map,
-                gpu_scene,
-                size,
-                params,
-            )?);
-        }
+        reuse_or_allocate(
+            &mut self.distance_targets,
+            |t| t.fits(size, params),
+            || {
+                DistanceMapTargets::new(
+                    &self.context,
+                    &self.raster,
+                    &self.distance_map,
+                    gpu_scene,
+                    size,
+                    params,
+                )
+            },
+        )?;
         let Some(targets) = &self.distance_targets else {
             unreachable!("allocated above")
         };
@@ -265,21 +281,20 @@ impl GpuRenderer {
             Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
         let size = (camera.width(), camera.height());
         let ng_size = (ng_camera.width(), ng_camera.height());
-        if !self
-            .nearby_targets
-            .as_ref()
-            .is_some_and(|t| t.fits(size, ng_size))
-        {
-            self.nearby_targets = None;
-            self.nearby_targets = Some(NearbyTargets::new(
-                &self.context,
-                &self.raster,
-                &self.nearby,
-                gpu_scene,
-                size,
-                ng_size,
-            )?);
-        }
+        reuse_or_allocate(
+            &mut self.nearby_targets,
+            |t| t.fits(size, ng_size),
+            || {
+                NearbyTargets::new(
+                    &self.context,
+                    &self.raster,
+                    &self.nearby,
+                    gpu_scene,
+                    size,
+                    ng_size,
+                )
+            },
+        )?;
         let Some(targets) = &self.nearby_targets else {
             unreachable!("allocated above")
         };

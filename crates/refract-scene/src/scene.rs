@@ -4,6 +4,7 @@
 
 use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
+use refract_core::distance_map::TexelMaterial;
 pub use refract_core::fresnel::Conductor;
 use refract_core::nearby_geometry::{MAX_PLANES, Plane};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
@@ -109,6 +110,22 @@ impl Refractor {
     /// Makes the object a conductor (`Some`) or a dielectric again (`None`).
     pub fn set_conductor(&mut self, conductor: Option<Conductor>) {
         self.conductor = conductor;
+    }
+
+    /// Its material as a distance-map texel stores it (Umenhoffer et al. 2007 §17.3, the sign
+    /// code): a conductor `ior = −1` with `F_p` per channel, glass its index with
+    /// `F0 = ((n − 1)/(n + 1))²`.
+    pub fn texel_material(&self) -> TexelMaterial {
+        match self.conductor {
+            Some(c) => TexelMaterial {
+                rgb: c.f0(),
+                ior: -1.0,
+            },
+            None => TexelMaterial {
+                rgb: Vec3::splat(refract_core::fresnel::f0_dielectric(1.0 / self.ior)),
+                ior: self.ior,
+            },
+        }
     }
 
     /// Whether it is glass (a dielectric), as the image-space methods require.

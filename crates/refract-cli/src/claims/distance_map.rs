@@ -7,65 +7,16 @@
 use std::fmt::Write as _;
 use std::sync::Arc;
 
-use refract_core::Camera;
-use refract_cpu::CpuRenderer;
-use refract_scene::metrics::{MetricsRecord, evaluate_method};
 use refract_scene::{
-    Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceMode, TraceSettings,
-    load_scene,
+    Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceMode, load_scene,
 };
-use refract_trace::ReferenceRenderer;
 
-use super::{Claim, ClaimsArgs, claim_rows, value};
+use super::{Bench, Claim, ClaimsArgs, claim_rows, less, value};
 use crate::data_scenes;
 use crate::timing::time_frames;
 
 /// The chapter's setting (§17.4): 800 × 600, 3 layers of 6 × 512², depth 2.
 const CHAPTER_SIZE: (u32, u32) = (800, 600);
-
-struct Truth {
-    scene: Arc<Scene>,
-    camera: Camera,
-    frame: Frame,
-}
-
-fn truth(
-    reference: &mut ReferenceRenderer,
-    cpu: &mut CpuRenderer,
-    scene: Arc<Scene>,
-    res: u32,
-    mode: TraceMode,
-) -> anyhow::Result<Truth> {
-    let camera = scene.camera(res, res)?;
-    reference.prepare(&scene)?;
-    let mut frame = Frame::default();
-    let settings = TraceSettings {
-        mode,
-        ..TraceSettings::default()
-    };
-    reference.render(
-        &camera,
-        &MethodParams::Reference(settings),
-        FrameOutputs::ColorAndAovs,
-        &mut frame,
-    )?;
-    cpu.prepare(&scene)?;
-    Ok(Truth {
-        scene,
-        camera,
-        frame,
-    })
-}
-
-fn measure(
-    cpu: &mut CpuRenderer,
-    t: &Truth,
-    params: &MethodParams,
-) -> anyhow::Result<MetricsRecord> {
-    let mut frame = Frame::default();
-    cpu.render(&t.camera, params, FrameOutputs::ColorAndAovs, &mut frame)?;
-    Ok(evaluate_method(&t.frame, &frame, &t.camera, &t.scene, params).0)
-}
 
 fn dm(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
     let mut params = MethodParams::defaults(MethodId::DistanceMap);
@@ -89,8 +40,7 @@ fn rooms(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<Vec<Scene
 
 /// Measures the claims and returns the markdown section.
 pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
-    let mut cpu = CpuRenderer::new();
-    let mut reference = ReferenceRenderer::new();
+    let mut bench = Bench::new();
     let mut notes = Vec::new();
     let mut claims = vec![
         Claim {
@@ -113,17 +63,11 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
     for scene in rooms(args, &mut notes)? {
-        let t = truth(
-            &mut reference,
-            &mut cpu,
-            Arc::new(scene),
-            args.res,
-            TraceMode::Transmission,
-        )?;
+        let t = bench.truth_with(Arc::new(scene), args.res, TraceMode::Transmission)?;
         let name = t.scene.name.clone();
         let mut flips = Vec::new();
         for depth in 1..=8u32 {
-            let r = measure(&mut cpu, &t, &dm(&[("depth", &depth.to_string())])?)?;
+            let r = bench.measure(&t, &dm(&[("depth", &depth.to_string())])?)?.1;
             flips.push((depth, r.flip_mean, r.psnr_ldr_db));
         }
         let f: Vec<f64> = flips.iter().filter_map(|(_, f, _)| *f).collect();
@@ -144,23 +88,23 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
 
         let mut steps = Vec::new();
         for (linear, secant) in [(15, 1), (15, 10), (80, 1), (80, 10)] {
-            let r = measure(
-                &mut cpu,
-                &t,
-                &dm(&[
-                    ("depth", "4"),
-                    ("min-steps", "15"),
-                    ("max-steps", &linear.to_string()),
-                    ("secant", &secant.to_string()),
-                ])?,
-            )?;
+            let r = bench
+                .measure(
+                    &t,
+                    &dm(&[
+                        ("depth", "4"),
+                        ("min-steps", "15"),
+                        ("max-steps", &linear.to_string()),
+                        ("secant", &secant.to_string()),
+                    ])?,
+                )?
+                .1;
             steps.push(((linear, secant), r));
         }
         let flip = |k: usize| steps[k].1.flip_mean;
-        let lt = |a: Option<f64>, b: Option<f64>| matches!((a, b), (Some(a), Some(b)) if a < b);
         claims[1].rows.push((
             name.clone(),
-            lt(flip(1), flip(0)) && lt(flip(3), flip(2)),
+            less(flip(1), flip(0)) && less(flip(3), flip(2)),
             format!(
                 "FLIP 15/1 {}, 15/10 {}; 80/1 {}, 80/10 {}",
                 value(flip(0), 4),
@@ -171,7 +115,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         ));
         claims[2].rows.push((
             name.clone(),
-            lt(flip(2), flip(0)) && lt(flip(3), flip(1)),
+            less(flip(2), flip(0)) && less(flip(3), flip(1)),
             format!(
                 "FLIP 15/1 {} vs 80/1 {}; 15/10 {} vs 80/10 {}",
                 value(flip(0), 4),
@@ -189,7 +133,8 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         for minmax in ["off", "on"] {
             let params = dm(&[("minmax", minmax), ("res", "512"), ("layers", "3")])?;
             let times = time_frames(2, 10, || {
-                Ok(cpu
+                Ok(bench
+                    .cpu
                     .render(&camera, &params, FrameOutputs::Color, &mut frame)?
                     .ms)
             })?;
@@ -211,32 +156,18 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
 
     // Fig. 17-9: the glass sphere that reflects and refracts, against the full reference.
     let glass = Arc::new(load_scene("glass-room")?.scene);
-    let full = truth(
-        &mut reference,
-        &mut cpu,
-        Arc::clone(&glass),
-        args.res,
-        TraceMode::Full,
-    )?;
-    let transmission = truth(
-        &mut reference,
-        &mut cpu,
-        glass,
-        args.res,
-        TraceMode::Transmission,
-    )?;
-    let split = measure(
-        &mut cpu,
-        &full,
-        &dm(&[("depth", "4"), ("fresnel", "split")])?,
-    )?;
-    let none_vs_full = measure(&mut cpu, &full, &dm(&[("depth", "4")])?)?;
-    let none = measure(&mut cpu, &transmission, &dm(&[("depth", "4")])?)?;
+    let full = bench.truth_with(Arc::clone(&glass), args.res, TraceMode::Full)?;
+    let transmission = bench.truth_with(glass, args.res, TraceMode::Transmission)?;
+    let split = bench
+        .measure(&full, &dm(&[("depth", "4"), ("fresnel", "split")])?)?
+        .1;
+    let none_vs_full = bench.measure(&full, &dm(&[("depth", "4")])?)?.1;
+    let none = bench.measure(&transmission, &dm(&[("depth", "4")])?)?.1;
     claims.push(Claim {
         text: "A sphere \"that is both reflective and refractive\" (Fig. 17-9): with `fresnel=split` (Schlick-weighted reflection at the first interface) the FLIP against the reference's `full` mode is lower than without it",
         rows: vec![(
             "glass-room".into(),
-            matches!((split.flip_mean, none_vs_full.flip_mean), (Some(a), Some(b)) if a < b),
+            less(split.flip_mean, none_vs_full.flip_mean),
             format!(
                 "FLIP vs `full`: {} (split) vs {} (none); `none` vs `transmission`: {}",
                 value(split.flip_mean, 4),
@@ -251,16 +182,12 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     let mut glass_scenes = vec![load_scene("sphere")?.scene, load_scene("torus")?.scene];
     glass_scenes.push(load_scene("lens")?.scene);
     for scene in glass_scenes {
-        let t = truth(
-            &mut reference,
-            &mut cpu,
-            Arc::new(scene),
-            args.res,
-            TraceMode::Transmission,
-        )?;
-        let wyman = measure(&mut cpu, &t, &MethodParams::defaults(MethodId::Wyman))?;
-        let d2 = measure(&mut cpu, &t, &dm(&[])?)?;
-        let d8 = measure(&mut cpu, &t, &dm(&[("depth", "8")])?)?;
+        let t = bench.truth_with(Arc::new(scene), args.res, TraceMode::Transmission)?;
+        let wyman = bench
+            .measure(&t, &MethodParams::defaults(MethodId::Wyman))?
+            .1;
+        let d2 = bench.measure(&t, &dm(&[])?)?.1;
+        let d8 = bench.measure(&t, &dm(&[("depth", "8")])?)?.1;
         versus.push((t.scene.name.clone(), wyman, d2, d8));
     }
     claims.push(Claim {
@@ -270,7 +197,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
             .map(|(name, w, _, d8)| {
                 (
                     name.clone(),
-                    matches!((d8.flip_mean, w.flip_mean), (Some(a), Some(b)) if a < b),
+                    less(d8.flip_mean, w.flip_mean),
                     format!(
                         "FLIP {} (`distance-map`, depth 8) vs {} (`wyman`)",
                         value(d8.flip_mean, 4),

@@ -3,73 +3,17 @@
 //! glass sphere before igea (`scenes/`).
 
 use std::fmt::Write as _;
-use std::sync::Arc;
 
 use refract_core::Camera;
-use refract_cpu::CpuRenderer;
-use refract_scene::metrics::{MetricsRecord, evaluate_method};
-use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene,
-};
-use refract_trace::ReferenceRenderer;
+use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene, load_scene};
 
-use super::{Claim, ClaimsArgs, claim_rows, value};
+use super::{Bench, Claim, ClaimsArgs, claim_rows, value};
 use crate::data_scenes;
 
 /// The resolution of the feature-size claim (§4.3: "at 512² resolutions").
 const FEATURE_RES: u32 = 512;
 /// The IOR sweep of Fig. 11.
 const IORS: [f32; 4] = [1.05, 1.1, 1.2, 1.4];
-
-/// A scene with its reference frame at one resolution, and the renderers.
-struct Bench {
-    cpu: CpuRenderer,
-    reference: ReferenceRenderer,
-}
-
-struct Truth {
-    scene: Arc<Scene>,
-    camera: Camera,
-    frame: Frame,
-}
-
-impl Bench {
-    fn truth(&mut self, scene: Scene, res: u32) -> anyhow::Result<Truth> {
-        let scene = Arc::new(scene);
-        let camera = scene.camera(res, res)?;
-        self.reference.prepare(&scene)?;
-        let mut frame = Frame::default();
-        self.reference.render(
-            &camera,
-            &MethodParams::defaults(MethodId::Reference),
-            FrameOutputs::ColorAndAovs,
-            &mut frame,
-        )?;
-        self.cpu.prepare(&scene)?;
-        Ok(Truth {
-            scene,
-            camera,
-            frame,
-        })
-    }
-
-    fn measure(
-        &mut self,
-        truth: &Truth,
-        params: &MethodParams,
-    ) -> anyhow::Result<(Frame, MetricsRecord)> {
-        let mut frame = Frame::default();
-        self.cpu.render(
-            &truth.camera,
-            params,
-            FrameOutputs::ColorAndAovs,
-            &mut frame,
-        )?;
-        let (record, _) =
-            evaluate_method(&truth.frame, &frame, &truth.camera, &truth.scene, params);
-        Ok((frame, record))
-    }
-}
 
 fn with(id: MethodId, settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
     let mut params = MethodParams::defaults(id);
@@ -114,10 +58,7 @@ fn lookup_scenes(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<V
 
 /// Measures the claims and returns the markdown section.
 pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
-    let mut bench = Bench {
-        cpu: CpuRenderer::new(),
-        reference: ReferenceRenderer::new(),
-    };
+    let mut bench = Bench::new();
     let mut notes = Vec::new();
     let mut claims = vec![
         Claim {

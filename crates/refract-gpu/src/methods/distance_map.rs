@@ -9,7 +9,6 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use refract_core::distance_map::{MAX_LAYERS, fresnel_code};
-use refract_core::fresnel::f0_dielectric;
 use refract_core::{Camera, CubeFace, TirPolicy};
 use refract_scene::{Aov, DistanceMapParams, Family, Frame, FrameOutputs, MethodId, Scene};
 
@@ -18,7 +17,9 @@ use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::methods::{MethodPipelines, fill};
-use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::passes::raster::{
+    DEPTH_FORMAT, RasterKind, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
+};
 use crate::scene_buffers::GpuScene;
 use crate::shaders::module_source;
 use crate::timestamps::Timestamps;
@@ -126,10 +127,8 @@ impl DistanceMapPipelines {
 /// The targets of distance-map frames at one frame size, face size and layer count.
 pub(crate) struct DistanceMapTargets {
     key: (u32, u32, u32, u32),
-    camera_uniforms: wgpu::Buffer,
-    camera_group: wgpu::BindGroup,
-    camera_targets: [wgpu::TextureView; 3],
-    camera_depth: wgpu::TextureView,
+    /// The eye pass of every mesh; its uniforms are the frame's (the kernel's binding 0).
+    eye: SurfaceTargets,
     face_uniforms: Vec<wgpu::Buffer>,
     face_groups: Vec<wgpu::BindGroup>,
     /// Per layer and face: the P, N, uv+object views of array layer `layer·6 + face`.
@@ -169,19 +168,7 @@ impl DistanceMapTargets {
                 })
             };
             let frame_size = std::mem::size_of::<FrameUniforms>();
-            let camera_uniforms = uniform("distance-map camera uniforms", frame_size);
-            let camera_group = bind_group(
-                device,
-                "distance-map camera",
-                &raster.layout,
-                &[camera_uniforms.as_entire_binding()],
-            );
-            let camera_targets = ["eye P", "eye N", "eye uv, object"].map(|label| {
-                target(device, label, width, height, TARGET_FORMAT)
-                    .create_view(&wgpu::TextureViewDescriptor::default())
-            });
-            let camera_depth = target(device, "eye depth", width, height, DEPTH_FORMAT)
-                .create_view(&wgpu::TextureViewDescriptor::default());
+            let eye = SurfaceTargets::new(device, raster, "eye", width, height);
             let face_uniforms: Vec<_> = (0..6)
                 .map(|_| uniform("cube face uniforms", frame_size))
                 .collect();
@@ -267,10 +254,10 @@ impl DistanceMapTargets {
                 "distance map",
                 &pipelines.methods.layout,
                 &[
-                    camera_uniforms.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&camera_targets[0]),
-                    wgpu::BindingResource::TextureView(&camera_targets[1]),
-                    wgpu::BindingResource::TextureView(&camera_targets[2]),
+                    eye.uniforms().as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&eye.views[0]),
+                    wgpu::BindingResource::TextureView(&eye.views[1]),
+                    wgpu::BindingResource::TextureView(&eye.views[2]),
                     scene.environment_texels.as_entire_binding(),
                     outputs.outputs[0].as_entire_binding(),
                     outputs.outputs[1].as_entire_binding(),
@@ -285,10 +272,7 @@ impl DistanceMapTargets {
             );
             Self {
                 key: (width, height, size, layers),
-                camera_uniforms,
-                camera_group,
-                camera_targets,
-                camera_depth,
+                eye,
                 face_uniforms,
                 face_groups,
                 slices,
@@ -335,21 +319,19 @@ impl DistanceMapTargets {
         let (near, far) = scene.cube_map_clip_planes(center);
         let ior = scene.refractor.ior();
         let frame = frame_uniforms(camera, &gpu_scene.environment, ior, TirPolicy::default());
-        queue.write_buffer(&self.camera_uniforms, 0, bytemuck::bytes_of(&frame));
-        for face in CubeFace::ALL {
-            let face_camera = Camera::cube_face(center, face, size, near, far)
-                .map_err(|e| GpuError::Wgpu(format!("distance map face camera: {e}")))?;
+        let face_cameras: Vec<Camera> = CubeFace::ALL
+            .iter()
+            .map(|&face| Camera::cube_face(center, face, size, near, far))
+            .collect::<Result<_, _>>()
+            .map_err(|e| GpuError::Wgpu(format!("distance map face camera: {e}")))?;
+        for (buffer, face_camera) in self.face_uniforms.iter().zip(&face_cameras) {
             let u = frame_uniforms(
-                &face_camera,
+                face_camera,
                 &gpu_scene.environment,
                 ior,
                 TirPolicy::default(),
             );
-            queue.write_buffer(
-                &self.face_uniforms[face as usize],
-                0,
-                bytemuck::bytes_of(&u),
-            );
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(&u));
         }
         queue.write_buffer(
             &self.peel_uniforms,
@@ -360,10 +342,8 @@ impl DistanceMapTargets {
                 _padding: [0.0; 3],
             }),
         );
-        let refractor = match scene.refractor.conductor() {
-            Some(c) => c.f0().extend(-1.0),
-            None => Vec3::splat(f0_dielectric(1.0 / ior)).extend(ior),
-        };
+        let refractor = scene.refractor.texel_material();
+        let refractor = refractor.rgb.extend(refractor.ior);
         let light = &scene.light;
         let search = &params.path.search;
         let uniforms = DmUniforms {
@@ -387,11 +367,6 @@ impl DistanceMapTargets {
             .collect();
         queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
 
-        let face_cameras: Vec<Camera> = CubeFace::ALL
-            .iter()
-            .map(|&face| Camera::cube_face(center, face, size, near, far))
-            .collect::<Result<_, _>>()
-            .map_err(|e| GpuError::Wgpu(format!("distance map face camera: {e}")))?;
         let objects: Vec<_> = gpu_scene.objects.iter().collect();
         let mut first = timestamps.map(Timestamps::begin_render);
         for layer in 0..layers {
@@ -421,20 +396,8 @@ impl DistanceMapTargets {
         let everything: Vec<_> = std::iter::once(&gpu_scene.refractor)
             .chain(gpu_scene.objects.iter())
             .collect();
-        raster.encode(
-            encoder,
-            RasterKind::Surface,
-            camera,
-            &self.camera_group,
-            &everything,
-            &[
-                &self.camera_targets[0],
-                &self.camera_targets[1],
-                &self.camera_targets[2],
-            ],
-            &self.camera_depth,
-            None,
-        );
+        self.eye
+            .encode(queue, raster, encoder, camera, &frame, &everything);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("distance-map ranges"),

@@ -380,23 +380,7 @@ impl ImageSpaceTargets {
                 Aov::ExitNormalSource => fill(frame.count_mut(aov), &pixels, |p| {
                     p.n2_source.map_or(0, exit_normal_source_code)
                 }),
-                Aov::P1
-                | Aov::N1
-                | Aov::T1
-                | Aov::TOut
-                | Aov::PGeom
-                | Aov::NgTexel
-                | Aov::Iterations
-                | Aov::Converged
-                | Aov::Interfaces
-                | Aov::TirFirstExit
-                | Aov::HitLayer
-                | Aov::LinearSteps
-                | Aov::SecantSteps
-                | Aov::Bounces
-                | Aov::Miss => {
-                    unreachable!("the image-space kernels do not compute {}", aov.name())
-                }
+                other => unreachable!("the image-space kernels do not compute {}", other.name()),
             }
         }
         Ok(())

@@ -17,7 +17,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
 use crate::methods::{MethodPipelines, fill};
-use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::passes::raster::{RasterPipelines, SurfaceTargets};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
 
@@ -77,10 +77,7 @@ pub(crate) struct NearbyFrame<'a> {
 pub(crate) struct NearbyTargets {
     size: (u32, u32, u32, u32),
     refractor: RefractorTargets,
-    ng_uniforms: wgpu::Buffer,
-    ng_raster_group: wgpu::BindGroup,
-    ng: [wgpu::TextureView; 3],
-    ng_depth: wgpu::TextureView,
+    ng: SurfaceTargets,
     nearby_uniforms: wgpu::Buffer,
     shade_group: wgpu::BindGroup,
     /// Colour, T2, P~2, N2 (as the image-space methods), P_geom (w: hit + 2 converged),
@@ -103,33 +100,13 @@ impl NearbyTargets {
         let device = &context.device;
         context.checked(|| {
             let refractor = RefractorTargets::allocate(device, raster, width, height);
-            let uniform = |label| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: std::mem::size_of::<FrameUniforms>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            };
-            let ng_uniforms = uniform("NG frame uniforms");
+            let ng = SurfaceTargets::new(device, raster, "NG", ng_width, ng_height);
             let nearby_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nearby uniforms"),
                 size: std::mem::size_of::<NearbyUniforms>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let ng_raster_group = bind_group(
-                device,
-                "NG raster",
-                &raster.layout,
-                &[ng_uniforms.as_entire_binding()],
-            );
-            let ng = ["NG P", "NG N", "NG uv, object"].map(|label| {
-                target(device, label, ng_width, ng_height, TARGET_FORMAT)
-                    .create_view(&wgpu::TextureViewDescriptor::default())
-            });
-            let ng_depth = target(device, "NG depth", ng_width, ng_height, DEPTH_FORMAT)
-                .create_view(&wgpu::TextureViewDescriptor::default());
             let outputs = OutputBuffers::new(
                 device,
                 &["colour", "T2", "P2", "N2", "P_geom", "NG texel"],
@@ -152,19 +129,16 @@ impl NearbyTargets {
                     outputs.outputs[4].as_entire_binding(),
                     outputs.outputs[5].as_entire_binding(),
                     scene.materials.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&ng[0]),
-                    wgpu::BindingResource::TextureView(&ng[1]),
-                    wgpu::BindingResource::TextureView(&ng[2]),
+                    wgpu::BindingResource::TextureView(&ng.views[0]),
+                    wgpu::BindingResource::TextureView(&ng.views[1]),
+                    wgpu::BindingResource::TextureView(&ng.views[2]),
                     nearby_uniforms.as_entire_binding(),
                 ],
             );
             Self {
                 size: (width, height, ng_width, ng_height),
                 refractor,
-                ng_uniforms,
-                ng_raster_group,
                 ng,
-                ng_depth,
                 nearby_uniforms,
                 shade_group,
                 outputs,
@@ -200,9 +174,6 @@ impl NearbyTargets {
             uniforms.ior,
             refract_core::TirPolicy::default(),
         );
-        context
-            .queue
-            .write_buffer(&self.ng_uniforms, 0, bytemuck::bytes_of(&ng_frame));
         context.queue.write_buffer(
             &self.nearby_uniforms,
             0,
@@ -219,15 +190,13 @@ impl NearbyTargets {
             encoder,
         );
         let objects: Vec<_> = scene.objects.iter().collect();
-        raster.encode(
+        self.ng.encode(
+            &context.queue,
+            raster,
             encoder,
-            RasterKind::Surface,
             nearby.ng_camera,
-            &self.ng_raster_group,
+            &ng_frame,
             &objects,
-            &[&self.ng[0], &self.ng[1], &self.ng[2]],
-            &self.ng_depth,
-            None,
         );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -311,19 +280,10 @@ impl NearbyTargets {
                 Aov::Converged => fill(frame.flag_mut(aov), |i| {
                     pixels[i].covered && p_geom[i][3] as u32 & 2 == 2
                 }),
-                Aov::P1
-                | Aov::N1
-                | Aov::T1
-                | Aov::TOut
-                | Aov::Interfaces
-                | Aov::TirFirstExit
-                | Aov::HitLayer
-                | Aov::LinearSteps
-                | Aov::SecantSteps
-                | Aov::Bounces
-                | Aov::Miss => {
-                    unreachable!("the nearby-geometry methods do not compute {}", aov.name())
-                }
+                other => unreachable!(
+                    "the nearby-geometry methods do not compute {}",
+                    other.name()
+                ),
             }
         }
         Ok(())

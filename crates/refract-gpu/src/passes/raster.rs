@@ -328,3 +328,90 @@ pub(crate) fn target(
         view_formats: &[],
     })
 }
+
+/// The targets of one [`RasterKind::Surface`] pass at one size, with its own camera uniforms:
+/// the nearest front faces of some meshes as (P, scalar), (N, 1), (uv, object, 1). The NG
+/// texture of Wyman 2005b and the eye pass of the distance maps.
+pub(crate) struct SurfaceTargets {
+    uniforms: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    /// P, N, uv + object.
+    pub views: [wgpu::TextureView; 3],
+    depth: wgpu::TextureView,
+}
+
+impl SurfaceTargets {
+    /// Allocates `width × height` targets; `label` names them.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        raster: &RasterPipelines,
+        label: &str,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("{label} frame uniforms")),
+            size: std::mem::size_of::<refract_core::gpu::FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group = crate::bindings::bind_group(
+            device,
+            label,
+            &raster.layout,
+            &[uniforms.as_entire_binding()],
+        );
+        let views = ["P", "N", "uv, object"].map(|what| {
+            target(
+                device,
+                &format!("{label} {what}"),
+                width,
+                height,
+                TARGET_FORMAT,
+            )
+            .create_view(&wgpu::TextureViewDescriptor::default())
+        });
+        let depth = target(
+            device,
+            &format!("{label} depth"),
+            width,
+            height,
+            DEPTH_FORMAT,
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default());
+        Self {
+            uniforms,
+            group,
+            views,
+            depth,
+        }
+    }
+
+    /// The camera uniforms buffer (a compute pass reading the targets may bind it too).
+    pub(crate) fn uniforms(&self) -> &wgpu::Buffer {
+        &self.uniforms
+    }
+
+    /// Writes `uniforms` (those of `camera`) and encodes the surface pass of `meshes`.
+    pub(crate) fn encode(
+        &self,
+        queue: &wgpu::Queue,
+        raster: &RasterPipelines,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        uniforms: &refract_core::gpu::FrameUniforms,
+        meshes: &[&GpuMesh],
+    ) {
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
+        raster.encode(
+            encoder,
+            RasterKind::Surface,
+            camera,
+            &self.group,
+            meshes,
+            &[&self.views[0], &self.views[1], &self.views[2]],
+            &self.depth,
+            None,
+        );
+    }
+}
