@@ -92,7 +92,7 @@ fn method_params(args: &RenderArgs) -> anyhow::Result<MethodParams> {
         }
         MethodParams::TwoInterface(p) => p.tir = args.tir.into(),
         MethodParams::NearbyGeometry(p) => p.two.tir = args.tir.into(),
-        MethodParams::Single | MethodParams::DistanceMap(_) => {}
+        MethodParams::Single | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {}
     }
     for assignment in &args.params {
         let (name, value) = crate::parse_param(assignment)?;

@@ -11,6 +11,7 @@
 //! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
+//! * [`pvrr`]: Kakimoto et al. 2007, per-vertex reflection and refraction (virtual viewpoint, view volume, texture coordinates, map lookup).
 //! * [`back_surface`]: which back surface the back-face pass keeps (Wyman 2005a §3.2).
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
 //! * [`environment`]: lat-long environment lookup (Mitsuba 3's convention), bilinear, generic
@@ -58,6 +59,7 @@ mod math;
 pub mod nearby_geometry;
 pub mod optics;
 pub mod procedural_sky;
+pub mod pvrr;
 pub mod vector;
 pub mod wgsl;
 

@@ -22,6 +22,7 @@ pub mod distance_map;
 pub mod image_space;
 pub mod nearby_geometry;
 mod pixel_group;
+pub mod pvrr;
 pub mod raster;
 pub mod renderer;
 pub mod scene_meshes;

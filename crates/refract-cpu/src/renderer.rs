@@ -13,6 +13,7 @@ use refract_scene::{
 use crate::distance_map::DistancePasses;
 use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
 use crate::nearby_geometry::{NearbyMethod, NearbyPasses};
+use crate::pvrr::PvrrPasses;
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
 /// resolution a colour-only frame allocates nothing.
@@ -22,6 +23,7 @@ pub struct CpuRenderer {
     image_space: ImageSpacePasses,
     nearby: NearbyPasses,
     distance_map: DistancePasses,
+    pvrr: PvrrPasses,
 }
 
 impl CpuRenderer {
@@ -42,7 +44,8 @@ impl Renderer for CpuRenderer {
             MethodParams::Single
             | MethodParams::TwoInterface(_)
             | MethodParams::NearbyGeometry(_)
-            | MethodParams::DistanceMap(_) => true,
+            | MethodParams::DistanceMap(_)
+            | MethodParams::Pvrr(_) => true,
         }
     }
 
@@ -50,6 +53,7 @@ impl Renderer for CpuRenderer {
         // The mesh, its BVH and d_N come built with the scene; buffers are sized per frame.
         self.nearby.prepare(scene);
         self.distance_map.prepare(scene);
+        self.pvrr.prepare(scene);
         self.scene = Some(Arc::clone(scene));
         Ok(())
     }
@@ -79,11 +83,20 @@ impl Renderer for CpuRenderer {
                 source: TimingSource::Wall,
             });
         }
+        if let MethodParams::Pvrr(p) = method {
+            self.pvrr.render(scene, camera, p, outputs, frame)?;
+            return Ok(FrameTiming {
+                ms: start.elapsed().as_secs_f64() * 1e3,
+                source: TimingSource::Wall,
+            });
+        }
         let kernel = method
             .image_space_kernel(refractor.ior())
             .ok_or_else(unsupported)??;
         let image_space = match method {
-            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return Err(unsupported()),
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {
+                return Err(unsupported());
+            }
             MethodParams::Single => ImageSpaceMethod::Single,
             MethodParams::TwoInterface(p) => ImageSpaceMethod::TwoInterface { back: p.back },
             MethodParams::NearbyGeometry(p) => {

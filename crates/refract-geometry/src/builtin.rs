@@ -34,10 +34,60 @@ pub const CATALOG: &[(&str, &str)] = &[
         "lens",
         "biconvex spectacle lens R1 = 2, R2 = -2, t = 0.5, D = 1.8 (Kakimoto et al. 4.5)",
     ),
+    (
+        "lens-concave",
+        "biconcave spectacle lens R1 = -2, R2 = 2, t = 0.08, D = 1.8 (Kakimoto et al. Fig. 12 right, 14)",
+    ),
+    (
+        "mirror-convex",
+        "convex square mirror, side 1.1, R = 4, 7 x 7 = 49 vertices facing +z (Kakimoto et al. Fig. 1, 9)",
+    ),
+    (
+        "mirror-flat",
+        "flat square mirror, side 1.1, 7 x 7 = 49 vertices facing +z (Kakimoto et al. Fig. 9)",
+    ),
+    (
+        "mirror-concave",
+        "concave square mirror, side 1.1, R = -8 (focal length 4: the eye of the built-in scenes inside it), 7 x 7 = 49 vertices facing +z (Kakimoto et al. Fig. 8(b), 9)",
+    ),
+    (
+        "mirror-left",
+        "left 4 of the 7 columns of mirror-convex (Kakimoto et al. Fig. 7: shares 7 vertices with mirror-right)",
+    ),
+    (
+        "mirror-right",
+        "right 4 of the 7 columns of mirror-convex (Kakimoto et al. Fig. 7)",
+    ),
 ];
 
 /// The names in [`CATALOG`].
-pub const NAMES: [&str; 6] = ["sphere", "icosphere", "torus", "box", "plane", "lens"];
+pub const NAMES: [&str; 12] = [
+    "sphere",
+    "icosphere",
+    "torus",
+    "box",
+    "plane",
+    "lens",
+    "lens-concave",
+    "mirror-convex",
+    "mirror-flat",
+    "mirror-concave",
+    "mirror-left",
+    "mirror-right",
+];
+
+/// The mirrors' side and radius of curvature (`mirror-*`).
+pub const MIRROR_SIZE: f32 = 1.1;
+/// See [`MIRROR_SIZE`].
+pub const MIRROR_RADIUS: f32 = 4.0;
+
+/// The built-in biconcave lens.
+pub const BICONCAVE: LensDesc = LensDesc {
+    front_radius: -2.0,
+    back_radius: 2.0,
+    center_thickness: 0.08,
+    ..LensDesc::BICONVEX
+};
 
 /// The prefix that marks a built-in shape in a mesh path.
 pub const PREFIX: &str = "builtin:";
@@ -52,6 +102,12 @@ pub fn mesh(name: &str) -> Result<Mesh, GeometryError> {
         "box" => shapes::cuboid(Vec3::splat(1.0 / 3f32.sqrt()), 1),
         "plane" => shapes::plane(2f32.sqrt(), 16),
         "lens" => LensDesc::BICONVEX.build(),
+        "lens-concave" => BICONCAVE.build(),
+        "mirror-convex" => shapes::mirror_patch(MIRROR_SIZE, MIRROR_RADIUS, 7, 0..7),
+        "mirror-flat" => shapes::mirror_patch(MIRROR_SIZE, f32::INFINITY, 7, 0..7),
+        "mirror-concave" => shapes::mirror_patch(MIRROR_SIZE, -2.0 * MIRROR_RADIUS, 7, 0..7),
+        "mirror-left" => shapes::mirror_patch(MIRROR_SIZE, MIRROR_RADIUS, 7, 0..4),
+        "mirror-right" => shapes::mirror_patch(MIRROR_SIZE, MIRROR_RADIUS, 7, 3..7),
         _ => {
             return Err(GeometryError::UnknownBuiltin {
                 name: name.to_owned(),

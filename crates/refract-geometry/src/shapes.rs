@@ -282,9 +282,91 @@ pub fn plane(size: f32, subdivisions: u32) -> Result<Mesh, GeometryError> {
     Mesh::new("plane", positions, Some(normals), uvs, triangles)
 }
 
+/// A square mirror patch facing `+z`, side `size`, on a sphere of signed radius of curvature
+/// `radius` (`> 0` convex, bulging toward `+z`; `< 0` concave; infinite: flat), as a grid of
+/// `vertices × vertices` (Kakimoto et al. Fig. 9; 7 × 7 = 49 vertices is their car mirror),
+/// keeping the grid columns `columns` only (`0..vertices` for the whole patch; two ranges that
+/// share a column are the adjacent mirrors of Fig. 7, with the shared vertices identical).
+/// Surface `z = −s(R, r)` with `s` the sagitta ([`crate::LensDesc::sagitta`]), analytic normals.
+pub fn mirror_patch(
+    size: f32,
+    radius: f32,
+    vertices: u32,
+    columns: core::ops::Range<u32>,
+) -> Result<Mesh, GeometryError> {
+    let half = 0.5 * size;
+    require(
+        "mirror patch",
+        vertices >= 2
+            && size > 0.0
+            && size.is_finite()
+            && !radius.is_nan()
+            && radius != 0.0
+            && (radius.is_infinite() || radius.abs() > half * core::f32::consts::SQRT_2)
+            && columns.start + 1 < columns.end
+            && columns.end <= vertices,
+        "expected size > 0, |radius| > the half-diagonal, at least 2 vertices per side and 2 columns",
+    )?;
+    let width = columns.end - columns.start;
+    let (mut positions, mut normals, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..vertices {
+        for j in columns.clone() {
+            let uv = Vec2::new(j as f32, k as f32) / (vertices - 1) as f32;
+            let (x, y) = ((uv.x - 0.5) * size, (0.5 - uv.y) * size);
+            let r = (x * x + y * y).sqrt();
+            let z = -crate::LensDesc::sagitta(radius, r);
+            let normal = if radius.is_infinite() {
+                Vec3::Z
+            } else {
+                // The centre of curvature lies at (0, 0, −R).
+                (Vec3::new(x, y, z) - Vec3::new(0.0, 0.0, -radius)).normalize() * radius.signum()
+            };
+            positions.push(Vec3::new(x, y, z));
+            normals.push(normal);
+            uvs.push(uv);
+        }
+    }
+    let mut triangles = Vec::new();
+    for k in 0..vertices - 1 {
+        for j in 0..width - 1 {
+            let (a, b, c, d) = (
+                k * width + j,
+                k * width + j + 1,
+                (k + 1) * width + j + 1,
+                (k + 1) * width + j,
+            );
+            triangles.push([a, d, c]);
+            triangles.push([a, c, b]);
+        }
+    }
+    Mesh::new("mirror patch", positions, Some(normals), uvs, triangles)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mirror_patches_face_plus_z_with_their_curvature() {
+        for radius in [1.5, f32::INFINITY, -1.5] {
+            let mesh = mirror_patch(1.3, radius, 7, 0..7).unwrap();
+            assert_eq!(mesh.positions.len(), 49);
+            for (i, _) in mesh.triangles.iter().enumerate() {
+                let [a, b, c] = mesh.triangle_positions(i);
+                assert!((b - a).cross(c - a).z > 0.0, "winding toward +z");
+            }
+            let corner = mesh.positions[0];
+            let expected = -crate::LensDesc::sagitta(radius, corner.truncate().length());
+            assert!((corner.z - expected).abs() < 1e-6);
+            // Convex: the corner normal leans outward (same sign as its position); concave: inward.
+            let lean = mesh.normals[0].x * corner.x;
+            assert_eq!(lean > 1e-6, radius > 0.0 && radius.is_finite(), "{radius}");
+        }
+        let left = mirror_patch(1.3, 1.5, 7, 0..4).unwrap();
+        let right = mirror_patch(1.3, 1.5, 7, 3..7).unwrap();
+        assert_eq!(left.positions[3], right.positions[0], "the shared column");
+        assert!(mirror_patch(1.3, 0.5, 7, 0..7).is_err());
+    }
 
     fn assert_closed_and_outward(mesh: &Mesh, volume: f32, tolerance: f32) {
         let facts = mesh.facts();

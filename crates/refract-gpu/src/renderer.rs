@@ -351,6 +351,7 @@ impl Renderer for GpuRenderer {
             | MethodParams::TwoInterface(_)
             | MethodParams::NearbyGeometry(_)
             | MethodParams::DistanceMap(_) => true,
+            MethodParams::Pvrr(_) => true,
         }
     }
 
@@ -389,7 +390,9 @@ impl Renderer for GpuRenderer {
         };
         let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
         let kernel = match method {
-            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return Err(unsupported()),
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {
+                return Err(unsupported());
+            }
             MethodParams::Single => ImageSpaceKernel::Single,
             MethodParams::TwoInterface(p) => ImageSpaceKernel::TwoInterface { back: p.back },
             MethodParams::NearbyGeometry(p) => {

@@ -59,6 +59,11 @@ pub enum Aov {
     Bounces,
     /// A distance-map ray left every layer (the environment was read instead).
     Miss,
+    /// A `pvrr` pixel that was not looked up: its triangle has a vertex whose exact ray ends
+    /// outside the map (the zooming region of concave mirrors and convex lenses, Kakimoto et al.
+    /// 2007 §4.2, left out as in the paper), is trapped in the lens, or lies past the last
+    /// level of the reflection stack.
+    Zoom,
 }
 
 /// The type of an [`Aov`]'s per-pixel values.
@@ -74,7 +79,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 21] = [
+    pub const ALL: [Aov; 22] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -96,6 +101,7 @@ impl Aov {
         Aov::SecantSteps,
         Aov::Bounces,
         Aov::Miss,
+        Aov::Zoom,
     ];
 
     /// The layer name (EXR channel or channel prefix).
@@ -122,6 +128,7 @@ impl Aov {
             Aov::SecantSteps => "secant_steps",
             Aov::Bounces => "bounces",
             Aov::Miss => "miss",
+            Aov::Zoom => "zoom",
         }
     }
 
@@ -144,7 +151,12 @@ impl Aov {
             | Aov::LinearSteps
             | Aov::SecantSteps
             | Aov::Bounces => AovKind::Count,
-            Aov::Covered | Aov::Tir | Aov::TirFirstExit | Aov::Converged | Aov::Miss => {
+            Aov::Covered
+            | Aov::Tir
+            | Aov::TirFirstExit
+            | Aov::Converged
+            | Aov::Miss
+            | Aov::Zoom => {
                 AovKind::Flag
             }
         }

@@ -11,6 +11,8 @@
 //! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
 //! * [`registry`]: every method (id, paper, parameters with ranges, AOVs, backends) and
 //!   [`MethodParams`].
+//! * [`pvrr`]: the per-frame plan of Kakimoto et al. 2007 (per-vertex rays by BVH, views,
+//!   texture coordinates) both backends draw.
 //! * [`renderer`]: the [`Renderer`] interface the three renderers implement.
 //! * [`frame`]: [`Frame`], linear colour plus named AOV layers, EXR/PNG output.
 //! * [`metrics`]: error metrics of a frame against the reference (design.md, "Measuring").
@@ -22,6 +24,7 @@ pub mod environment;
 pub mod error;
 pub mod frame;
 pub mod metrics;
+pub mod pvrr;
 pub mod registry;
 pub mod renderer;
 pub mod scene;
@@ -33,7 +36,7 @@ pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
     BackendId, DistanceMapParams, Family, InterfaceRule, MethodId, MethodInfo, MethodParams,
-    NearbyParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
+    NearbyParams, PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

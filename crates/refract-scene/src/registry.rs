@@ -38,6 +38,8 @@ pub enum MethodId {
     IterativeSeeded,
     /// `distance-map`: Umenhoffer et al. 2007, rays traced in layered distance cube maps.
     DistanceMap,
+    /// `pvrr`: Kakimoto et al. 2007, per-vertex exact rays warping one map per reflector.
+    Pvrr,
 }
 
 /// A family of methods: the methods of one family share their passes.
@@ -53,6 +55,9 @@ pub enum Family {
     /// Umenhoffer et al. 2007: layered distance cube maps around a reference point, searched
     /// per secondary ray (mirrors, metals, glass, several bounces).
     DistanceMap,
+    /// Kakimoto et al. 2007: per-vertex exact rays (BVH), one map per reflector rendered from
+    /// its virtual viewpoint, texture coordinates per vertex (mirrors, lenses, stacks).
+    Pvrr,
 }
 
 /// A renderer implementation.
@@ -219,6 +224,53 @@ const DISTANCE_MAP_PARAMS: &[ParamSpec] = &[
     },
 ];
 
+/// The longest map side `pvrr` accepts (`res`).
+pub const PVRR_RESOLUTION: (u32, u32) = (16, 4096);
+/// The deepest reflection stack of `pvrr` (`depth`).
+pub const MAX_PVRR_DEPTH: u32 = 4;
+/// The largest index step between channels of `pvrr` (`dispersion`, in thousandths).
+pub const MAX_PVRR_DISPERSION: u32 = 100;
+
+const PVRR_PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "depth",
+        doc: "levels of the reflection stack (§4.4), the specular interactions of a path as the reference's depth counts them (a lens is one): 1 draws reflectors black inside a map, 2 gives each its own map from this map's virtual viewpoint, ...",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: MAX_PVRR_DEPTH,
+        },
+        default: "3",
+    },
+    ParamSpec {
+        name: "res",
+        doc: "texels of a map's longer side (the other follows the view volume's aspect)",
+        kind: ParamKind::Integer {
+            min: PVRR_RESOLUTION.0,
+            max: PVRR_RESOLUTION.1,
+        },
+        default: "1024",
+    },
+    ParamSpec {
+        name: "dispersion",
+        doc: "chromatic aberration (§4.5, Fig. 15): R, G, B refract with ior - d/1000, ior, ior + d/1000 and share one map (10 at ior 1.61: the paper's 1.60/1.61/1.62); 0: one ray per vertex",
+        kind: ParamKind::Integer {
+            min: 0,
+            max: MAX_PVRR_DISPERSION,
+        },
+        default: "0",
+    },
+    ParamSpec {
+        name: "update",
+        doc: "per-vertex rays, viewpoints and texture coordinates: every-frame, or on-change (kept while the camera is unchanged: the lens fixed to the eye, §5)",
+        kind: ParamKind::Choice(UPDATE_CHOICES),
+        default: "every-frame",
+    },
+];
+
+const UPDATE_CHOICES: &[&str] = &["every-frame", "on-change"];
+
+const PVRR_AOVS: &[Aov] = &[Aov::Covered, Aov::Zoom];
+
 const DISTANCE_MAP_AOVS: &[Aov] = &[
     Aov::Covered,
     Aov::HitLayer,
@@ -360,7 +412,7 @@ const ITERATIVE_AOVS: &[Aov] = &[
 ];
 
 /// Every method, in report order (the reference first).
-pub const REGISTRY: [MethodInfo; 10] = [
+pub const REGISTRY: [MethodInfo; 11] = [
     MethodInfo {
         id: MethodId::Reference,
         name: "reference",
@@ -484,6 +536,17 @@ pub const REGISTRY: [MethodInfo; 10] = [
         aovs: DISTANCE_MAP_AOVS,
         backends: IMAGE_SPACE_BACKENDS,
     },
+    MethodInfo {
+        id: MethodId::Pvrr,
+        name: "pvrr",
+        paper: "Kakimoto et al. 2007",
+        section: "§3-4",
+        family: Family::Pvrr,
+        summary: "per-vertex exact rays (BVH) of each mirror or lens; one map per reflector from the least-squares virtual viewpoint; per-vertex texture coordinates; stacks, chromatic aberration",
+        params: PVRR_PARAMS,
+        aovs: PVRR_AOVS,
+        backends: IMAGE_SPACE_BACKENDS,
+    },
 ];
 
 /// Whether `method` can render `scene`, and why not: the image-space and nearby-geometry
@@ -491,7 +554,7 @@ pub const REGISTRY: [MethodInfo; 10] = [
 /// distance-map method render conductors (mirrors, metals) too.
 pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), String> {
     match method.info().family {
-        Family::Reference | Family::DistanceMap => Ok(()),
+        Family::Reference | Family::DistanceMap | Family::Pvrr => Ok(()),
         Family::ImageSpace | Family::NearbyGeometry => {
             if let Some(c) = scene.refractor.conductor() {
                 Err(format!(
@@ -661,6 +724,38 @@ impl Default for DistanceMapParams {
     }
 }
 
+/// Parameters of `pvrr` (Kakimoto et al. 2007).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PvrrParams {
+    /// Levels of the reflection stack (1..=[`MAX_PVRR_DEPTH`]).
+    pub depth: u32,
+    /// Texels of a map's longer side.
+    pub resolution: u32,
+    /// Index step between channels, thousandths (0..=[`MAX_PVRR_DISPERSION`]).
+    pub dispersion: u32,
+    /// Keep the per-vertex work while the camera is unchanged.
+    pub update_on_change: bool,
+}
+
+impl Default for PvrrParams {
+    fn default() -> Self {
+        Self {
+            depth: 3,
+            resolution: 1024,
+            dispersion: 0,
+            update_on_change: false,
+        }
+    }
+}
+
+impl PvrrParams {
+    /// The indices of refraction of the R, G and B rays through a lens of index `ior`.
+    pub fn channel_iors(&self, ior: f32) -> [f32; 3] {
+        let d = self.dispersion as f32 * 1e-3;
+        [ior - d, ior, ior + d]
+    }
+}
+
 /// The parameters of one run of one method: one variant per parameter set, so a backend's
 /// exhaustive `match` decides, at compile time, what it does with every method.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -675,6 +770,8 @@ pub enum MethodParams {
     NearbyGeometry(NearbyParams),
     /// `distance-map`.
     DistanceMap(DistanceMapParams),
+    /// `pvrr`.
+    Pvrr(PvrrParams),
 }
 
 fn choice<T: Copy>(
@@ -732,6 +829,7 @@ const FRESNEL_TABLE: [(&str, DielectricFresnel); 3] = [
     ("schlick", DielectricFresnel::Schlick),
     ("split", DielectricFresnel::Split),
 ];
+const UPDATE_TABLE: [(&str, bool); 2] = [("every-frame", false), ("on-change", true)];
 const MODE_TABLE: [(&str, TraceMode); 2] = [
     ("transmission", TraceMode::Transmission),
     ("full", TraceMode::Full),
@@ -775,6 +873,7 @@ impl MethodParams {
                 spacing: SeedSpacing::Screen,
             }),
             MethodId::DistanceMap => MethodParams::DistanceMap(DistanceMapParams::default()),
+            MethodId::Pvrr => MethodParams::Pvrr(PvrrParams::default()),
         }
     }
 
@@ -795,6 +894,7 @@ impl MethodParams {
                 NearbyLookup::Seeded { .. } => MethodId::IterativeSeeded,
             },
             MethodParams::DistanceMap(_) => MethodId::DistanceMap,
+            MethodParams::Pvrr(_) => MethodId::Pvrr,
         }
     }
 
@@ -872,6 +972,18 @@ impl MethodParams {
                     _ => return Err(unknown(id)),
                 }
             }
+            MethodParams::Pvrr(p) => match name {
+                "depth" => p.depth = integer(name, value, 1, MAX_PVRR_DEPTH, origin)?,
+                "res" => {
+                    let (lo, hi) = PVRR_RESOLUTION;
+                    p.resolution = integer(name, value, lo, hi, origin)?;
+                }
+                "dispersion" => {
+                    p.dispersion = integer(name, value, 0, MAX_PVRR_DISPERSION, origin)?;
+                }
+                "update" => p.update_on_change = choice(name, value, &UPDATE_TABLE, origin)?,
+                _ => return Err(unknown(id)),
+            },
         }
         Ok(())
     }
@@ -912,6 +1024,13 @@ impl MethodParams {
                 "fresnel" => Some(name_of(&FRESNEL_TABLE, &p.path.fresnel).into()),
                 _ => None,
             },
+            (MethodParams::Pvrr(p), _) => match name {
+                "depth" => Some(p.depth.to_string()),
+                "res" => Some(p.resolution.to_string()),
+                "dispersion" => Some(p.dispersion.to_string()),
+                "update" => Some(name_of(&UPDATE_TABLE, &p.update_on_change).into()),
+                _ => None,
+            },
             _ => None,
         }
     }
@@ -921,7 +1040,10 @@ impl MethodParams {
         match &mut self {
             MethodParams::TwoInterface(p) => p.tir = tir,
             MethodParams::NearbyGeometry(p) => p.two.tir = tir,
-            MethodParams::Reference(_) | MethodParams::Single | MethodParams::DistanceMap(_) => {}
+            MethodParams::Reference(_)
+            | MethodParams::Single
+            | MethodParams::DistanceMap(_)
+            | MethodParams::Pvrr(_) => {}
         }
         self
     }
@@ -933,7 +1055,9 @@ impl MethodParams {
             MethodParams::Single => (DistanceMode::Interpolated, TirPolicy::default()),
             MethodParams::TwoInterface(p) => (p.distance, p.tir),
             MethodParams::NearbyGeometry(p) => (p.two.distance, p.two.tir),
-            MethodParams::Reference(_) | MethodParams::DistanceMap(_) => return None,
+            MethodParams::Reference(_) | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {
+                return None;
+            }
         };
         Some(
             ImageSpaceParams::new(ior, distance, tir)
@@ -946,9 +1070,10 @@ impl MethodParams {
         match self {
             MethodParams::TwoInterface(p) => Some(p.back),
             MethodParams::NearbyGeometry(p) => Some(p.two.back),
-            MethodParams::Single | MethodParams::Reference(_) | MethodParams::DistanceMap(_) => {
-                None
-            }
+            MethodParams::Single
+            | MethodParams::Reference(_)
+            | MethodParams::DistanceMap(_)
+            | MethodParams::Pvrr(_) => None,
         }
     }
 

@@ -57,7 +57,8 @@ impl Renderer for ReferenceRenderer {
             MethodParams::Single
             | MethodParams::TwoInterface(_)
             | MethodParams::NearbyGeometry(_)
-            | MethodParams::DistanceMap(_) => {
+            | MethodParams::DistanceMap(_)
+            | MethodParams::Pvrr(_) => {
                 return Err(RenderError::Unsupported {
                     backend: BackendId::Trace,
                     method: method.id(),

@@ -60,7 +60,8 @@ impl ImageSpacePipelines {
                 ),
                 MethodParams::Reference(_)
                 | MethodParams::NearbyGeometry(_)
-                | MethodParams::DistanceMap(_) => {
+                | MethodParams::DistanceMap(_)
+            | MethodParams::Pvrr(_) => {
                     unreachable!("not an image-space method")
                 }
             },

@@ -1,0 +1,241 @@
+//! Kakimoto et al. 2007 on the CPU, method `pvrr`: the plan of the frame
+//! ([`refract_scene::pvrr`]: per-vertex rays by BVH, virtual viewpoints, view volumes, texture
+//! coordinates), then every view rendered with the shared rasteriser, deepest first: a map is
+//! the scene from its virtual viewpoint without its own reflector, the eye view is the frame.
+//! In each view the diffuse objects are shaded, empty pixels show the environment, and a
+//! reflector's pixel interpolates its vertices' map positions (perspective-correct
+//! barycentrics) and reads its map bilinearly (§3.1 step 4).
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use refract_core::Camera;
+use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
+use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh};
+
+use crate::distance_map::surface_material;
+use crate::image_space::fill;
+use crate::raster::{DepthTest, Faces, SurfaceBuffer, rasterize_into};
+use crate::scene_meshes::SceneMeshes;
+
+/// A rendered view's radiance, row-major from the top.
+#[derive(Default)]
+struct Image {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec3>,
+}
+
+impl MapTexels for Image {
+    fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    #[inline]
+    fn texel(&self, x: u32, y: u32) -> Vec3 {
+        self.texels[(y * self.width + x) as usize]
+    }
+}
+
+/// What one pixel of a view shows beside its colour.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct PvrrAov {
+    covered: bool,
+    zoom: bool,
+}
+
+/// The CPU passes of `pvrr`; the plan and every buffer are kept between frames.
+#[derive(Default)]
+pub struct PvrrPasses {
+    planner: PvrrPlanner,
+    /// Every mesh of the scene; and every mesh but reflector `k`, for `k`'s maps.
+    everything: SceneMeshes,
+    without: Vec<SceneMeshes>,
+    buffers: Vec<SurfaceBuffer>,
+    images: Vec<Image>,
+    aovs: Vec<PvrrAov>,
+}
+
+impl PvrrPasses {
+    /// Prepares the meshes of `scene`.
+    pub fn prepare(&mut self, scene: &Scene) {
+        self.planner.prepare(scene);
+        let all: Vec<SceneMesh> = core::iter::once(SceneMesh::Refractor)
+            .chain((0..scene.objects.len()).map(SceneMesh::Object))
+            .collect();
+        self.everything = SceneMeshes::of(scene, all.iter().copied());
+        self.without = refract_scene::pvrr::reflectors(scene)
+            .iter()
+            .map(|r| SceneMeshes::of(scene, all.iter().copied().filter(|m| *m != r.mesh)))
+            .collect();
+    }
+
+    /// One frame.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        params: &PvrrParams,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        let plan = self.planner.plan(scene, camera, params)?;
+        let views = plan.views.len();
+        self.buffers.resize_with(views, SurfaceBuffer::new);
+        self.images.resize_with(views, Image::default);
+        for index in (1..views).rev() {
+            let (done, rest) = self.images.split_at_mut(index + 1);
+            let image = &mut done[index];
+            let view = &plan.views[index];
+            image.width = view.camera.width();
+            image.height = view.camera.height();
+            image.texels.resize((image.width * image.height) as usize, Vec3::ZERO);
+            let meshes = match view.excluded {
+                Some(k) => &self.without[k],
+                None => &self.everything,
+            };
+            let children = ChildMaps {
+                first: index + 1,
+                images: rest,
+            };
+            render_view(
+                scene,
+                plan,
+                view,
+                meshes,
+                &children,
+                &mut self.buffers[index],
+                &mut image.texels,
+                None,
+            );
+        }
+        let (width, height) = (camera.width(), camera.height());
+        frame.resize_for_overwrite(width, height);
+        let with_aovs = outputs == FrameOutputs::ColorAndAovs;
+        self.aovs.resize(
+            if with_aovs { (width * height) as usize } else { 0 },
+            PvrrAov::default(),
+        );
+        let children = ChildMaps {
+            first: 1,
+            images: self.images.get(1..).unwrap_or_default(),
+        };
+        render_view(
+            scene,
+            plan,
+            &plan.views[0],
+            &self.everything,
+            &children,
+            &mut self.buffers[0],
+            &mut frame.color,
+            with_aovs.then_some(&mut self.aovs[..]),
+        );
+        if with_aovs {
+            write_layers(&self.aovs, frame);
+        }
+        Ok(())
+    }
+}
+
+/// The rendered maps of views `first..`.
+struct ChildMaps<'a> {
+    first: usize,
+    images: &'a [Image],
+}
+
+impl ChildMaps<'_> {
+    fn get(&self, view: usize) -> Option<&Image> {
+        view.checked_sub(self.first).and_then(|i| self.images.get(i))
+    }
+}
+
+/// Renders `view` into `out` (one radiance per pixel) and, for the eye, its AOVs.
+#[allow(clippy::too_many_arguments)]
+fn render_view(
+    scene: &Scene,
+    plan: &PvrrPlan,
+    view: &PvrrView,
+    meshes: &SceneMeshes,
+    children: &ChildMaps<'_>,
+    buffer: &mut SurfaceBuffer,
+    out: &mut [Vec3],
+    aovs: Option<&mut [PvrrAov]>,
+) {
+    let camera = &view.camera;
+    let raster = meshes.raster();
+    rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);
+    let width = camera.width();
+    let buffer = &*buffer;
+    let shade = |i: usize| -> (Vec3, PvrrAov) {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        let Some(t) = buffer.texel(i) else {
+            let dir = camera.pixel_ray(Camera::pixel_center(x, y)).dir;
+            return (scene.environment.radiance(dir), PvrrAov::default());
+        };
+        let (mesh, triangle) = meshes.source(t.triangle);
+        let w = raster.barycentrics(&t);
+        let Some(draw) = view
+            .draws
+            .iter()
+            .find(|d| plan.reflectors[d.reflector].mesh == mesh)
+        else {
+            let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
+            return (material.rgb, PvrrAov::default());
+        };
+        let covered = PvrrAov {
+            covered: true,
+            zoom: true,
+        };
+        let Some(corners) = scene
+            .mesh(mesh)
+            .map(|m| m.triangles[triangle as usize].map(|v| draw.vertices[v as usize]))
+        else {
+            return (Vec3::ZERO, covered);
+        };
+        let state: f32 = (0..3).map(|k| w[k] * corners[k].state).sum();
+        let map = draw.map.and_then(|m| children.get(m));
+        let (Some(map), true) = (map, state <= 0.0) else {
+            return (Vec3::ZERO, covered);
+        };
+        let st = [0, 1, 2].map(|c| {
+            (0..3)
+                .map(|k| w[k] * Vec2::from_array(corners[k].st[c]))
+                .sum::<Vec2>()
+        });
+        let tint = match plan.reflectors[draw.reflector].kind {
+            ReflectorKind::Mirror { f0 } => {
+                mirror_tint(f0, t.n_ws, (t.p_ws - camera.eye()).normalize())
+            }
+            ReflectorKind::Lens { .. } => Vec3::ONE,
+        };
+        (
+            lookup(map, st, tint),
+            PvrrAov {
+                covered: true,
+                zoom: false,
+            },
+        )
+    };
+    match aovs {
+        Some(aovs) => out
+            .par_iter_mut()
+            .zip(aovs.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (c, a))| (*c, *a) = shade(i)),
+        None => out
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, c)| *c = shade(i).0),
+    }
+}
+
+/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
+fn write_layers(aovs: &[PvrrAov], frame: &mut Frame) {
+    for &aov in MethodId::Pvrr.info().aovs {
+        match aov {
+            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
+            Aov::Zoom => fill(frame.flag_mut(aov), aovs, |a| a.zoom),
+            other => unreachable!("pvrr does not compute {}", other.name()),
+        }
+    }
+}
