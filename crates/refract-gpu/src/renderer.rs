@@ -17,6 +17,7 @@ use crate::frame_uniforms::frame_uniforms;
 use crate::methods::distance_map::{DistanceMapPipelines, DistanceMapTargets};
 use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines, ImageSpaceTargets};
 use crate::methods::nearby_geometry::{NearbyFrame, NearbyPipelines, NearbyTargets};
+use crate::methods::pvrr::{PvrrPipelines, PvrrTargets};
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
@@ -50,11 +51,13 @@ pub struct GpuRenderer {
     image_space: ImageSpacePipelines,
     nearby: NearbyPipelines,
     distance_map: DistanceMapPipelines,
+    pvrr: PvrrPipelines,
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     targets: Option<ImageSpaceTargets>,
     nearby_targets: Option<NearbyTargets>,
     distance_targets: Option<DistanceMapTargets>,
+    pvrr_targets: Option<PvrrTargets>,
 }
 
 impl GpuRenderer {
@@ -65,12 +68,15 @@ impl GpuRenderer {
 
     /// Compiles the pipelines on `context`.
     pub fn with_context(context: GpuContext) -> Result<Self, GpuError> {
-        let (raster, image_space, nearby, distance_map) = context.checked(|| {
+        let (raster, image_space, nearby, distance_map, pvrr) = context.checked(|| {
+            let raster = RasterPipelines::new(&context.device);
+            let pvrr = PvrrPipelines::new(&context.device, &raster);
             (
-                RasterPipelines::new(&context.device),
+                raster,
                 ImageSpacePipelines::new(&context.device),
                 NearbyPipelines::new(&context.device),
                 DistanceMapPipelines::new(&context.device),
+                pvrr,
             )
         })?;
         let timestamps = Timestamps::new(&context);
@@ -80,11 +86,13 @@ impl GpuRenderer {
             image_space,
             nearby,
             distance_map,
+            pvrr,
             timestamps,
             scene: None,
             targets: None,
             nearby_targets: None,
             distance_targets: None,
+            pvrr_targets: None,
         })
     }
 
@@ -262,6 +270,54 @@ impl GpuRenderer {
         Ok(timing)
     }
 
+    /// One frame of `pvrr` (Kakimoto et al. 2007).
+    fn pvrr(
+        &mut self,
+        camera: &Camera,
+        params: &refract_scene::PvrrParams,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        let (scene, gpu_scene) = self
+            .scene
+            .as_ref()
+            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
+        let size = (camera.width(), camera.height());
+        reuse_or_allocate(
+            &mut self.pvrr_targets,
+            |t| t.fits(size, params),
+            || PvrrTargets::new(&self.context, scene, size, params),
+        )?;
+        let Some(targets) = &mut self.pvrr_targets else {
+            unreachable!("allocated above")
+        };
+        // The per-vertex work (CPU BVH) is part of the frame's wall time.
+        let start = Instant::now();
+        let mut encoder =
+            self.context
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("pvrr frame"),
+                });
+        targets.encode(
+            &self.context,
+            &self.raster,
+            &self.pvrr,
+            gpu_scene,
+            scene,
+            camera,
+            params,
+            outputs,
+            self.timestamps.as_ref(),
+            &mut encoder,
+        )?;
+        let timing = self.submit(encoder, start)?;
+        if let Some(targets) = &self.pvrr_targets {
+            targets.read(&self.context, outputs, frame)?;
+        }
+        Ok(timing)
+    }
+
     /// One frame of a nearby-geometry method (Wyman 2005b).
     fn nearby_geometry(
         &mut self,
@@ -362,6 +418,7 @@ impl Renderer for GpuRenderer {
         self.targets = None; // bound to the old scene's environment buffer
         self.nearby_targets = None;
         self.distance_targets = None;
+        self.pvrr_targets = None;
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }
@@ -383,6 +440,9 @@ impl Renderer for GpuRenderer {
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
         if let MethodParams::DistanceMap(p) = method {
             return self.distance_map(camera, p, outputs, frame);
+        }
+        if let MethodParams::Pvrr(p) = method {
+            return self.pvrr(camera, p, outputs, frame);
         }
         let unsupported = || RenderError::Unsupported {
             backend: BackendId::Gpu,

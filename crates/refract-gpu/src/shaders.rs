@@ -5,7 +5,7 @@ use refract_core::gpu::wgsl_constants;
 
 /// Every `.wgsl` file, by name: the core twin from `refract_core::wgsl`, the passes and
 /// methods from `shaders/`.
-pub const FILES: [(&str, &str); 11] = [
+pub const FILES: [(&str, &str); 13] = [
     ("core.wgsl", refract_core::wgsl::CORE),
     ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY),
     ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
@@ -14,6 +14,10 @@ pub const FILES: [(&str, &str); 11] = [
         include_str!("../../../shaders/environment.wgsl"),
     ),
     ("raster.wgsl", include_str!("../../../shaders/raster.wgsl")),
+    (
+        "pvrr_raster.wgsl",
+        include_str!("../../../shaders/pvrr_raster.wgsl"),
+    ),
     (
         "image_space.wgsl",
         include_str!("../../../shaders/image_space.wgsl"),
@@ -34,6 +38,7 @@ pub const FILES: [(&str, &str); 11] = [
         "nearby_geometry.wgsl",
         include_str!("../../../shaders/nearby_geometry.wgsl"),
     ),
+    ("pvrr.wgsl", include_str!("../../../shaders/pvrr.wgsl")),
     (
         "conformance.wgsl",
         include_str!("../../../shaders/conformance.wgsl"),
@@ -70,8 +75,11 @@ fn compose(parts: &[&str]) -> String {
 }
 
 /// The modules the backend compiles: `(name, files it is made of)`.
-pub const MODULES: [(&str, &[&str]); 5] = [
-    ("raster", &["core.wgsl", "frame.wgsl", "raster.wgsl"]),
+pub const MODULES: [(&str, &[&str]); 6] = [
+    (
+        "raster",
+        &["core.wgsl", "frame.wgsl", "raster.wgsl", "pvrr_raster.wgsl"],
+    ),
     (
         "image_space",
         &[
@@ -104,6 +112,17 @@ pub const MODULES: [(&str, &[&str]); 5] = [
             "materials.wgsl",
             "distance_search.wgsl",
             "distance_map.wgsl",
+        ],
+    ),
+    (
+        "pvrr",
+        &[
+            "core.wgsl",
+            "procedural_sky.wgsl",
+            "frame.wgsl",
+            "environment.wgsl",
+            "materials.wgsl",
+            "pvrr.wgsl",
         ],
     ),
     (

@@ -3,6 +3,7 @@
 pub(crate) mod distance_map;
 pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
+pub(crate) mod pvrr;
 
 use refract_scene::{Family, FrameOutputs, MethodId, MethodParams, REGISTRY};
 
