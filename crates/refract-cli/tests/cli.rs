@@ -46,8 +46,8 @@ fn compare_writes_metrics_images_and_reports() {
     }
     assert_eq!(
         records.len(),
-        2 * (1 + 9 * backends.len()),
-        "reference + 9 methods per backend per scene"
+        2 * (1 + 10 * backends.len()),
+        "reference + 10 methods per backend per scene"
     );
     let fields = [
         "scene",

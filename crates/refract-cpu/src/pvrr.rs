@@ -11,7 +11,9 @@ use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
-use refract_scene::{Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh};
+use refract_scene::{
+    Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
+};
 
 use crate::distance_map::surface_material;
 use crate::image_space::fill;
@@ -20,10 +22,13 @@ use crate::scene_meshes::SceneMeshes;
 
 /// A rendered view's radiance, row-major from the top.
 #[derive(Default)]
-struct Image {
-    width: u32,
-    height: u32,
-    texels: Vec<Vec3>,
+pub struct Image {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Radiance per texel.
+    pub texels: Vec<Vec3>,
 }
 
 impl MapTexels for Image {
@@ -70,6 +75,35 @@ impl PvrrPasses {
             .collect();
     }
 
+    /// The plan of the last frame.
+    pub fn last_plan(&self) -> &PvrrPlan {
+        self.planner.last()
+    }
+
+    /// The map of view `view` (≥ 1) of the last frame.
+    pub fn map(&self, view: usize) -> Option<&Image> {
+        (view >= 1).then(|| self.images.get(view)).flatten()
+    }
+
+    /// The mesh map `view` of the last frame shows at map position `st`, `None` where it shows
+    /// the environment (Kakimoto et al. §6: what the occlusion inconsistency compares).
+    pub fn map_mesh_at(&self, view: usize, st: Vec2) -> Option<SceneMesh> {
+        let plan = self.planner.last();
+        let v = plan.views.get(view)?;
+        let buffer = self.buffers.get(view)?;
+        let (w, h) = (v.camera.width(), v.camera.height());
+        let (x, y) = (st.x.floor(), st.y.floor());
+        if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
+            return None;
+        }
+        let meshes = match v.excluded {
+            Some(k) => &self.without[k],
+            None => &self.everything,
+        };
+        let texel = buffer.texel((y as u32 * w + x as u32) as usize)?;
+        Some(meshes.source(texel.triangle).0)
+    }
+
     /// One frame.
     pub fn render(
         &mut self,
@@ -89,7 +123,9 @@ impl PvrrPasses {
             let view = &plan.views[index];
             image.width = view.camera.width();
             image.height = view.camera.height();
-            image.texels.resize((image.width * image.height) as usize, Vec3::ZERO);
+            image
+                .texels
+                .resize((image.width * image.height) as usize, Vec3::ZERO);
             let meshes = match view.excluded {
                 Some(k) => &self.without[k],
                 None => &self.everything,
@@ -113,7 +149,11 @@ impl PvrrPasses {
         frame.resize_for_overwrite(width, height);
         let with_aovs = outputs == FrameOutputs::ColorAndAovs;
         self.aovs.resize(
-            if with_aovs { (width * height) as usize } else { 0 },
+            if with_aovs {
+                (width * height) as usize
+            } else {
+                0
+            },
             PvrrAov::default(),
         );
         let children = ChildMaps {
@@ -145,7 +185,8 @@ struct ChildMaps<'a> {
 
 impl ChildMaps<'_> {
     fn get(&self, view: usize) -> Option<&Image> {
-        view.checked_sub(self.first).and_then(|i| self.images.get(i))
+        view.checked_sub(self.first)
+            .and_then(|i| self.images.get(i))
     }
 }
 

@@ -349,7 +349,7 @@ mod tests {
     #[test]
     fn mirror_patches_face_plus_z_with_their_curvature() {
         for radius in [1.5, f32::INFINITY, -1.5] {
-            let mesh = mirror_patch(1.3, radius, 7, 0..7).unwrap();
+            let mesh = mirror_patch(1.3, radius, 7, 0..7).expect("test value");
             assert_eq!(mesh.positions.len(), 49);
             for (i, _) in mesh.triangles.iter().enumerate() {
                 let [a, b, c] = mesh.triangle_positions(i);
@@ -362,8 +362,8 @@ mod tests {
             let lean = mesh.normals[0].x * corner.x;
             assert_eq!(lean > 1e-6, radius > 0.0 && radius.is_finite(), "{radius}");
         }
-        let left = mirror_patch(1.3, 1.5, 7, 0..4).unwrap();
-        let right = mirror_patch(1.3, 1.5, 7, 3..7).unwrap();
+        let left = mirror_patch(1.3, 1.5, 7, 0..4).expect("test value");
+        let right = mirror_patch(1.3, 1.5, 7, 3..7).expect("test value");
         assert_eq!(left.positions[3], right.positions[0], "the shared column");
         assert!(mirror_patch(1.3, 0.5, 7, 0..7).is_err());
     }

@@ -156,9 +156,7 @@ impl Aov {
             | Aov::TirFirstExit
             | Aov::Converged
             | Aov::Miss
-            | Aov::Zoom => {
-                AovKind::Flag
-            }
+            | Aov::Zoom => AovKind::Flag,
         }
     }
 }

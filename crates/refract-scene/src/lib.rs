@@ -36,7 +36,8 @@ pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
     BackendId, DistanceMapParams, Family, InterfaceRule, MethodId, MethodInfo, MethodParams,
-    NearbyParams, PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
+    NearbyParams, PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams,
+    scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

@@ -16,9 +16,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::pvrr::{
-    MAX_INTERNAL_BOUNCES, PvrrVertex, RayEnd, STATE_DEPTH, STATE_TRAPPED, STATE_ZOOM,
-    SceneBounds, VertexRay, ViewVolume, mean_direction, parallel_viewpoint, texcoord,
-    view_volume, virtual_viewpoint,
+    MAX_INTERNAL_BOUNCES, PvrrVertex, RayEnd, STATE_DEPTH, STATE_TRAPPED, STATE_ZOOM, SceneBounds,
+    VertexRay, ViewVolume, mean_direction, parallel_viewpoint, texcoord, view_volume,
+    virtual_viewpoint,
 };
 use refract_core::{Camera, CameraDesc, Ray};
 
@@ -129,12 +129,18 @@ pub struct PvrrPlanner {
     bounds: Option<SceneBounds>,
     plan: PvrrPlan,
     key: Option<(CameraDesc, PvrrParams)>,
+    builds: u64,
 }
 
 /// The smallest ray distance of a per-vertex ray, relative to the scene radius.
 const RAY_EPSILON: f32 = 1e-4;
 
 impl PvrrPlanner {
+    /// The scene's bounds (after [`Self::prepare`]).
+    pub fn bounds(&self) -> Option<SceneBounds> {
+        self.bounds
+    }
+
     /// Forgets everything about the previous scene.
     pub fn prepare(&mut self, scene: &Scene) {
         let (mut min, mut max) = scene.refractor.mesh().bounds();
@@ -171,7 +177,18 @@ impl PvrrPlanner {
         }
         self.plan = build_plan(scene, camera, params, bounds)?;
         self.key = Some(key);
+        self.builds += 1;
         Ok(&self.plan)
+    }
+
+    /// The last plan (empty before the first frame).
+    pub fn last(&self) -> &PvrrPlan {
+        &self.plan
+    }
+
+    /// How many plans were built (not reused) since this planner was made.
+    pub fn builds(&self) -> u64 {
+        self.builds
     }
 }
 
@@ -290,10 +307,7 @@ impl Context<'_> {
         let scene = self.scene;
         let mut best = f32::INFINITY;
         if exclude != SceneMesh::Refractor
-            && let Some(h) = scene
-                .refractor
-                .bvh()
-                .closest_hit(ray, self.epsilon, best)
+            && let Some(h) = scene.refractor.bvh().closest_hit(ray, self.epsilon, best)
         {
             best = h.t;
         }
@@ -314,7 +328,14 @@ impl Context<'_> {
 
     /// The exact ray of vertex `(v, n)` of `reflector` seen from `eye` through a lens of index
     /// `ior` (ignored for mirrors): `None` when it is trapped in the lens.
-    fn vertex_ray(&self, reflector: &Reflector, eye: Vec3, v: Vec3, n: Vec3, ior: f32) -> Option<Ray> {
+    fn vertex_ray(
+        &self,
+        reflector: &Reflector,
+        eye: Vec3,
+        v: Vec3,
+        n: Vec3,
+        ior: f32,
+    ) -> Option<Ray> {
         let incident = (v - eye).normalize();
         let n = face_forward_shading_normal(n, incident);
         match reflector.kind {
@@ -373,11 +394,13 @@ impl Context<'_> {
                 }
                 let (v, n) = (mesh.positions[i], mesh.normals[i]);
                 for (k, slot) in out.iter_mut().enumerate().take(channels) {
-                    *slot = self.vertex_ray(reflector, eye, v, n, iors[k]).map(|ray| VertexRay {
-                        origin: ray.origin,
-                        dir: ray.dir,
-                        end: self.trace(&ray, reflector.mesh),
-                    });
+                    *slot = self
+                        .vertex_ray(reflector, eye, v, n, iors[k])
+                        .map(|ray| VertexRay {
+                            origin: ray.origin,
+                            dir: ray.dir,
+                            end: self.trace(&ray, reflector.mesh),
+                        });
                 }
                 if channels == 1 {
                     out[1] = out[0];
@@ -438,8 +461,14 @@ mod tests {
         let all = reflectors(&scene);
         assert_eq!(all[0].mesh, SceneMesh::Refractor);
         assert!(matches!(all[0].kind, ReflectorKind::Mirror { .. }));
-        assert!(all.len() >= 2, "the planar mirror is a conductor object too");
+        assert!(
+            all.len() >= 2,
+            "the planar mirror is a conductor object too"
+        );
         let glass = load_scene("sphere").expect("built-in").scene;
-        assert!(matches!(reflectors(&glass)[0].kind, ReflectorKind::Lens { .. }));
+        assert!(matches!(
+            reflectors(&glass)[0].kind,
+            ReflectorKind::Lens { .. }
+        ));
     }
 }

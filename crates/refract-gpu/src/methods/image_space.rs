@@ -61,7 +61,7 @@ impl ImageSpacePipelines {
                 MethodParams::Reference(_)
                 | MethodParams::NearbyGeometry(_)
                 | MethodParams::DistanceMap(_)
-            | MethodParams::Pvrr(_) => {
+                | MethodParams::Pvrr(_) => {
                     unreachable!("not an image-space method")
                 }
             },

@@ -176,9 +176,22 @@ impl ViewTargets {
         let view = |t: wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
         Self {
             size: (width, height),
-            views: ["a", "N", "b"]
-                .map(|what| view(target(device, &format!("{label} {what}"), width, height, TARGET_FORMAT))),
-            depth: view(target(device, &format!("{label} depth"), width, height, DEPTH_FORMAT)),
+            views: ["a", "N", "b"].map(|what| {
+                view(target(
+                    device,
+                    &format!("{label} {what}"),
+                    width,
+                    height,
+                    TARGET_FORMAT,
+                ))
+            }),
+            depth: view(target(
+                device,
+                &format!("{label} depth"),
+                width,
+                height,
+                DEPTH_FORMAT,
+            )),
         }
     }
 }
@@ -194,7 +207,12 @@ struct ViewBindings {
 }
 
 /// A storage or vertex buffer that grows to what a frame needs.
-fn buffer(device: &wgpu::Device, label: &str, bytes: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: bytes.max(256).next_multiple_of(256),
@@ -239,7 +257,11 @@ impl PvrrTargets {
             draws: buffer(device, "pvrr draws", 32, wgpu::BufferUsages::STORAGE),
             vertices: buffer(device, "pvrr vertices", 32, wgpu::BufferUsages::VERTEX),
             bindings: Vec::new(),
-            outputs: OutputBuffers::new(device, &["colour", "flags"], u64::from(width) * u64::from(height)),
+            outputs: OutputBuffers::new(
+                device,
+                &["colour", "flags"],
+                u64::from(width) * u64::from(height),
+            ),
         })
     }
 
@@ -261,7 +283,8 @@ impl PvrrTargets {
         let device = &context.device;
         let limits = device.limits();
         let map_bytes = texels * 16;
-        if map_bytes > limits.max_storage_buffer_binding_size || map_bytes > limits.max_buffer_size {
+        if map_bytes > limits.max_storage_buffer_binding_size || map_bytes > limits.max_buffer_size
+        {
             return Err(GpuError::Wgpu(format!(
                 "pvrr: the frame's maps need {map_bytes} bytes; the adapter binds at most {} (lower res or depth)",
                 limits.max_storage_buffer_binding_size
@@ -273,11 +296,21 @@ impl PvrrTargets {
             grown = true;
         }
         if self.draws.size() < draws * 32 {
-            self.draws = buffer(device, "pvrr draws", draws * 32, wgpu::BufferUsages::STORAGE);
+            self.draws = buffer(
+                device,
+                "pvrr draws",
+                draws * 32,
+                wgpu::BufferUsages::STORAGE,
+            );
             grown = true;
         }
         if self.vertices.size() < vertices * 32 {
-            self.vertices = buffer(device, "pvrr vertices", vertices * 32, wgpu::BufferUsages::VERTEX);
+            self.vertices = buffer(
+                device,
+                "pvrr vertices",
+                vertices * 32,
+                wgpu::BufferUsages::VERTEX,
+            );
         }
         if grown {
             self.bindings.clear();
@@ -295,7 +328,12 @@ impl PvrrTargets {
                 std::mem::size_of::<PvrrViewUniforms>() as u64,
                 wgpu::BufferUsages::UNIFORM,
             );
-            let raster_group = bind_group(device, "pvrr raster", &raster.layout, &[frame.as_entire_binding()]);
+            let raster_group = bind_group(
+                device,
+                "pvrr raster",
+                &raster.layout,
+                &[frame.as_entire_binding()],
+            );
             let shade = |targets: &ViewTargets| {
                 bind_group(
                     device,
@@ -381,7 +419,12 @@ impl PvrrTargets {
             pipelines,
             raster,
             gpu_scene,
-            (texels, draws.len() as u64, vertices.len() as u64, plan.views.len()),
+            (
+                texels,
+                draws.len() as u64,
+                vertices.len() as u64,
+                plan.views.len(),
+            ),
         )?;
         let queue = &context.queue;
         queue.write_buffer(&self.draws, 0, bytemuck::cast_slice(&draws));
@@ -389,7 +432,12 @@ impl PvrrTargets {
         let light = &scene.light;
         for (v, view) in plan.views.iter().enumerate() {
             let b = &self.bindings[v];
-            let u = frame_uniforms(&view.camera, &gpu_scene.environment, 1.0, TirPolicy::default());
+            let u = frame_uniforms(
+                &view.camera,
+                &gpu_scene.environment,
+                1.0,
+                TirPolicy::default(),
+            );
             queue.write_buffer(&b.frame, 0, bytemuck::bytes_of(&u));
             let uniforms = PvrrViewUniforms {
                 light_direction: light.direction.extend(0.0).to_array(),
