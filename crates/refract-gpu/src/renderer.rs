@@ -291,7 +291,6 @@ impl GpuRenderer {
         let Some(targets) = &mut self.pvrr_targets else {
             unreachable!("allocated above")
         };
-        // The per-vertex work (CPU BVH) is part of the frame's wall time.
         let start = Instant::now();
         let mut encoder =
             self.context
@@ -299,7 +298,7 @@ impl GpuRenderer {
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("pvrr frame"),
                 });
-        targets.encode(
+        let plan_ms = targets.encode(
             &self.context,
             &self.raster,
             &self.pvrr,
@@ -311,7 +310,11 @@ impl GpuRenderer {
             self.timestamps.as_ref(),
             &mut encoder,
         )?;
-        let timing = self.submit(encoder, start)?;
+        let mut timing = self.submit(encoder, start)?;
+        if timing.source == TimingSource::GpuTimestamps {
+            // The GPU's timestamps plus the per-vertex plan the CPU made for it.
+            timing.ms += plan_ms;
+        }
         if let Some(targets) = &self.pvrr_targets {
             targets.read(&self.context, outputs, frame)?;
         }

@@ -366,7 +366,8 @@ impl PvrrTargets {
         Ok(())
     }
 
-    /// Plans and encodes one frame: every view, deepest first.
+    /// Plans and encodes one frame: every view, deepest first. Returns the milliseconds the
+    /// plan took on the CPU (the per-vertex rays), which GPU timestamps do not see.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode(
         &mut self,
@@ -380,7 +381,8 @@ impl PvrrTargets {
         outputs: FrameOutputs,
         timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
-    ) -> Result<(), GpuError> {
+    ) -> Result<f64, GpuError> {
+        let planning = std::time::Instant::now();
         let plan: PvrrPlan = self
             .planner
             .plan(scene, camera, params)
@@ -414,6 +416,7 @@ impl PvrrTargets {
                 vertices.extend_from_slice(&draw.vertices);
             }
         }
+        let plan_ms = planning.elapsed().as_secs_f64() * 1e3;
         self.reserve(
             context,
             pipelines,
@@ -544,7 +547,7 @@ impl PvrrTargets {
             FrameOutputs::Color => 1,
         };
         self.outputs.copy(encoder, copies);
-        Ok(())
+        Ok(plan_ms)
     }
 
     /// Reads the last submitted frame into `frame`.
