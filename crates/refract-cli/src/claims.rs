@@ -21,6 +21,7 @@ use crate::timing::time_frames;
 
 mod distance_map;
 mod nearby;
+mod pvrr;
 
 /// Arguments of `refract claims`.
 #[derive(Debug, clap::Args)]
@@ -145,11 +146,7 @@ pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
     let mut md = document(args, &measured, &notes, cow_fps);
     md.push_str(&nearby::section(args)?);
     md.push_str(&distance_map::section(args)?);
-    md.push_str(
-        "\n## Kakimoto et al. 2007\n\n\
-         Not measured yet: the PVRR method is not implemented. Its claims get rows here when it \
-         lands.\n",
-    );
+    md.push_str(&pvrr::section(args)?);
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         crate::cleanup::create_dir(dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;

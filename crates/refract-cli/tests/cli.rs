@@ -91,6 +91,7 @@ fn compare_writes_metrics_images_and_reports() {
         "secant_steps_mean",
         "bounces_mean",
         "layer_miss_share",
+        "zoom_share",
         "ms_per_frame",
     ];
     for record in records {

@@ -117,6 +117,9 @@ pub struct MetricsRecord {
     pub bounces_mean: Option<f64>,
     /// Distance maps: share of such pixels where a ray left every layer (environment read).
     pub layer_miss_share: Option<f64>,
+    /// `pvrr`: share of reflector pixels not looked up (the zooming region, a lens ray with no
+    /// exit, past the last stack level; Kakimoto et al. §4.2).
+    pub zoom_share: Option<f64>,
     /// Median time per frame (all per-frame passes), milliseconds.
     pub ms_per_frame: Option<f64>,
 }
@@ -441,6 +444,17 @@ pub fn evaluate_method(
         record.layer_miss_share = frame
             .flag(Aov::Miss)
             .and_then(|m| mean(paths.iter().map(|&i| f64::from(u8::from(m[i])))));
+    }
+    if let (MethodParams::Pvrr(_), Some(covered), Some(zoom)) =
+        (method, frame.flag(Aov::Covered), frame.flag(Aov::Zoom))
+    {
+        record.zoom_share = mean(
+            covered
+                .iter()
+                .zip(zoom)
+                .filter(|(c, _)| **c)
+                .map(|(_, z)| f64::from(u8::from(*z))),
+        );
     }
     (record, maps)
 }
