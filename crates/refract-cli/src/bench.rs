@@ -282,8 +282,18 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
 /// Kakimoto et al. 2007 §5 (GeForce 8800 Ultra, Core 2 Quad 2.66 GHz): the rows of the table,
 /// as (label, scene, parameters, paper's fps range).
 const PVRR_PAPER: [(&str, &str, &[(&str, &str)], (f64, f64)); 5] = [
-    ("reflection (Fig. 1, 5)", "convex-mirror", &[], (140.0, 170.0)),
-    ("multiple reflection (Fig. 11)", "mirror-stack", &[], (70.0, 90.0)),
+    (
+        "reflection (Fig. 1, 5)",
+        "convex-mirror",
+        &[],
+        (140.0, 170.0),
+    ),
+    (
+        "multiple reflection (Fig. 11)",
+        "mirror-stack",
+        &[],
+        (70.0, 90.0),
+    ),
     ("lens (Fig. 12-14)", "spectacles", &[], (8.0, 10.0)),
     (
         "lens fixed to the eye",

@@ -30,7 +30,7 @@ mod view_reference;
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
 /// With no command, compares every method of the registry (`refract methods`) on the CPU backend and the GPU backend (when an adapter exists) against the exact reference ray
-/// tracer on the built-in scenes (sphere, torus, lens, chart, mirror-room, glass-room) at 512², writes images, error maps,
+/// tracer on the built-in scenes (`refract scenes`: glass, the distance-map rooms, the PVRR mirrors and spectacles) at 512², writes images, error maps,
 /// metrics.json, report.md and index.html to out/, and prints a summary table.
 #[derive(Debug, Parser)]
 #[command(name = "refract", version, about, long_about)]

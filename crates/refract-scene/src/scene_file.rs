@@ -95,7 +95,7 @@ translate = [0.0, -1.0, 0.0]
 mesh = "builtin:plane"
 texture = "color-chart"
 scale = 3.0
-rotate_deg = [90.0, -120.0, 0.0]
+rotate_deg = [90.0, 0.0, 120.0]
 translate = [3.4, 0.2, 2.1]
 
 [[objects]]
