@@ -279,9 +279,17 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One row of the pvrr table: label, scene, parameters, the paper's fps range.
+type PvrrCase = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+    (f64, f64),
+);
+
 /// Kakimoto et al. 2007 §5 (GeForce 8800 Ultra, Core 2 Quad 2.66 GHz): the rows of the table,
 /// as (label, scene, parameters, paper's fps range).
-const PVRR_PAPER: [(&str, &str, &[(&str, &str)], (f64, f64)); 5] = [
+const PVRR_PAPER: [PvrrCase; 5] = [
     (
         "reflection (Fig. 1, 5)",
         "convex-mirror",
