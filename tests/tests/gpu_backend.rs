@@ -307,6 +307,18 @@ fn gpu_latlong_lookups_match_the_cpu() {
     }
 }
 
+/// The share of pixels whose 8-bit sRGB colours differ by more than one level in a channel.
+fn srgb8_differs(c: &Frame, g: &Frame) -> f64 {
+    let n = c.pixel_count();
+    (0..n)
+        .filter(|&i| {
+            let (a, b) = (to_srgb8(c.color[i]), to_srgb8(g.color[i]));
+            a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1)
+        })
+        .count() as f64
+        / n as f64
+}
+
 /// `distance-map` on both backends, on the room scenes (mirrors, glass, diffuse walls) and a
 /// glass sphere in the environment, with depth peeling and min-max off: colours differ by more
 /// than 1/255 on at most 2 % of the pixels and the bounce counts on at most 2 % of the pixels
@@ -351,13 +363,7 @@ fn gpu_distance_maps_agree_with_cpu_distance_maps() {
                 "the same layers"
             );
             let n = c.pixel_count();
-            let color_differs = (0..n)
-                .filter(|&i| {
-                    let (a, b) = (to_srgb8(c.color[i]), to_srgb8(g.color[i]));
-                    a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1)
-                })
-                .count() as f64
-                / n as f64;
+            let color_differs = srgb8_differs(&c, &g);
             let (cc, gc) = (
                 c.flag(Aov::Covered).expect("covered"),
                 g.flag(Aov::Covered).expect("covered"),
@@ -427,13 +433,7 @@ fn gpu_pvrr_agrees_with_cpu_pvrr() {
             "the same layers"
         );
         let n = c.pixel_count();
-        let color_differs = (0..n)
-            .filter(|&i| {
-                let (a, b) = (to_srgb8(c.color[i]), to_srgb8(g.color[i]));
-                a.iter().zip(b).any(|(x, y)| x.abs_diff(y) > 1)
-            })
-            .count() as f64
-            / n as f64;
+        let color_differs = srgb8_differs(&c, &g);
         let flags_differ = |aov| {
             let (a, b) = (c.flag(aov).expect("flag"), g.flag(aov).expect("flag"));
             a.iter().zip(b).filter(|(x, y)| x != y).count() as f64 / n as f64

@@ -31,6 +31,12 @@ impl CpuRenderer {
     pub fn new() -> Self {
         Self::default()
     }
+
+    /// The `pvrr` passes: the last frame's plan and maps (for measurements such as the
+    /// per-vertex exactness and the occlusion inconsistency of Kakimoto et al.).
+    pub fn pvrr_passes(&self) -> &PvrrPasses {
+        &self.pvrr
+    }
 }
 
 impl Renderer for CpuRenderer {

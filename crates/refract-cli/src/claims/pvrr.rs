@@ -158,34 +158,6 @@ fn exactness(passes: &PvrrPasses, scene: &Scene, camera: &Camera) -> Option<Exac
     })
 }
 
-/// One `pvrr` frame on `passes` and its metrics against `truth`.
-fn measure(
-    passes: &mut PvrrPasses,
-    truth: &Truth,
-    params: &MethodParams,
-) -> anyhow::Result<(Frame, refract_scene::metrics::MetricsRecord)> {
-    let MethodParams::Pvrr(p) = params else {
-        anyhow::bail!("pvrr parameters expected");
-    };
-    passes.prepare(&truth.scene);
-    let mut frame = Frame::default();
-    passes.render(
-        &truth.scene,
-        &truth.camera,
-        p,
-        FrameOutputs::ColorAndAovs,
-        &mut frame,
-    )?;
-    let (record, _) = refract_scene::metrics::evaluate_method(
-        &truth.frame,
-        &frame,
-        &truth.camera,
-        &truth.scene,
-        params,
-    );
-    Ok((frame, record))
-}
-
 /// Mean absolute colour difference over `pixels`.
 fn mean_abs(a: &Frame, b: &Frame, pixels: impl Iterator<Item = usize>) -> Option<f64> {
     let (sum, n) = pixels.fold((0.0, 0usize), |(s, n), i| {
@@ -200,7 +172,6 @@ fn mean_abs(a: &Frame, b: &Frame, pixels: impl Iterator<Item = usize>) -> Option
 /// Measures the claims and returns the markdown section.
 pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     let mut bench = Bench::new();
-    let mut passes = PvrrPasses::default();
     let res = args.res;
     let mut claims = vec![
         Claim {
@@ -247,8 +218,8 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
             0..n,
         )?;
         let truth = bench.truth_with(Arc::new(with_mirror(mesh)?), res, TraceMode::Transmission)?;
-        let (_, record) = measure(&mut passes, &truth, &pvrr(&[])?)?;
-        let e = exactness(&passes, &truth.scene, &truth.camera);
+        let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
+        let e = exactness(bench.cpu.pvrr_passes(), &truth.scene, &truth.camera);
         series.push((n * n, record, e));
     }
     for (vertices, _, e) in &series {
@@ -290,8 +261,8 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         let scene = with_lens(rings)?;
         let vertices = scene.refractor.mesh().positions.len();
         let truth = bench.truth_with(Arc::new(scene), res, TraceMode::Transmission)?;
-        let (_, record) = measure(&mut passes, &truth, &pvrr(&[])?)?;
-        let rays = passes.last_plan().rays();
+        let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
+        let rays = bench.cpu.pvrr_passes().last_plan().rays();
         lens_series.push((vertices, rays, record));
     }
     let (first, last) = (&lens_series[0], &lens_series[lens_series.len() - 1]);
@@ -321,7 +292,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
             res,
             TraceMode::Transmission,
         )?;
-        let (_, ours) = measure(&mut passes, &truth, &pvrr(&[("depth", "4")])?)?;
+        let (_, ours) = bench.measure(&truth, &pvrr(&[("depth", "4")])?)?;
         let (_, dm) = bench.measure(&truth, &MethodParams::defaults(MethodId::DistanceMap))?;
         claims[3].rows.push((
             name.into(),
@@ -341,7 +312,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     for radius in [1.5f32, 4.0, f32::INFINITY, -8.0, -4.0, -2.0, -1.5] {
         let mesh = shapes::mirror_patch(refract_geometry::builtin::MIRROR_SIZE, radius, 7, 0..7)?;
         let truth = bench.truth_with(Arc::new(with_mirror(mesh)?), res, TraceMode::Transmission)?;
-        let (_, record) = measure(&mut passes, &truth, &pvrr(&[])?)?;
+        let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
         curvature.push((radius, record));
     }
     let zoom = |r: &refract_scene::metrics::MetricsRecord| r.zoom_share.unwrap_or(0.0);
@@ -373,7 +344,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         res,
         TraceMode::Transmission,
     )?;
-    let (frame, _) = measure(&mut passes, &truth, &pvrr(&[])?)?;
+    let (frame, _) = bench.measure(&truth, &pvrr(&[])?)?;
     let (ours_covered, left) = (
         frame
             .flag(Aov::Covered)
@@ -434,8 +405,9 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         scene: Arc::new(base),
         ..composed
     };
-    let (chromatic, _) = measure(&mut passes, &composed, &pvrr(&[("dispersion", "10")])?)?;
-    let (plain, _) = measure(&mut passes, &composed, &pvrr(&[])?)?;
+    bench.cpu.prepare(&composed.scene)?;
+    let (chromatic, _) = bench.measure(&composed, &pvrr(&[("dispersion", "10")])?)?;
+    let (plain, _) = bench.measure(&composed, &pvrr(&[])?)?;
     let lens: Vec<usize> = chromatic
         .flag(Aov::Covered)
         .map(|c| (0..c.len()).filter(|&i| c[i]).collect())
