@@ -441,3 +441,126 @@ fn the_map_resolution_is_the_parameter() {
     let map = passes.map(1).expect("a map");
     assert_eq!(map.size().0.max(map.size().1), 200);
 }
+
+/// The exact ray through the lens of vertex `v` seen from `eye`, independently of the plan:
+/// refracted in at `v`, out at the first back-surface hit (no TIR in these tests), traced to the
+/// objects.
+fn exact_lens_hit(scene: &Scene, eye: Vec3, v: Vec3, n: Vec3, ior: f32) -> Option<Vec3> {
+    use refract_core::optics::refract;
+    let incident = (v - eye).normalize();
+    let inside = refract(
+        incident,
+        face_forward_shading_normal(n, incident),
+        1.0 / ior,
+    );
+    let ray = refract_core::Ray {
+        origin: v,
+        dir: inside.try_normalize()?,
+    };
+    let back = scene
+        .refractor
+        .bvh()
+        .closest_hit(&ray, 1e-3, f32::INFINITY)?;
+    let out = refract(
+        ray.dir,
+        face_forward_shading_normal(-back.shading_normal, ray.dir),
+        ior,
+    )
+    .try_normalize()?;
+    let exit = refract_core::Ray {
+        origin: ray.at(back.t),
+        dir: out,
+    };
+    let t = scene
+        .objects
+        .iter()
+        .filter_map(|o| o.bvh().closest_hit(&exit, 1e-3, f32::INFINITY))
+        .map(|h| h.t)
+        .min_by(f32::total_cmp)?;
+    Some(exit.at(t))
+}
+
+/// Fig. 14: through a lens too, every ray-issuing vertex looks up its exact double-refracted
+/// hit within one map texel; the concave spectacle lens as well as the convex one.
+#[test]
+fn every_lens_vertex_looks_up_its_exact_hit_within_one_texel() {
+    let convex = builtin("spectacles");
+    let toml = r#"
+[camera]
+eye = [0.0, 0.0, 1.1]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 70.0
+near = 0.05
+far = 40.0
+
+[refractor]
+mesh = "builtin:lens-concave"
+ior = 1.61
+scale = 0.9
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "color-chart"
+scale = 4.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.0, -2.0]
+"#;
+    for scene in [convex, scene(toml)] {
+        let camera = scene.camera(64, 64).expect("camera");
+        let (passes, frame) = pvrr(&scene, &camera, &params(&[("res", "512")]));
+        let plan = passes.last_plan();
+        let draw = &plan.views[0].draws[0];
+        let map_camera = plan.views[draw.map.expect("a map")].camera;
+        let mesh = scene.refractor.mesh();
+        let mut checked = 0;
+        for (i, vertex) in draw.vertices.iter().enumerate() {
+            if vertex.state != STATE_MAPPED as f32 {
+                continue;
+            }
+            let Some(hit) = exact_lens_hit(
+                &scene,
+                camera.eye(),
+                mesh.positions[i],
+                mesh.normals[i],
+                scene.refractor.ior(),
+            ) else {
+                continue;
+            };
+            let projected = map_camera.world_to_pixel(hit).expect("in front").truncate();
+            let st = Vec2::from_array(vertex.st[1]);
+            assert!(
+                projected.distance(st) <= 1.0,
+                "{}: vertex {i}: {st} vs {projected}",
+                mesh.name
+            );
+            checked += 1;
+        }
+        assert!(
+            checked >= 100,
+            "{}: {checked} ray-issuing vertices checked",
+            mesh.name
+        );
+        // And the image through the lens is the reference's where it is looked up (the
+        // concave lens spreads its rim's rays beyond the widest map: the zoom flag, black).
+        let truth = reference(&scene, &camera, "transmission");
+        let zoom = frame.flag(Aov::Zoom).expect("zoom");
+        let looked_up: Vec<bool> = frame
+            .flag(Aov::Covered)
+            .expect("covered")
+            .iter()
+            .zip(zoom)
+            .map(|(c, z)| *c && !z)
+            .collect();
+        assert!(
+            looked_up.iter().filter(|l| **l).count() > 500,
+            "{}",
+            mesh.name
+        );
+        let error = mean_error_on(&frame, &truth, &looked_up);
+        assert!(
+            error < 0.05,
+            "{}: mean error through the lens {error}",
+            mesh.name
+        );
+    }
+}
