@@ -190,7 +190,7 @@ fn default_job() -> anyhow::Result<()> {
         methods: method_params(&ids, TirPolicy::ClampToCritical, &[])?,
         res: 512,
         spp: 1,
-        frames: 10,
+        frames: 5,
         out: PathBuf::from("out"),
     };
     let records = compare::run(&options)?;
