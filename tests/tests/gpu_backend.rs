@@ -6,9 +6,9 @@
 
 use std::sync::Arc;
 
-use refract_core::BackSurface;
 use refract_core::exit::TirPolicy;
 use refract_core::vector::angle_between;
+use refract_core::{BackSurface, Camera};
 use refract_cpu::CpuRenderer;
 use refract_gpu::GpuRenderer;
 use refract_scene::tonemap::to_srgb8;
@@ -307,6 +307,35 @@ fn gpu_latlong_lookups_match_the_cpu() {
     }
 }
 
+/// The default parameters of `id` with `settings` applied.
+fn with_settings(id: MethodId, settings: &[(&str, &str)]) -> MethodParams {
+    let mut params = method(id);
+    for (name, value) in settings {
+        params.set(name, value, "test").expect(name);
+    }
+    params
+}
+
+/// One frame with colour and AOVs on each backend (prepared for the scene), with the same layers.
+fn render_both(
+    cpu: &mut CpuRenderer,
+    gpu: &mut GpuRenderer,
+    cam: &Camera,
+    params: &MethodParams,
+) -> (Frame, Frame) {
+    let (mut c, mut g) = (Frame::default(), Frame::default());
+    cpu.render(cam, params, FrameOutputs::ColorAndAovs, &mut c)
+        .expect("cpu");
+    gpu.render(cam, params, FrameOutputs::ColorAndAovs, &mut g)
+        .expect("gpu");
+    assert_eq!(
+        g.aovs().collect::<Vec<_>>(),
+        c.aovs().collect::<Vec<_>>(),
+        "the same layers"
+    );
+    (c, g)
+}
+
 /// The share of pixels whose 8-bit sRGB colours differ by more than one level in a channel.
 fn srgb8_differs(c: &Frame, g: &Frame) -> f64 {
     let n = c.pixel_count();
@@ -348,20 +377,8 @@ fn gpu_distance_maps_agree_with_cpu_distance_maps() {
                 ("fresnel", "split"),
             ][..],
         ] {
-            let mut params = method(MethodId::DistanceMap);
-            for (name, value) in settings {
-                params.set(name, value, "test").expect(name);
-            }
-            let (mut c, mut g) = (Frame::default(), Frame::default());
-            cpu.render(&cam, &params, FrameOutputs::ColorAndAovs, &mut c)
-                .expect("cpu");
-            gpu.render(&cam, &params, FrameOutputs::ColorAndAovs, &mut g)
-                .expect("gpu");
-            assert_eq!(
-                g.aovs().collect::<Vec<_>>(),
-                c.aovs().collect::<Vec<_>>(),
-                "the same layers"
-            );
+            let params = with_settings(MethodId::DistanceMap, settings);
+            let (c, g) = render_both(&mut cpu, &mut gpu, &cam, &params);
             let n = c.pixel_count();
             let color_differs = srgb8_differs(&c, &g);
             let (cc, gc) = (
@@ -418,20 +435,8 @@ fn gpu_pvrr_agrees_with_cpu_pvrr() {
         let cam = scene.camera(128, 128).expect("camera");
         cpu.prepare(&scene).expect("prepare");
         gpu.prepare(&scene).expect("prepare");
-        let mut params = method(MethodId::Pvrr);
-        for (k, v) in settings {
-            params.set(k, v, "test").expect(k);
-        }
-        let (mut c, mut g) = (Frame::default(), Frame::default());
-        cpu.render(&cam, &params, FrameOutputs::ColorAndAovs, &mut c)
-            .expect("cpu");
-        gpu.render(&cam, &params, FrameOutputs::ColorAndAovs, &mut g)
-            .expect("gpu");
-        assert_eq!(
-            g.aovs().collect::<Vec<_>>(),
-            c.aovs().collect::<Vec<_>>(),
-            "the same layers"
-        );
+        let params = with_settings(MethodId::Pvrr, settings);
+        let (c, g) = render_both(&mut cpu, &mut gpu, &cam, &params);
         let n = c.pixel_count();
         let color_differs = srgb8_differs(&c, &g);
         let flags_differ = |aov| {

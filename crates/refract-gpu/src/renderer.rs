@@ -22,6 +22,7 @@ use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
+use refract_scene::pvrr::PvrrPlanner;
 
 impl From<GpuError> for RenderError {
     fn from(err: GpuError) -> Self {
@@ -58,6 +59,8 @@ pub struct GpuRenderer {
     nearby_targets: Option<NearbyTargets>,
     distance_targets: Option<DistanceMapTargets>,
     pvrr_targets: Option<PvrrTargets>,
+    /// The per-vertex plan of `pvrr` (kept between frames: `update=on-change`).
+    pvrr_planner: PvrrPlanner,
 }
 
 impl GpuRenderer {
@@ -93,6 +96,7 @@ impl GpuRenderer {
             nearby_targets: None,
             distance_targets: None,
             pvrr_targets: None,
+            pvrr_planner: PvrrPlanner::default(),
         })
     }
 
@@ -286,26 +290,27 @@ impl GpuRenderer {
         reuse_or_allocate(
             &mut self.pvrr_targets,
             |t| t.fits(size, params),
-            || PvrrTargets::new(&self.context, scene, size, params),
+            || PvrrTargets::new(&self.context, size, params),
         )?;
         let Some(targets) = &mut self.pvrr_targets else {
             unreachable!("allocated above")
         };
         let start = Instant::now();
+        let plan = self.pvrr_planner.plan(scene, camera, params)?;
+        let plan_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut encoder =
             self.context
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("pvrr frame"),
                 });
-        let plan_ms = targets.encode(
+        targets.encode(
             &self.context,
             &self.raster,
             &self.pvrr,
             gpu_scene,
             scene,
-            camera,
-            params,
+            plan,
             outputs,
             self.timestamps.as_ref(),
             &mut encoder,
@@ -422,6 +427,7 @@ impl Renderer for GpuRenderer {
         self.nearby_targets = None;
         self.distance_targets = None;
         self.pvrr_targets = None;
+        self.pvrr_planner.prepare(scene);
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }

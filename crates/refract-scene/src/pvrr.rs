@@ -83,8 +83,6 @@ pub struct PvrrDraw {
     pub vertices: Vec<PvrrVertex>,
     /// The per-vertex rays traced for this draw (vertices of triangles facing the view).
     pub rays: usize,
-    /// The virtual viewpoint fell back to [`parallel_viewpoint`] (a singular system).
-    pub parallel: bool,
 }
 
 /// One view of the plan: the eye (view 0) or a reflector's map.
@@ -236,7 +234,6 @@ pub fn build_plan(
                     map: None,
                     vertices: vec![PvrrVertex::unmapped(STATE_DEPTH); mesh.positions.len()],
                     rays: 0,
-                    parallel: false,
                 });
                 continue;
             }
@@ -246,7 +243,6 @@ pub fn build_plan(
                     map: None,
                     vertices: vec![PvrrVertex::unmapped(STATE_ZOOM); mesh.positions.len()],
                     rays: 0,
-                    parallel: false,
                 });
                 continue;
             };
@@ -263,7 +259,6 @@ pub fn build_plan(
                 map: Some(child),
                 vertices: map.vertices,
                 rays: map.rays,
-                parallel: map.parallel,
             });
         }
         plan.views[next].draws = draws;
@@ -298,31 +293,14 @@ struct MapPlan {
     volume: ViewVolume,
     vertices: Vec<PvrrVertex>,
     rays: usize,
-    parallel: bool,
 }
 
 impl Context<'_> {
-    /// The nearest hit of `ray` on any mesh but `exclude`.
+    /// The end of `ray`: its nearest hit on any mesh but `exclude`, or its escape direction.
     fn trace(&self, ray: &Ray, exclude: SceneMesh) -> RayEnd {
-        let scene = self.scene;
-        let mut best = f32::INFINITY;
-        if exclude != SceneMesh::Refractor
-            && let Some(h) = scene.refractor.bvh().closest_hit(ray, self.epsilon, best)
-        {
-            best = h.t;
-        }
-        for (k, o) in scene.objects.iter().enumerate() {
-            if exclude == SceneMesh::Object(k) {
-                continue;
-            }
-            if let Some(h) = o.bvh().closest_hit(ray, self.epsilon, best) {
-                best = h.t;
-            }
-        }
-        if best.is_finite() {
-            RayEnd::Hit(ray.at(best))
-        } else {
-            RayEnd::Escape(ray.dir)
+        match self.scene.closest_hit(ray, self.epsilon, Some(exclude)) {
+            Some((_, hit)) => RayEnd::Hit(ray.at(hit.t)),
+            None => RayEnd::Escape(ray.dir),
         }
     }
 
@@ -412,8 +390,8 @@ impl Context<'_> {
         // §3.2 from the green rays (the middle index), §3.3 over every channel's ends.
         let green: Vec<VertexRay> = rays.iter().filter_map(|r| r[1]).collect();
         let c = match virtual_viewpoint(green.iter().map(|r| (r.origin, r.dir))) {
-            Some(c) => (c, false),
-            None => (parallel_viewpoint(&green, self.bounds.radius())?, true),
+            Some(c) => c,
+            None => parallel_viewpoint(&green, self.bounds.radius())?,
         };
         let direction = mean_direction(&green)?;
         let ends: Vec<RayEnd> = rays.iter().flatten().flatten().map(|r| r.end).collect();
@@ -422,7 +400,7 @@ impl Context<'_> {
             .map(|i| mesh.positions[i])
             .collect();
         let volume = view_volume(
-            c.0,
+            c,
             direction,
             &issued,
             &ends,
@@ -445,7 +423,6 @@ impl Context<'_> {
             volume,
             vertices,
             rays: green.len() * channels,
-            parallel: c.1,
         })
     }
 }

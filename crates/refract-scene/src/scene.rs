@@ -492,6 +492,30 @@ impl Scene {
         }
     }
 
+    /// The nearest hit of `ray` beyond `t_min` on any mesh of the scene but `exclude`, with the
+    /// mesh it is on (BVH queries, the refractor first, ties to the earlier mesh).
+    pub fn closest_hit(
+        &self,
+        ray: &refract_core::Ray,
+        t_min: f32,
+        exclude: Option<SceneMesh>,
+    ) -> Option<(SceneMesh, refract_geometry::Hit)> {
+        let mut best: Option<(SceneMesh, refract_geometry::Hit)> = None;
+        let meshes = core::iter::once((SceneMesh::Refractor, self.refractor.bvh())).chain(
+            self.objects
+                .iter()
+                .enumerate()
+                .map(|(k, o)| (SceneMesh::Object(k), o.bvh())),
+        );
+        for (mesh, bvh) in meshes.filter(|(m, _)| Some(*m) != exclude) {
+            let t_max = best.as_ref().map_or(f32::INFINITY, |(_, h)| h.t);
+            if let Some(hit) = bvh.closest_hit(ray, t_min, t_max) {
+                best = Some((mesh, hit));
+            }
+        }
+        best
+    }
+
     /// Whether every surface is glass or diffuse (what the image-space and nearby-geometry
     /// methods can render): no conductor refractor and no conductor object.
     pub fn is_dielectric_and_diffuse(&self) -> bool {

@@ -856,6 +856,20 @@ mod tests {
         }
     }
 
+    /// An open mirror as the specular object misses d_N everywhere; d_N serves refraction only,
+    /// so loading it warns about nothing (it warned "49 of 49 vertices missed").
+    #[test]
+    fn a_mirror_specular_object_has_no_d_n_warning() {
+        for name in ["convex-mirror", "adjacent-mirrors"] {
+            let loaded = load_scene(name).expect(name);
+            assert!(
+                loaded.scene.refractor.normal_distances().misses > 0,
+                "{name}: open mesh"
+            );
+            assert!(loaded.warnings.is_empty(), "{name}: {:?}", loaded.warnings);
+        }
+    }
+
     #[test]
     fn scene_file_errors_name_the_file_and_key() {
         let dir = tempfile::tempdir().expect("tempdir");

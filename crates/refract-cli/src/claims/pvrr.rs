@@ -13,7 +13,7 @@ use refract_core::optics::{face_forward_shading_normal, reflect};
 use refract_core::pvrr::STATE_MAPPED;
 use refract_core::{Camera, Ray};
 use refract_cpu::pvrr::PvrrPasses;
-use refract_geometry::{Hit, LensDesc, Mesh, shapes};
+use refract_geometry::{LensDesc, shapes};
 use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
     Aov, Conductor, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
@@ -31,8 +31,10 @@ fn pvrr(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
     Ok(params)
 }
 
-/// `convex-mirror` with its mirror replaced by `mesh` (placed as the built-in one: turned 30°).
-fn with_mirror(mut mesh: Mesh) -> anyhow::Result<Scene> {
+/// `convex-mirror` with its mirror a patch of signed radius `radius` and `n × n` vertices
+/// (placed as the built-in one: turned 30°).
+fn with_mirror(radius: f32, n: u32) -> anyhow::Result<Scene> {
+    let mut mesh = shapes::mirror_patch(refract_geometry::builtin::MIRROR_SIZE, radius, n, 0..n)?;
     let mut scene = load_scene("convex-mirror")?.scene;
     mesh.transform(&Affine3A::from_rotation_y(30f32.to_radians()));
     let mut refractor = Refractor::new(mesh, 1.5)?;
@@ -56,33 +58,6 @@ fn with_lens(rings: u32) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-/// The nearest hit of `ray` on any mesh of `scene` but `exclude`.
-fn nearest(scene: &Scene, ray: &Ray, exclude: Option<SceneMesh>) -> Option<(SceneMesh, Hit)> {
-    let mut best: Option<(SceneMesh, Hit)> = None;
-    let mut consider = |mesh: SceneMesh, hit: Option<Hit>| {
-        if let Some(h) = hit
-            && best.as_ref().is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((mesh, h));
-        }
-    };
-    if exclude != Some(SceneMesh::Refractor) {
-        consider(
-            SceneMesh::Refractor,
-            scene.refractor.bvh().closest_hit(ray, 1e-3, f32::INFINITY),
-        );
-    }
-    for (k, o) in scene.objects.iter().enumerate() {
-        if exclude != Some(SceneMesh::Object(k)) {
-            consider(
-                SceneMesh::Object(k),
-                o.bvh().closest_hit(ray, 1e-3, f32::INFINITY),
-            );
-        }
-    }
-    best
-}
-
 /// What the last frame of `passes` shows at the mirror (the specular object): per eye pixel
 /// that sees it, whether the map shows the mesh the exact reflected ray hits (§6: the share
 /// that does not is the occlusion inconsistency of Fig. 16, incl. map texels on a silhouette);
@@ -103,7 +78,9 @@ fn exactness(passes: &PvrrPasses, scene: &Scene, camera: &Camera) -> Option<Exac
     let exact = |origin: Vec3, n: Vec3, incident: Vec3| {
         let dir = reflect(incident, face_forward_shading_normal(n, incident));
         let ray = Ray { origin, dir };
-        nearest(scene, &ray, Some(SceneMesh::Refractor)).map(|(m, h)| (m, ray.at(h.t)))
+        scene
+            .closest_hit(&ray, 1e-3, Some(SceneMesh::Refractor))
+            .map(|(m, h)| (m, ray.at(h.t)))
     };
     let (mut within, mut hit) = (0usize, 0usize);
     for (i, v) in draw.vertices.iter().enumerate() {
@@ -126,7 +103,7 @@ fn exactness(passes: &PvrrPasses, scene: &Scene, camera: &Camera) -> Option<Exac
     for y in 0..camera.height() {
         for x in 0..camera.width() {
             let ray = camera.pixel_ray(Camera::pixel_center(x, y));
-            let Some((SceneMesh::Refractor, h)) = nearest(scene, &ray, None) else {
+            let Some((SceneMesh::Refractor, h)) = scene.closest_hit(&ray, 1e-3, None) else {
                 continue;
             };
             let corners = mesh.triangles[h.triangle as usize];
@@ -211,13 +188,8 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     // Exactness and occlusion on the built-in convex mirror and its tessellation series.
     let mut series = Vec::new();
     for n in [4u32, 7, 10, 16, 24, 32] {
-        let mesh = shapes::mirror_patch(
-            refract_geometry::builtin::MIRROR_SIZE,
-            refract_geometry::builtin::MIRROR_RADIUS,
-            n,
-            0..n,
-        )?;
-        let truth = bench.truth_with(Arc::new(with_mirror(mesh)?), res, TraceMode::Transmission)?;
+        let scene = with_mirror(refract_geometry::builtin::MIRROR_RADIUS, n)?;
+        let truth = bench.truth_with(Arc::new(scene), res, TraceMode::Transmission)?;
         let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
         let e = exactness(bench.cpu.pvrr_passes(), &truth.scene, &truth.camera);
         series.push((n * n, record, e));
@@ -314,8 +286,11 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     // Fig. 9: from convex to concave (R is the signed radius of curvature).
     let mut curvature = Vec::new();
     for radius in [1.5f32, 4.0, f32::INFINITY, -8.0, -4.0, -2.0, -1.5] {
-        let mesh = shapes::mirror_patch(refract_geometry::builtin::MIRROR_SIZE, radius, 7, 0..7)?;
-        let truth = bench.truth_with(Arc::new(with_mirror(mesh)?), res, TraceMode::Transmission)?;
+        let truth = bench.truth_with(
+            Arc::new(with_mirror(radius, 7)?),
+            res,
+            TraceMode::Transmission,
+        )?;
         let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
         curvature.push((radius, record));
     }

@@ -8,9 +8,9 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use refract_core::TirPolicy;
 use refract_core::pvrr::PvrrVertex;
-use refract_core::{Camera, TirPolicy};
-use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, ReflectorKind};
+use refract_scene::pvrr::{PvrrPlan, ReflectorKind};
 use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, PvrrParams, Scene, SceneMesh};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
@@ -224,7 +224,6 @@ fn buffer(
 /// The targets and buffers of `pvrr` frames at one frame size and map resolution.
 pub(crate) struct PvrrTargets {
     key: (u32, u32, u32),
-    planner: PvrrPlanner,
     eye: ViewTargets,
     map: ViewTargets,
     maps: wgpu::Buffer,
@@ -238,7 +237,6 @@ pub(crate) struct PvrrTargets {
 impl PvrrTargets {
     pub(crate) fn new(
         context: &GpuContext,
-        scene: &Scene,
         (width, height): (u32, u32),
         params: &PvrrParams,
     ) -> Result<Self, GpuError> {
@@ -246,11 +244,8 @@ impl PvrrTargets {
         let res = params.resolution;
         check_limits(context, res, res)?;
         let device = &context.device;
-        let mut planner = PvrrPlanner::default();
-        planner.prepare(scene);
         context.checked(|| Self {
             key: (width, height, res),
-            planner,
             eye: ViewTargets::new(device, "pvrr eye", (width, height)),
             map: ViewTargets::new(device, "pvrr map", (res, res)),
             maps: buffer(device, "pvrr maps", 16, wgpu::BufferUsages::STORAGE),
@@ -366,8 +361,7 @@ impl PvrrTargets {
         Ok(())
     }
 
-    /// Plans and encodes one frame: every view, deepest first. Returns the milliseconds the
-    /// plan took on the CPU (the per-vertex rays), which GPU timestamps do not see.
+    /// Encodes the frame of `plan` (every view, deepest first).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode(
         &mut self,
@@ -376,18 +370,11 @@ impl PvrrTargets {
         pipelines: &PvrrPipelines,
         gpu_scene: &GpuScene,
         scene: &Scene,
-        camera: &Camera,
-        params: &PvrrParams,
+        plan: &PvrrPlan,
         outputs: FrameOutputs,
         timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
-    ) -> Result<f64, GpuError> {
-        let planning = std::time::Instant::now();
-        let plan: PvrrPlan = self
-            .planner
-            .plan(scene, camera, params)
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?
-            .clone();
+    ) -> Result<(), GpuError> {
         // Where each view's map lives in `maps`, each draw in `draws` and its vertices.
         let mut map_offsets = vec![0u32; plan.views.len()];
         let mut texels = 0u64;
@@ -398,7 +385,10 @@ impl PvrrTargets {
         let mut draws = Vec::new();
         let mut vertices: Vec<PvrrVertex> = Vec::new();
         let mut vertex_offsets = Vec::new();
+        // The global index of each view's first draw (the draws' instance indices).
+        let mut first_draw = Vec::with_capacity(plan.views.len());
         for view in &plan.views {
+            first_draw.push(draws.len() as u32);
             for draw in &view.draws {
                 let (f0, kind) = match plan.reflectors[draw.reflector].kind {
                     ReflectorKind::Mirror { f0 } => (f0, 0.0),
@@ -416,7 +406,6 @@ impl PvrrTargets {
                 vertices.extend_from_slice(&draw.vertices);
             }
         }
-        let plan_ms = planning.elapsed().as_secs_f64() * 1e3;
         self.reserve(
             context,
             pipelines,
@@ -463,15 +452,7 @@ impl PvrrTargets {
             SceneMesh::Refractor => &gpu_scene.refractor,
             SceneMesh::Object(k) => &gpu_scene.objects[k],
         };
-        // Global draw indices of each view's first draw.
-        let mut first_draw = vec![0u32; plan.views.len()];
-        let mut count = 0u32;
-        for (v, view) in plan.views.iter().enumerate() {
-            first_draw[v] = count;
-            count += view.draws.len() as u32;
-        }
         let mut first_timestamp = timestamps.map(Timestamps::begin_render);
-        let last = 0;
         for (v, view) in plan.views.iter().enumerate().rev() {
             let targets = if v == 0 { &self.eye } else { &self.map };
             let (width, height) = (view.camera.width(), view.camera.height());
@@ -529,7 +510,7 @@ impl PvrrTargets {
             }
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("pvrr shade"),
-                timestamp_writes: if v == last {
+                timestamp_writes: if v == 0 {
                     timestamps.map(Timestamps::end_compute)
                 } else {
                     None
@@ -547,7 +528,7 @@ impl PvrrTargets {
             FrameOutputs::Color => 1,
         };
         self.outputs.copy(encoder, copies);
-        Ok(plan_ms)
+        Ok(())
     }
 
     /// Reads the last submitted frame into `frame`.
