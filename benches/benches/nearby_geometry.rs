@@ -7,9 +7,8 @@ use std::sync::Arc;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_cpu::CpuRenderer;
 use refract_cpu::nearby_geometry::{NearbyMeshes, NearbyTexture};
-use refract_scene::{
-    Aov, Family, Frame, FrameOutputs, MethodParams, REGISTRY, Renderer, load_scene,
-};
+use refract_eval::load_scene;
+use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodParams, REGISTRY, Renderer};
 
 const RES: u32 = 1024;
 

@@ -6,8 +6,9 @@ use std::sync::Arc;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_cpu::CpuRenderer;
+use refract_eval::load_scene;
 use refract_scene::pvrr::PvrrPlanner;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, load_scene};
+use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
 const RES: u32 = 1024;
 

@@ -7,8 +7,8 @@ use glam::Vec3;
 use refract_core::vector::angle_between;
 use refract_core::{BackSurface, Camera, Ray};
 use refract_cpu::{CpuRenderer, front_faces, render_buffers, shade_into};
+use refract_eval::metrics::{MetricsRecord, evaluate};
 use refract_geometry::{Hit, shapes};
-use refract_scene::metrics::{MetricsRecord, evaluate};
 use refract_scene::{
     Aov, Environment, Family, Frame, FrameOutputs, LatLongMap, MethodId, MethodParams, Renderer,
     Scene, TwoInterfaceParams,

@@ -1,14 +1,16 @@
 //! The dependency rule of `docs/architecture.md`, checked over `cargo metadata`: refract-core
-//! depends on no workspace crate; geometry on core only; the scene crate on core and geometry;
-//! the reference and the two backends on the scene crate and never on one another; and the
-//! reference uses exact math only, never an approximation a backend uses.
+//! depends on no workspace crate; geometry on core only; the API crate (refract-scene) on core
+//! and geometry, so on no renderer and no file format; refract-eval (files, metrics) on the API;
+//! the reference and the two backends on the API crate and never on one another, on refract-eval
+//! or on anything above them (only the reference's tests write files through refract-eval); and
+//! the reference uses exact math only, never an approximation a backend uses.
 
 use std::collections::BTreeSet;
 use std::process::Command;
 
 /// Every workspace package with the workspace crates it depends on (any kind: normal, dev,
-/// build).
-fn workspace_dependencies() -> Vec<(String, BTreeSet<String>)> {
+/// build) and those it links outside its tests (normal and build).
+fn workspace_dependencies() -> Vec<(String, BTreeSet<String>, BTreeSet<String>)> {
     let output = Command::new(env!("CARGO"))
         .args([
             "metadata",
@@ -34,15 +36,22 @@ fn workspace_dependencies() -> Vec<(String, BTreeSet<String>)> {
     packages
         .iter()
         .map(|p| {
-            let deps = p["dependencies"]
-                .as_array()
-                .expect("dependencies")
-                .iter()
-                .filter_map(|d| d["name"].as_str())
-                .filter(|d| names.contains(*d))
-                .map(str::to_owned)
-                .collect();
-            (p["name"].as_str().expect("name").to_owned(), deps)
+            let workspace = |dev: bool| {
+                p["dependencies"]
+                    .as_array()
+                    .expect("dependencies")
+                    .iter()
+                    .filter(|d| dev || d["kind"].as_str() != Some("dev"))
+                    .filter_map(|d| d["name"].as_str())
+                    .filter(|d| names.contains(*d))
+                    .map(str::to_owned)
+                    .collect()
+            };
+            (
+                p["name"].as_str().expect("name").to_owned(),
+                workspace(true),
+                workspace(false),
+            )
         })
         .collect()
 }
@@ -54,13 +63,14 @@ fn set(names: &[&str]) -> BTreeSet<String> {
 #[test]
 fn crates_depend_only_downward() {
     let packages = workspace_dependencies();
-    let deps = |name: &str| -> BTreeSet<String> {
+    let find = |name: &str| {
         packages
             .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, d)| d.clone())
+            .find(|(n, _, _)| n == name)
             .unwrap_or_else(|| panic!("no package {name}"))
     };
+    let deps = |name: &str| -> BTreeSet<String> { find(name).1.clone() };
+    let links = |name: &str| -> BTreeSet<String> { find(name).2.clone() };
     assert_eq!(
         deps("refract-core"),
         set(&[]),
@@ -69,7 +79,13 @@ fn crates_depend_only_downward() {
     assert_eq!(deps("refract-geometry"), set(&["refract-core"]));
     assert_eq!(
         deps("refract-scene"),
-        set(&["refract-core", "refract-geometry"])
+        set(&["refract-core", "refract-geometry"]),
+        "the API crate depends on no renderer and nothing above it"
+    );
+    assert_eq!(
+        deps("refract-eval"),
+        set(&["refract-core", "refract-geometry", "refract-scene"]),
+        "refract-eval sits on the API crate and on no renderer"
     );
     let renderers = ["refract-trace", "refract-cpu", "refract-gpu"];
     for renderer in renderers {
@@ -84,6 +100,12 @@ fn crates_depend_only_downward() {
         assert!(
             !d.contains("refract-cli") && !d.contains("refract-tests"),
             "{renderer}: {d:?}"
+        );
+        assert!(
+            links(renderer).is_subset(&set(&["refract-core", "refract-geometry", "refract-scene"])),
+            "{renderer} links only the API crate and below (no files, metrics, experiments, \
+             viewer): {:?}",
+            links(renderer)
         );
     }
     println!("{packages:#?}");

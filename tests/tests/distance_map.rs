@@ -9,9 +9,9 @@ use std::sync::Arc;
 
 use refract_core::Camera;
 use refract_cpu::CpuRenderer;
+use refract_eval::{load_scene, load_scene_str};
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, RenderError, Renderer, Scene, load_scene,
-    load_scene_str,
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, RenderError, Renderer, Scene,
 };
 use refract_tests::scenes::{method, render};
 use refract_trace::ReferenceRenderer;

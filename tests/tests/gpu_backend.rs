@@ -10,11 +10,11 @@ use refract_core::exit::TirPolicy;
 use refract_core::vector::angle_between;
 use refract_core::{BackSurface, Camera};
 use refract_cpu::CpuRenderer;
+use refract_eval::load_scene;
 use refract_gpu::GpuRenderer;
 use refract_scene::tonemap::to_srgb8;
 use refract_scene::{
     Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TwoInterfaceParams,
-    load_scene,
 };
 use refract_tests::scenes::{builtin, camera, method, render, shared};
 use refract_tests::shared_data;

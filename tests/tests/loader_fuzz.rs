@@ -6,6 +6,7 @@
 //! `cargo test` runs a small budget (32 cases per loader); a long run:
 //! `PROPTEST_CASES=100000 cargo test --release -p refract-tests --test loader_fuzz`.
 
+use refract_eval::FrameFiles;
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
@@ -168,7 +169,7 @@ proptest! {
         let seed = seed("envmaps/apartment.exr", small_exr);
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "e.exr", &mutate(&seed, &edits));
-        let _ = refract_scene::load_latlong(&path);
+        let _ = refract_eval::load_latlong(&path);
         let _ = refract_scene::Frame::read_exr(&path);
     }
 
@@ -177,7 +178,7 @@ proptest! {
         let seed = seed("envmaps/city.hdr", small_hdr);
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "e.hdr", &mutate(&seed, &edits));
-        let _ = refract_scene::load_latlong(&path);
+        let _ = refract_eval::load_latlong(&path);
     }
 
     #[test]
@@ -187,7 +188,7 @@ proptest! {
 [[objects]]\nmesh = \"builtin:plane\"\ntranslate = [0.0, -1.0, 0.0]\nscale = 3.0\ncolor = [0.5, 0.5, 0.5]\n";
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "s.toml", &mutate(seed, &edits));
-        let _ = refract_scene::load_scene(&path.display().to_string());
+        let _ = refract_eval::load_scene(&path.display().to_string());
     }
 }
 
@@ -209,7 +210,7 @@ fn the_seeds_load() {
         "e.exr",
         &seed("envmaps/apartment.exr", small_exr),
     );
-    refract_scene::load_latlong(&exr).expect("exr seed");
+    refract_eval::load_latlong(&exr).expect("exr seed");
     let hdr = write_case(dir.path(), "e.hdr", &seed("envmaps/city.hdr", small_hdr));
-    refract_scene::load_latlong(&hdr).expect("hdr seed");
+    refract_eval::load_latlong(&hdr).expect("hdr seed");
 }

@@ -7,10 +7,9 @@ use std::sync::Arc;
 
 use refract_core::Camera;
 use refract_cpu::CpuRenderer;
-use refract_scene::metrics::{MetricsRecord, evaluate_method};
-use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene,
-};
+use refract_eval::load_scene;
+use refract_eval::metrics::{MetricsRecord, evaluate_method};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene};
 use refract_tests::scenes::{builtin, method, render};
 use refract_trace::ReferenceRenderer;
 

@@ -14,10 +14,10 @@ use refract_core::Camera;
 use refract_core::optics::{face_forward_shading_normal, reflect};
 use refract_core::pvrr::{MapTexels, STATE_MAPPED, sample_bilinear};
 use refract_cpu::pvrr::PvrrPasses;
+use refract_eval::{load_scene, load_scene_str};
 use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Scene, SceneMesh, load_scene,
-    load_scene_str,
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Scene, SceneMesh,
 };
 use refract_tests::scenes::{method, render};
 use refract_trace::ReferenceRenderer;
@@ -563,4 +563,24 @@ translate = [0.0, 0.0, -2.0]
             mesh.name
         );
     }
+}
+
+/// The specular object and every conductor object are reflectors; a glass specular object is
+/// a lens.
+#[test]
+fn the_specular_object_and_conductor_objects_are_reflectors() {
+    use refract_scene::pvrr::{ReflectorKind, reflectors};
+    let scene = load_scene("mirror-room").expect("built-in").scene;
+    let all = reflectors(&scene);
+    assert_eq!(all[0].mesh, SceneMesh::Refractor);
+    assert!(matches!(all[0].kind, ReflectorKind::Mirror { .. }));
+    assert!(
+        all.len() >= 2,
+        "the planar mirror is a conductor object too"
+    );
+    let glass = load_scene("sphere").expect("built-in").scene;
+    assert!(matches!(
+        reflectors(&glass)[0].kind,
+        ReflectorKind::Lens { .. }
+    ));
 }

@@ -2,7 +2,8 @@
 
 use glam::Vec3;
 use refract_core::environment::latlong_to_direction;
-use refract_scene::{Environment, load_latlong};
+use refract_eval::load_latlong;
+use refract_scene::Environment;
 use refract_tests::shared_data;
 
 const EXR_MAPS: [&str; 7] = [

@@ -11,8 +11,8 @@ use std::time::Instant;
 use anyhow::Context;
 use refract_core::Camera;
 use refract_core::exit::TirPolicy;
+use refract_eval::atomic_write::write_text_atomically;
 use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
-use refract_scene::atomic_write::write_text_atomically;
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
     TraceSettings,
@@ -217,7 +217,7 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
     let scene = match data_scenes::load("teapot-box", &args.data)? {
         Some(scene) => scene,
-        None => refract_scene::load_scene("mirror-room")?.scene,
+        None => refract_eval::load_scene("mirror-room")?.scene,
     };
     let scene = Arc::new(scene);
     let triangles = triangles(&scene);
@@ -333,7 +333,7 @@ fn run_pvrr(args: &BenchArgs) -> anyhow::Result<()> {
     let mut rows = Vec::new();
     let mut frame = Frame::default();
     for (label, name, settings, paper) in PVRR_PAPER {
-        let scene = Arc::new(refract_scene::load_scene(name)?.scene);
+        let scene = Arc::new(refract_eval::load_scene(name)?.scene);
         let triangles = triangles(&scene);
         let camera = scene.camera(res, res)?;
         let mut method = MethodParams::defaults(MethodId::Pvrr);

@@ -8,12 +8,12 @@ use std::sync::Arc;
 use anyhow::Context;
 use refract_core::Camera;
 use refract_cpu::CpuRenderer;
+use refract_eval::atomic_write::write_text_atomically;
+use refract_eval::load_scene;
+use refract_eval::metrics::{MetricsRecord, evaluate};
 use refract_geometry::{LoadOptions, load_mesh};
-use refract_scene::atomic_write::write_text_atomically;
-use refract_scene::metrics::{MetricsRecord, evaluate};
 use refract_scene::{
-    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
-    TraceMode, load_scene,
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene, TraceMode,
 };
 use refract_trace::ReferenceRenderer;
 
@@ -223,7 +223,7 @@ impl Bench {
             FrameOutputs::ColorAndAovs,
             &mut frame,
         )?;
-        let (record, _) = refract_scene::metrics::evaluate_method(
+        let (record, _) = refract_eval::metrics::evaluate_method(
             &truth.frame,
             &frame,
             &truth.camera,

@@ -1,6 +1,6 @@
 //! Leaving nothing half-made behind: directories a command created are removed when it fails or
 //! is interrupted (SIGINT, SIGTERM), together with every temporary file being written
-//! (`refract_scene::atomic_write::remove_temporaries`).
+//! (`refract_eval::atomic_write::remove_temporaries`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -25,7 +25,7 @@ pub fn create_dir(dir: &Path) -> std::io::Result<()> {
 
 /// Removes what this run created (temporaries, then directories, innermost first).
 pub fn remove_created() {
-    refract_scene::atomic_write::remove_temporaries();
+    refract_eval::atomic_write::remove_temporaries();
     let created = match CREATED.lock() {
         Ok(mut created) => std::mem::take(&mut *created),
         Err(_) => return,

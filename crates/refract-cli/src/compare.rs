@@ -1,14 +1,16 @@
 //! `refract compare` (and the default job): every method against the reference on each scene,
 //! with images, error maps, `metrics.json`, `report.md` and `index.html`.
 
+use refract_eval::FrameFiles;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use refract_scene::metrics::{MetricsRecord, evaluate_method, reference_record};
+use refract_eval::load_scene;
+use refract_eval::metrics::{MetricsRecord, evaluate_method, reference_record};
 use refract_scene::{
-    Aov, BackendId, Family, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings, load_scene,
+    Aov, BackendId, Family, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings,
 };
 use refract_trace::ReferenceRenderer;
 

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use refract_scene::{Scene, load_scene_str};
+use refract_eval::load_scene_str;
+use refract_scene::Scene;
 
 /// The scene files' path to the shared data, replaced by `--data`.
 const SCENE_DATA_PREFIX: &str = "../../shared/data";

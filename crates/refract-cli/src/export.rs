@@ -4,13 +4,15 @@
 //! `scene.json` (camera, IOR, environment). The Mitsuba 3
 //! cross-check (`scripts/mitsuba-cross-check.py`) renders from these files.
 
+use refract_eval::FrameFiles;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context;
+use refract_eval::atomic_write::write_text_atomically;
+use refract_eval::load_scene;
 use refract_geometry::Mesh;
-use refract_scene::atomic_write::write_text_atomically;
-use refract_scene::{Environment, Frame, load_scene};
+use refract_scene::{Environment, Frame};
 use serde::Serialize;
 
 /// Arguments of `refract export`.

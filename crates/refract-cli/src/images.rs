@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use refract_scene::atomic_write::write_png_rgb8;
+use refract_eval::atomic_write::write_png_rgb8;
 use refract_scene::tonemap::to_srgb8;
 
 /// Linear radiance, tonemapped to sRGB.
@@ -48,7 +48,7 @@ pub fn write_hdr_script(
         "(window.refractHdr = window.refractHdr || {{}})[{key:?}] = \"data:image/png;base64,{}\";\n",
         base64::encode(&png)
     );
-    Ok(refract_scene::atomic_write::write_text_atomically(
+    Ok(refract_eval::atomic_write::write_text_atomically(
         path, &script,
     )?)
 }

@@ -6,8 +6,9 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use refract_core::exit::TirPolicy;
+use refract_eval::BUILTIN_SCENES;
 use refract_scene::registry::ParamKind;
-use refract_scene::{BUILTIN_SCENES, MethodId, MethodParams, REGISTRY};
+use refract_scene::{MethodId, MethodParams, REGISTRY};
 
 mod backends;
 mod bench;

@@ -1,13 +1,13 @@
 //! `refract render`: one scene, one method (or the reference), to `.png` or `.exr`.
 
+use refract_eval::FrameFiles;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use refract_scene::{
-    BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceMode, load_scene,
-};
+use refract_eval::load_scene;
+use refract_scene::{BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceMode};
 use refract_trace::ReferenceRenderer;
 
 use crate::{TirArg, backends};

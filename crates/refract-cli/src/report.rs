@@ -5,8 +5,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Context;
-use refract_scene::atomic_write::write_text_atomically;
-use refract_scene::metrics::MetricsRecord;
+use refract_eval::atomic_write::write_text_atomically;
+use refract_eval::metrics::MetricsRecord;
 
 use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
 use crate::sweep::{Job, JobImages, JobResult};

@@ -5,6 +5,7 @@
 //! is recorded without stopping the others. `docs/sweeps.md` has the format and cluster
 //! recipes; `refract report DIR...` merges shards (`sweep_report.rs`).
 
+use refract_eval::FrameFiles;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -12,10 +13,11 @@ use std::sync::Arc;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use refract_core::Camera;
-use refract_scene::atomic_write::write_text_atomically;
-use refract_scene::metrics::{MetricsRecord, evaluate_method};
+use refract_eval::atomic_write::write_text_atomically;
+use refract_eval::load_scene;
+use refract_eval::metrics::{MetricsRecord, evaluate_method};
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings, load_scene,
+    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
 };
 use refract_trace::ReferenceRenderer;
 use serde::{Deserialize, Serialize};

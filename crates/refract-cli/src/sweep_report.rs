@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use plotters::prelude::*;
-use refract_scene::atomic_write::write_text_atomically;
-use refract_scene::metrics::MetricsRecord;
+use refract_eval::atomic_write::write_text_atomically;
+use refract_eval::metrics::MetricsRecord;
 use refract_scene::{MethodId, REGISTRY};
 
 use crate::sweep::JobResult;

@@ -14,12 +14,13 @@ use glam::Vec3;
 use refract_core::exit::TirPolicy;
 use refract_core::{Camera, CameraDesc};
 use refract_cpu::CpuRenderer;
+use refract_eval::atomic_write::{write_png_rgb8, write_text_atomically};
+use refract_eval::load_scene;
+use refract_eval::metrics::evaluate_method;
 use refract_gpu::{GpuContext, GpuRenderer};
-use refract_scene::atomic_write::{write_png_rgb8, write_text_atomically};
-use refract_scene::metrics::evaluate_method;
 use refract_scene::registry::ParamKind;
 use refract_scene::tonemap::to_srgb8;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, load_scene};
+use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene};
 use refract_trace::ReferenceRenderer;
 use winit::application::ApplicationHandler;
 
@@ -722,7 +723,7 @@ impl Viewer {
         let mut frame = Frame::default();
         self.renderer()
             .render(camera, params, FrameOutputs::ColorAndAovs, &mut frame)?;
-        let (_, maps) = refract_scene::metrics::evaluate(
+        let (_, maps) = refract_eval::metrics::evaluate(
             &truth,
             &frame,
             camera,

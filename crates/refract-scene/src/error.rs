@@ -48,8 +48,13 @@ pub enum SceneError {
         message: String,
     },
     /// An unknown built-in scene name, or a path that is not a scene file.
-    #[error("unknown scene `{0}`: expected a built-in scene ({names}) or a .toml scene file", names = crate::scene_file::builtin_names())]
-    UnknownScene(String),
+    #[error("unknown scene `{name}`: expected a built-in scene ({builtins}) or a .toml scene file")]
+    UnknownScene {
+        /// The name or path given.
+        name: String,
+        /// The built-in scenes' names, comma-separated.
+        builtins: String,
+    },
     /// A mesh could not be loaded or built.
     #[error("{origin}: {source}")]
     Geometry {

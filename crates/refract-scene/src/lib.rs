@@ -1,37 +1,32 @@
 //! # refract-scene
 //!
-//! What every renderer of refract consumes and produces, so that the CPU backend, the GPU
-//! backend, the exact reference, the CLI, the tests and the benches share one definition:
+//! The API every renderer of refract consumes and produces, so that the CPU backend, the GPU
+//! backend, the exact reference, the experiments, the tests and the benches share one
+//! definition. It links no file format, no TOML and no FLIP: scene files, built-in scenes,
+//! image writers and metrics live in refract-eval, above it.
 //!
 //! * [`scene`]: [`Scene`]: camera, refractor (mesh, BVH, `d_N`, IOR, each built once), opaque
 //!   objects (mesh, BVH, material), light, environment.
-//! * [`environment`]: lat-long `.exr`/`.hdr` maps and their loaders (negatives clamped and
-//!   counted), constant and procedural environments, looked up with the backends' or the exact
-//!   `atan2`.
-//! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
+//! * [`environment`]: lat-long maps, constant and procedural environments, looked up with the
+//!   backends' or the exact `atan2`.
 //! * [`registry`]: every method (id, paper, parameters with ranges, AOVs, backends) and
 //!   [`MethodParams`].
 //! * [`pvrr`]: the per-frame plan of Kakimoto et al. 2007 (per-vertex rays by BVH, views,
 //!   texture coordinates) both backends draw.
 //! * [`renderer`]: the [`Renderer`] interface the three renderers implement.
-//! * [`frame`]: [`Frame`], linear colour plus named AOV layers, EXR/PNG output.
-//! * [`metrics`]: error metrics of a frame against the reference (design.md, "Measuring").
+//! * [`frame`]: [`Frame`], linear colour plus named AOV layers.
 //! * [`tonemap`]: the display encoding of every PNG.
-//! * [`atomic_write`]: the one way files are written (temporary file, flush, rename).
 
-pub mod atomic_write;
 pub mod environment;
 pub mod error;
 pub mod frame;
-pub mod metrics;
 pub mod pvrr;
 pub mod registry;
 pub mod renderer;
 pub mod scene;
-pub mod scene_file;
 pub mod tonemap;
 
-pub use environment::{Environment, EnvironmentReport, LatLongMap, load_latlong};
+pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::SceneError;
 pub use frame::{Aov, AovKind, Frame, Layer};
 pub use registry::{
@@ -44,4 +39,3 @@ pub use scene::{
     Albedo, COLOR_CHART, CONDUCTORS, Conductor, DirectionalLight, Material, Object, Refractor,
     Scene, SceneMesh, SurfaceTexel, conductor_name,
 };
-pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene, load_scene_str};

@@ -426,26 +426,3 @@ impl Context<'_> {
         })
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::load_scene;
-
-    #[test]
-    fn the_specular_object_and_conductor_objects_are_reflectors() {
-        let scene = load_scene("mirror-room").expect("built-in").scene;
-        let all = reflectors(&scene);
-        assert_eq!(all[0].mesh, SceneMesh::Refractor);
-        assert!(matches!(all[0].kind, ReflectorKind::Mirror { .. }));
-        assert!(
-            all.len() >= 2,
-            "the planar mirror is a conductor object too"
-        );
-        let glass = load_scene("sphere").expect("built-in").scene;
-        assert!(matches!(
-            reflectors(&glass)[0].kind,
-            ReflectorKind::Lens { .. }
-        ));
-    }
-}

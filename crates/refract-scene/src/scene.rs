@@ -160,7 +160,7 @@ fn try_bvh(mesh: &Mesh) -> Result<MeshBvh, SceneError> {
 }
 
 /// `ior` in `(0, MAX_IOR]`.
-pub(crate) fn check_ior(ior: f32) -> Result<(), SceneError> {
+pub fn check_ior(ior: f32) -> Result<(), SceneError> {
     if ior > 0.0 && ior <= MAX_IOR {
         Ok(())
     } else {

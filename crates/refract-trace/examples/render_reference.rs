@@ -2,12 +2,14 @@
 //! `cargo run --release -p refract-trace --example render_reference -- MESH IOR RES OUT_PREFIX [ENVMAP]`
 //! (MESH is a file or builtin:NAME).
 
+use refract_eval::FrameFiles;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use refract_core::{Camera, CameraDesc};
+use refract_eval::load_latlong;
 use refract_geometry::{LoadOptions, builtin, load_mesh};
-use refract_scene::{Environment, Refractor, Scene, TraceSettings, load_latlong};
+use refract_scene::{Environment, Refractor, Scene, TraceSettings};
 use refract_trace::render;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -4,6 +4,7 @@
 use glam::{Vec2, Vec3};
 use refract_core::fresnel::fresnel_dielectric;
 use refract_core::{Camera, CameraDesc, Ray};
+use refract_eval::FrameFiles;
 use refract_geometry::{LensDesc, shapes};
 use refract_scene::{
     Aov, Environment, Frame, InterfaceRule, Refractor, Scene, TraceMode, TraceSettings,

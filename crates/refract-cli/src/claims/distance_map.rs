@@ -7,9 +7,8 @@
 use std::fmt::Write as _;
 use std::sync::Arc;
 
-use refract_scene::{
-    Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceMode, load_scene,
-};
+use refract_eval::load_scene;
+use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceMode};
 
 use super::{Bench, Claim, ClaimsArgs, claim_rows, less, value};
 use crate::data_scenes;

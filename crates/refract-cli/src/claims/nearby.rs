@@ -5,7 +5,8 @@
 use std::fmt::Write as _;
 
 use refract_core::Camera;
-use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene, load_scene};
+use refract_eval::load_scene;
+use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene};
 
 use super::{Bench, Claim, ClaimsArgs, claim_rows, value};
 use crate::data_scenes;
@@ -35,7 +36,7 @@ fn displacement_px(frame: &Frame, camera: &Camera) -> Option<f64> {
             Some(f64::from((q - Camera::pixel_center(x, y)).length()))
         })
         .collect();
-    refract_scene::metrics::percentile(&mut d, 50.0)
+    refract_eval::metrics::percentile(&mut d, 50.0)
 }
 
 fn pct(v: Option<f64>) -> String {

@@ -13,11 +13,12 @@ use refract_core::optics::{face_forward_shading_normal, reflect};
 use refract_core::pvrr::STATE_MAPPED;
 use refract_core::{Camera, Ray};
 use refract_cpu::pvrr::PvrrPasses;
+use refract_eval::load_scene;
 use refract_geometry::{LensDesc, shapes};
 use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
     Aov, Conductor, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
-    SceneMesh, TraceMode, load_scene,
+    SceneMesh, TraceMode,
 };
 
 use super::{Bench, Claim, ClaimsArgs, Truth, claim_rows, less, value};
@@ -215,7 +216,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
             ));
         }
     }
-    let flip = |r: &refract_scene::metrics::MetricsRecord| r.flip_mean;
+    let flip = |r: &refract_eval::metrics::MetricsRecord| r.flip_mean;
     let (first, last) = (&series[0], &series[series.len() - 1]);
     claims[1].rows.push((
         "convex mirror".into(),
@@ -294,7 +295,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         let (_, record) = bench.measure(&truth, &pvrr(&[])?)?;
         curvature.push((radius, record));
     }
-    let zoom = |r: &refract_scene::metrics::MetricsRecord| r.zoom_share.unwrap_or(0.0);
+    let zoom = |r: &refract_eval::metrics::MetricsRecord| r.zoom_share.unwrap_or(0.0);
     let zoom_at = |radius: f32| {
         curvature
             .iter()

@@ -8,9 +8,11 @@ use refract_core::CameraDesc;
 use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
 use serde::Deserialize;
 
-use crate::environment::{Environment, load_latlong};
-use crate::error::SceneError;
-use crate::scene::{Albedo, Material, Object, Refractor, Scene};
+use refract_scene::Environment;
+
+use crate::environment_files::load_latlong;
+use refract_scene::SceneError;
+use refract_scene::{Albedo, Material, Object, Refractor, Scene};
 
 /// The room of the distance-map scenes (Umenhoffer et al. 2007 Figs. 17-7 to 17-9): a box of
 /// diffuse walls `x ∈ [−3, 3]`, `y ∈ [−1, 3]`, `z ∈ [−3, 5]` facing inward (red left, green
@@ -434,7 +436,7 @@ fn parse_conductor(
     material: Option<&str>,
     eta: Option<[f32; 3]>,
     k: Option<[f32; 3]>,
-) -> Result<Option<crate::scene::Conductor>, SceneError> {
+) -> Result<Option<refract_scene::scene::Conductor>, SceneError> {
     let name = material.unwrap_or(plain);
     let custom = name == "conductor";
     if !custom && (eta.is_some() || k.is_some()) {
@@ -465,17 +467,17 @@ fn parse_conductor(
             MAX_CONDUCTOR_ETA,
         )?;
         check_vector(origin, &format!("{section} k"), k, 0.0, MAX_CONDUCTOR_K)?;
-        return Ok(Some(crate::scene::Conductor {
+        return Ok(Some(refract_scene::scene::Conductor {
             eta: Vec3::from(eta),
             k: Vec3::from(k),
         }));
     }
-    crate::scene::CONDUCTORS
+    refract_scene::scene::CONDUCTORS
         .iter()
         .find(|(n, _)| *n == name)
         .map(|(_, c)| Some(*c))
         .ok_or_else(|| {
-            let names: Vec<String> = crate::scene::CONDUCTORS
+            let names: Vec<String> = refract_scene::scene::CONDUCTORS
                 .iter()
                 .map(|(n, _)| format!("\"{n}\""))
                 .collect();
@@ -514,7 +516,10 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
     }
     let path = PathBuf::from(spec);
     if path.extension().is_none_or(|e| e != "toml") {
-        return Err(SceneError::UnknownScene(spec.to_owned()));
+        return Err(SceneError::UnknownScene {
+            name: spec.to_owned(),
+            builtins: builtin_names(),
+        });
     }
     let text = std::fs::read_to_string(&path).map_err(|source| SceneError::Io {
         path: path.clone(),
@@ -659,8 +664,13 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     check_camera(origin, &file.camera)?;
     let r = &file.refractor;
     check_placement(origin, "[refractor]", r.translate, r.scale, r.rotate_deg)?;
-    crate::scene::check_ior(r.ior).map_err(|_| {
-        SceneError::field(origin, "[refractor] ior", r.ior, crate::scene::IOR_EXPECTED)
+    refract_scene::scene::check_ior(r.ior).map_err(|_| {
+        SceneError::field(
+            origin,
+            "[refractor] ior",
+            r.ior,
+            refract_scene::scene::IOR_EXPECTED,
+        )
     })?;
     check_range(
         origin,
@@ -1090,7 +1100,7 @@ mod tests {
     /// scenes).
     #[test]
     fn materials_are_read_and_checked() {
-        use crate::scene::Conductor;
+        use refract_scene::scene::Conductor;
         let load = |text: &str| load_scene_str("m", text, Path::new("."), "m.toml");
         let scene = load(
             "[refractor]\nmesh = \"builtin:sphere\"\nmaterial = \"copper\"\n\

@@ -12,10 +12,10 @@ use refract_core::nearby_geometry::{
 use refract_core::vector::angle_between;
 use serde::{Deserialize, Serialize};
 
-use crate::frame::{Aov, Frame};
-use crate::registry::MethodParams;
-use crate::scene::Scene;
-use crate::tonemap::to_srgb8;
+use refract_scene::MethodParams;
+use refract_scene::scene::Scene;
+use refract_scene::tonemap::to_srgb8;
+use refract_scene::{Aov, Frame};
 
 /// The `ε` of the relative MSE, `(a − b)² / (b² + ε)` (pbrt's `imgtool diff --metric MRSE`).
 pub const REL_MSE_EPSILON: f64 = 0.01;

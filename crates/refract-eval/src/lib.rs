@@ -1,0 +1,20 @@
+//! # refract-eval
+//!
+//! Everything around the renderer API of refract-scene that touches files or judges a frame,
+//! so that the renderers link none of it:
+//!
+//! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
+//! * [`environment_files`]: lat-long `.exr`/`.hdr` maps (negatives clamped and counted).
+//! * [`frame_files`]: a [`refract_scene::Frame`] as an EXR (colour and every AOV layer) or a PNG.
+//! * [`metrics`]: error metrics of a frame against the reference (design.md, "Measuring").
+//! * [`atomic_write`]: the one way files are written (temporary file, flush, rename).
+
+pub mod atomic_write;
+pub mod environment_files;
+pub mod frame_files;
+pub mod metrics;
+pub mod scene_file;
+
+pub use environment_files::load_latlong;
+pub use frame_files::FrameFiles;
+pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene, load_scene_str};
