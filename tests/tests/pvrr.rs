@@ -14,6 +14,7 @@ use refract_core::Camera;
 use refract_core::optics::{face_forward_shading_normal, reflect};
 use refract_core::pvrr::{MapTexels, STATE_MAPPED, sample_bilinear};
 use refract_cpu::pvrr::PvrrPasses;
+use refract_cpu::{CpuFamily, FrameCx};
 use refract_eval::{load_scene, load_scene_str};
 use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
@@ -45,13 +46,17 @@ fn params(settings: &[(&str, &str)]) -> PvrrParams {
     p
 }
 
-fn pvrr(scene: &Scene, camera: &Camera, p: &PvrrParams) -> (PvrrPasses, Frame) {
+fn pvrr(scene: &Arc<Scene>, camera: &Camera, p: &PvrrParams) -> (PvrrPasses, Frame) {
     let mut passes = PvrrPasses::default();
     passes.prepare(scene);
     let mut frame = Frame::default();
-    passes
-        .render(scene, camera, p, FrameOutputs::ColorAndAovs, &mut frame)
-        .expect("pvrr frame");
+    let cx = FrameCx {
+        scene,
+        camera,
+        method: MethodId::Pvrr,
+        outputs: FrameOutputs::ColorAndAovs,
+    };
+    passes.render(&cx, p, &mut frame).expect("pvrr frame");
     (passes, frame)
 }
 

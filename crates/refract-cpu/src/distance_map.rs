@@ -9,6 +9,8 @@
 //! what the searches read, 4 bytes) and the rasteriser's visibility (which triangle), from
 //! which the normal and material of a hit are interpolated once per hit.
 
+use std::sync::Arc;
+
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::distance_map::{
@@ -20,6 +22,7 @@ use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh,
 };
 
+use crate::family::{CpuFamily, FrameCx};
 use crate::image_space::fill;
 use crate::raster::{
     DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
@@ -379,26 +382,34 @@ pub struct DistancePasses {
 }
 
 impl DistancePasses {
-    /// Prepares the meshes of `scene`.
-    pub fn prepare(&mut self, scene: &Scene) {
-        self.map.prepare(scene);
-        self.everything = SceneMeshes::everything(scene);
-    }
-
     /// The distance map of the last frame.
     pub fn map(&self) -> &DistanceMap {
         &self.map
     }
+}
+
+impl CpuFamily for DistancePasses {
+    type Params = DistanceMapParams;
+
+    /// Prepares the meshes of `scene`.
+    fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.map.prepare(scene);
+        self.everything = SceneMeshes::everything(scene);
+    }
 
     /// One frame: the distance map, the eye pass, the paths.
-    pub fn render(
+    fn render(
         &mut self,
-        scene: &Scene,
-        camera: &Camera,
+        cx: &FrameCx<'_>,
         params: &DistanceMapParams,
-        outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
+        let FrameCx {
+            scene,
+            camera,
+            outputs,
+            ..
+        } = *cx;
         self.map
             .render(scene, params.layers as usize, params.resolution)?;
         let (width, height) = (camera.width(), camera.height());

@@ -2,6 +2,8 @@
 //! `wyman-dn`): the back faces rasterised and resolved, then the front faces rasterised band by
 //! band, each band shaded by refract-core's eight-lane kernels right after it is rasterised.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 use rayon::iter::Either;
 use rayon::prelude::*;
@@ -9,9 +11,13 @@ use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
-use refract_scene::{Aov, Environment, Frame, FrameOutputs, MethodId, Refractor};
+use refract_scene::{
+    Aov, Environment, Frame, FrameOutputs, MethodId, Refractor, RenderError, Scene,
+    TwoInterfaceParams,
+};
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
+use crate::family::{CpuFamily, FrameCx};
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::shade::{BandRow, BufferRow, ShadeContext};
 
@@ -20,11 +26,19 @@ use crate::shade::{BandRow, BufferRow, ShadeContext};
 pub enum ImageSpaceMethod {
     /// `single`: one interface.
     Single,
-    /// `wyman` and its ablations: two interfaces with this back surface.
-    TwoInterface {
-        /// Which back surface is rasterised.
-        back: BackSurface,
-    },
+    /// `wyman` and its ablations: two interfaces (back surface, `d~`, exit TIR policy).
+    TwoInterface(TwoInterfaceParams),
+}
+
+impl ImageSpaceMethod {
+    /// The kernel's parameters for a refractor of index `ior` (`single` ignores the distance
+    /// mode and the exit policy).
+    pub fn kernel(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
+        match self {
+            ImageSpaceMethod::Single => TwoInterfaceParams::default().kernel(ior),
+            ImageSpaceMethod::TwoInterface(p) => p.kernel(ior),
+        }
+    }
 }
 
 /// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
@@ -168,30 +182,30 @@ pub struct ImageSpacePasses {
     aovs: Vec<MethodAov>,
 }
 
-impl ImageSpacePasses {
-    /// One frame of `method` (`id` names it for its AOV layers) into `frame`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render(
+impl CpuFamily for ImageSpacePasses {
+    type Params = ImageSpaceMethod;
+
+    fn prepare(&mut self, _scene: &Arc<Scene>) {}
+
+    fn render(
         &mut self,
-        refractor: &Refractor,
-        environment: &Environment,
-        camera: &Camera,
-        kernel: &ImageSpaceParams,
-        method: ImageSpaceMethod,
-        id: MethodId,
-        outputs: FrameOutputs,
+        cx: &FrameCx<'_>,
+        method: &ImageSpaceMethod,
         frame: &mut Frame,
-    ) {
+    ) -> Result<(), RenderError> {
+        let FrameCx { scene, camera, .. } = *cx;
+        let refractor = &scene.refractor;
+        let kernel = &method.kernel(refractor.ior())?;
         let back = match method {
             ImageSpaceMethod::Single => None,
-            ImageSpaceMethod::TwoInterface { back: surface } => {
-                self.back.render_into(refractor, camera, surface);
+            ImageSpaceMethod::TwoInterface(p) => {
+                self.back.render_into(refractor, camera, p.back);
                 Some(&self.back)
             }
         };
         let context = ShadeContext {
             back,
-            environment,
+            environment: &scene.environment,
             camera,
             kernel,
         };
@@ -200,7 +214,7 @@ impl ImageSpacePasses {
         frame.resize_for_overwrite(width, height);
         let band = band_pixels(width);
         let colors = frame.color.par_chunks_mut(band);
-        let with_aovs = outputs == FrameOutputs::ColorAndAovs;
+        let with_aovs = cx.with_aovs();
         let bands = if with_aovs {
             self.aovs.resize(n, MethodAov::BACKGROUND);
             Either::Left(colors.zip(self.aovs.par_chunks_mut(band).map(Some)))
@@ -217,8 +231,9 @@ impl ImageSpacePasses {
             |rows, (colors, aovs)| shade_band(&context, rows, colors, aovs),
         );
         if with_aovs {
-            write_layers(&self.aovs[..n], id, frame);
+            write_layers(&self.aovs[..n], cx.method, frame);
         }
+        Ok(())
     }
 }
 

@@ -19,6 +19,7 @@
 
 pub mod buffers;
 pub mod distance_map;
+pub mod family;
 pub mod image_space;
 pub mod nearby_geometry;
 mod pixel_group;
@@ -30,6 +31,7 @@ mod shade;
 pub mod surfaces;
 
 pub use buffers::{BackFaces, front_faces, front_faces_into};
+pub use family::{CpuFamily, FrameCx};
 pub use image_space::{
     FrameBuffers, ImageSpaceMethod, ImageSpacePasses, render_buffers, render_buffers_into,
     shade_into,

@@ -7,8 +7,11 @@
 //! Every pixel is one of: the refractor in front of the objects (the refraction), an object
 //! seen directly (its NG texel), or the environment.
 
+use std::sync::Arc;
+
 use glam::{UVec2, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
+use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams};
@@ -18,10 +21,10 @@ use refract_core::nearby_geometry::{
     NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
     view_depth,
 };
-use refract_core::{BackSurface, Camera};
-use refract_scene::{Aov, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh};
+use refract_scene::{Aov, Frame, MethodId, NearbyParams, RenderError, Scene, SceneMesh};
 
 use crate::buffers::{BackFaces, front_faces_into};
+use crate::family::{CpuFamily, FrameCx};
 use crate::image_space::fill;
 use crate::pixel_group::PixelGroup;
 use crate::raster::{DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
@@ -179,17 +182,6 @@ impl NearbyAov {
     };
 }
 
-/// One nearby-geometry method run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NearbyMethod {
-    /// The back surface of the two-interface kernel.
-    pub back: BackSurface,
-    /// The lookup in the NG texture.
-    pub lookup: NearbyLookup,
-    /// Guard band of the NG texture, percent of the image size per side.
-    pub guard_band_percent: u32,
-}
-
 /// The passes of the nearby-geometry methods, with their memory kept between frames.
 #[derive(Default)]
 pub struct NearbyPasses {
@@ -201,34 +193,34 @@ pub struct NearbyPasses {
 }
 
 impl NearbyPasses {
-    /// Prepares the passes for `scene` (its objects as one mesh).
-    pub fn prepare(&mut self, scene: &Scene) {
-        self.meshes = SceneMeshes::objects(scene);
-    }
-
     /// The NG texture of the last frame.
     pub fn nearby_texture(&self) -> &NearbyTexture {
         &self.nearby
     }
+}
 
-    /// One frame of `method` (`id` names its AOV layers) into `frame`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render(
+impl CpuFamily for NearbyPasses {
+    type Params = NearbyParams;
+
+    /// Prepares the passes for `scene` (its objects as one mesh).
+    fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.meshes = SceneMeshes::objects(scene);
+    }
+
+    fn render(
         &mut self,
-        scene: &Scene,
-        planes: &[Plane],
-        camera: &Camera,
-        kernel: &ImageSpaceParams,
-        method: NearbyMethod,
-        id: MethodId,
-        outputs: FrameOutputs,
+        cx: &FrameCx<'_>,
+        method: &NearbyParams,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
+        let FrameCx { scene, camera, .. } = *cx;
         let refractor = &scene.refractor;
+        let kernel = &method.two.kernel(refractor.ior())?;
+        let planes = &scene.nearby_planes(camera.look_dir());
         let (ng_desc, pad) = guard_band_camera(camera.desc(), method.guard_band_percent);
         let ng_camera =
             Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
-        self.back.render_into(refractor, camera, method.back);
+        self.back.render_into(refractor, camera, method.two.back);
         self.nearby.render_into(scene, &self.meshes, &ng_camera);
         front_faces_into(refractor, camera, &mut self.front);
 
@@ -248,7 +240,7 @@ impl NearbyPasses {
             nearby: &self.nearby,
         };
         let rows = frame.color.par_chunks_mut(width as usize).enumerate();
-        if outputs == FrameOutputs::ColorAndAovs {
+        if cx.with_aovs() {
             self.aovs.clear();
             self.aovs.resize(n, NearbyAov::NONE);
             rows.zip(self.aovs.par_chunks_mut(width as usize))
@@ -257,8 +249,8 @@ impl NearbyPasses {
             // Colour only, as displayed: no per-pixel AOV memory is touched.
             rows.for_each(|(y, colors)| pixels.row(y as u32, colors, None));
         }
-        if outputs == FrameOutputs::ColorAndAovs {
-            write_layers(&self.aovs[..n], id, frame);
+        if cx.with_aovs() {
+            write_layers(&self.aovs[..n], cx.method, frame);
         }
         Ok(())
     }

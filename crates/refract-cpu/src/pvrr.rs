@@ -6,6 +6,8 @@
 //! reflector's pixel interpolates its vertices' map positions (perspective-correct
 //! barycentrics) and reads its map bilinearly (§3.1 step 4).
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
@@ -16,6 +18,7 @@ use refract_scene::{
 };
 
 use crate::distance_map::surface_material;
+use crate::family::{CpuFamily, FrameCx};
 use crate::image_space::fill;
 use crate::raster::{DepthTest, Faces, SurfaceBuffer, rasterize_into};
 use crate::scene_meshes::SceneMeshes;
@@ -61,9 +64,11 @@ pub struct PvrrPasses {
     aovs: Vec<PvrrAov>,
 }
 
-impl PvrrPasses {
+impl CpuFamily for PvrrPasses {
+    type Params = PvrrParams;
+
     /// Prepares the meshes of `scene`.
-    pub fn prepare(&mut self, scene: &Scene) {
+    fn prepare(&mut self, scene: &Arc<Scene>) {
         self.planner.prepare(scene);
         let all: Vec<SceneMesh> = core::iter::once(SceneMesh::Refractor)
             .chain((0..scene.objects.len()).map(SceneMesh::Object))
@@ -75,44 +80,19 @@ impl PvrrPasses {
             .collect();
     }
 
-    /// The plan of the last frame.
-    pub fn last_plan(&self) -> &PvrrPlan {
-        self.planner.last()
-    }
-
-    /// The map of view `view` (≥ 1) of the last frame.
-    pub fn map(&self, view: usize) -> Option<&Image> {
-        (view >= 1).then(|| self.images.get(view)).flatten()
-    }
-
-    /// The mesh map `view` of the last frame shows at map position `st`, `None` where it shows
-    /// the environment (Kakimoto et al. §6: what the occlusion inconsistency compares).
-    pub fn map_mesh_at(&self, view: usize, st: Vec2) -> Option<SceneMesh> {
-        let plan = self.planner.last();
-        let v = plan.views.get(view)?;
-        let buffer = self.buffers.get(view)?;
-        let (w, h) = (v.camera.width(), v.camera.height());
-        let (x, y) = (st.x.floor(), st.y.floor());
-        if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
-            return None;
-        }
-        let meshes = match v.excluded {
-            Some(k) => &self.without[k],
-            None => &self.everything,
-        };
-        let texel = buffer.texel((y as u32 * w + x as u32) as usize)?;
-        Some(meshes.source(texel.triangle).0)
-    }
-
     /// One frame.
-    pub fn render(
+    fn render(
         &mut self,
-        scene: &Scene,
-        camera: &Camera,
+        cx: &FrameCx<'_>,
         params: &PvrrParams,
-        outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
+        let FrameCx {
+            scene,
+            camera,
+            outputs,
+            ..
+        } = *cx;
         let plan = self.planner.plan(scene, camera, params)?;
         let views = plan.views.len();
         self.buffers.resize_with(views, SurfaceBuffer::new);
@@ -174,6 +154,37 @@ impl PvrrPasses {
             write_layers(&self.aovs, frame);
         }
         Ok(())
+    }
+}
+
+impl PvrrPasses {
+    /// The plan of the last frame.
+    pub fn last_plan(&self) -> &PvrrPlan {
+        self.planner.last()
+    }
+
+    /// The map of view `view` (≥ 1) of the last frame.
+    pub fn map(&self, view: usize) -> Option<&Image> {
+        (view >= 1).then(|| self.images.get(view)).flatten()
+    }
+
+    /// The mesh map `view` of the last frame shows at map position `st`, `None` where it shows
+    /// the environment (Kakimoto et al. §6: what the occlusion inconsistency compares).
+    pub fn map_mesh_at(&self, view: usize, st: Vec2) -> Option<SceneMesh> {
+        let plan = self.planner.last();
+        let v = plan.views.get(view)?;
+        let buffer = self.buffers.get(view)?;
+        let (w, h) = (v.camera.width(), v.camera.height());
+        let (x, y) = (st.x.floor(), st.y.floor());
+        if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
+            return None;
+        }
+        let meshes = match v.excluded {
+            Some(k) => &self.without[k],
+            None => &self.everything,
+        };
+        let texel = buffer.texel((y as u32 * w + x as u32) as usize)?;
+        Some(meshes.source(texel.triangle).0)
     }
 }
 

@@ -1,5 +1,6 @@
-//! The CPU backend as a [`Renderer`]: one exhaustive `match` from [`MethodParams`] to the module
-//! of the method's family, so a new method does not compile until it is handled or declined.
+//! The CPU backend as a [`Renderer`]: one value of every method family ([`crate::family`]) and
+//! one exhaustive `match` from [`MethodParams`] to the family that renders it, so a new
+//! parameter set does not compile until it is handled or declined.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,8 +12,9 @@ use refract_scene::{
 };
 
 use crate::distance_map::DistancePasses;
+use crate::family::{CpuFamily, FrameCx};
 use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
-use crate::nearby_geometry::{NearbyMethod, NearbyPasses};
+use crate::nearby_geometry::NearbyPasses;
 use crate::pvrr::PvrrPasses;
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
@@ -44,19 +46,14 @@ impl Renderer for CpuRenderer {
         BackendId::Cpu
     }
 
+    /// The registry row's word; `render` declines every other method (tested for every row).
     fn supports(&self, method: MethodId) -> bool {
-        match MethodParams::defaults(method) {
-            MethodParams::Reference(_) => false,
-            MethodParams::Single
-            | MethodParams::TwoInterface(_)
-            | MethodParams::NearbyGeometry(_)
-            | MethodParams::DistanceMap(_)
-            | MethodParams::Pvrr(_) => true,
-        }
+        method.info().backends.contains(&BackendId::Cpu)
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         // The mesh, its BVH and d_N come built with the scene; buffers are sized per frame.
+        self.image_space.prepare(scene);
         self.nearby.prepare(scene);
         self.distance_map.prepare(scene);
         self.pvrr.prepare(scene);
@@ -75,68 +72,31 @@ impl Renderer for CpuRenderer {
             .scene
             .as_ref()
             .ok_or(RenderError::NotPrepared(BackendId::Cpu))?;
-        let refractor = &scene.refractor;
-        let start = Instant::now();
-        let unsupported = || RenderError::Unsupported {
-            backend: BackendId::Cpu,
-            method: method.id(),
-        };
-        refract_scene::scene_support(method.id(), scene).map_err(RenderError::UnsupportedScene)?;
-        if let MethodParams::DistanceMap(p) = method {
-            self.distance_map.render(scene, camera, p, outputs, frame)?;
-            return Ok(FrameTiming {
-                ms: start.elapsed().as_secs_f64() * 1e3,
-                source: TimingSource::Wall,
-            });
-        }
-        if let MethodParams::Pvrr(p) = method {
-            self.pvrr.render(scene, camera, p, outputs, frame)?;
-            return Ok(FrameTiming {
-                ms: start.elapsed().as_secs_f64() * 1e3,
-                source: TimingSource::Wall,
-            });
-        }
-        let kernel = method
-            .image_space_kernel(refractor.ior())
-            .ok_or_else(unsupported)??;
-        let image_space = match method {
-            MethodParams::Reference(_) | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {
-                return Err(unsupported());
-            }
-            MethodParams::Single => ImageSpaceMethod::Single,
-            MethodParams::TwoInterface(p) => ImageSpaceMethod::TwoInterface { back: p.back },
-            MethodParams::NearbyGeometry(p) => {
-                let planes = scene.nearby_planes(camera.look_dir());
-                self.nearby.render(
-                    scene,
-                    &planes,
-                    camera,
-                    &kernel,
-                    NearbyMethod {
-                        back: p.two.back,
-                        lookup: p.lookup,
-                        guard_band_percent: p.guard_band_percent,
-                    },
-                    method.id(),
-                    outputs,
-                    frame,
-                )?;
-                return Ok(FrameTiming {
-                    ms: start.elapsed().as_secs_f64() * 1e3,
-                    source: TimingSource::Wall,
-                });
-            }
-        };
-        self.image_space.render(
-            refractor,
-            &scene.environment,
+        let id = method.id();
+        refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
+        let cx = FrameCx {
+            scene,
             camera,
-            &kernel,
-            image_space,
-            method.id(),
+            method: id,
             outputs,
-            frame,
-        );
+        };
+        let start = Instant::now();
+        match method {
+            MethodParams::Reference(_) => Err(RenderError::Unsupported {
+                backend: BackendId::Cpu,
+                method: id,
+            }),
+            MethodParams::Single => self
+                .image_space
+                .render(&cx, &ImageSpaceMethod::Single, frame),
+            MethodParams::TwoInterface(p) => {
+                self.image_space
+                    .render(&cx, &ImageSpaceMethod::TwoInterface(*p), frame)
+            }
+            MethodParams::NearbyGeometry(p) => self.nearby.render(&cx, p, frame),
+            MethodParams::DistanceMap(p) => self.distance_map.render(&cx, p, frame),
+            MethodParams::Pvrr(p) => self.pvrr.render(&cx, p, frame),
+        }?;
         Ok(FrameTiming {
             ms: start.elapsed().as_secs_f64() * 1e3,
             source: TimingSource::Wall,

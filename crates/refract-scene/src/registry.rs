@@ -689,6 +689,15 @@ pub struct TwoInterfaceParams {
     pub tir: TirPolicy,
 }
 
+impl TwoInterfaceParams {
+    /// The parameters of refract-core's two-interface kernel for a refractor of index `ior`
+    /// (an index out of range is [`RenderError::Parameter`]).
+    pub fn kernel(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
+        ImageSpaceParams::new(ior, self.distance, self.tir)
+            .map_err(|err| RenderError::Parameter(err.to_string()))
+    }
+}
+
 /// Parameters of the nearby-geometry methods (`kay-greenberg`, `ray-plane`, `iterative`,
 /// `iterative-seeded`): the two-interface kernel (`d~` interpolated, as in Wyman 2005b §3) and
 /// the lookup in the NG texture.
