@@ -18,6 +18,7 @@
 mod bindings;
 pub mod conformance;
 pub mod context;
+mod family;
 mod frame_uniforms;
 mod methods;
 mod passes;

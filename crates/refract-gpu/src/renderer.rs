@@ -1,28 +1,27 @@
-//! The GPU backend as a [`Renderer`]: one exhaustive `match` from [`MethodParams`] to the module
-//! of the method's family, so a new method does not compile until it is handled or declined.
+//! The GPU backend as a [`Renderer`]: one [`FamilySlot`] per method family
+//! ([`crate::family`]) and one exhaustive `match` from [`MethodParams`] to the family that renders
+//! it, so a new parameter set does not compile until it is handled or declined. The frame
+//! routine (reuse or allocate, encode, submit, read back, time) is [`FamilySlot::run_frame`],
+//! written once.
 
 use std::sync::Arc;
-use std::time::Instant;
 
 use refract_core::Camera;
-use refract_core::kernel::ImageSpaceParams;
-use refract_core::nearby_geometry::guard_band_camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, NearbyParams, RenderError,
-    Renderer, Scene, SceneMesh, SurfaceTexel, TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
+    Scene, SceneMesh, SurfaceTexel,
 };
 
 use crate::context::{GpuContext, GpuError};
-use crate::frame_uniforms::frame_uniforms;
-use crate::methods::distance_map::{DistanceMapPipelines, DistanceMapTargets};
-use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines, ImageSpaceTargets};
-use crate::methods::nearby_geometry::{NearbyFrame, NearbyPipelines, NearbyTargets};
-use crate::methods::pvrr::{PvrrPipelines, PvrrTargets};
+use crate::family::{FamilySlot, GpuFrameCx};
+use crate::methods::distance_map::DistanceMapPipelines;
+use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines};
+use crate::methods::nearby_geometry::NearbyPipelines;
+use crate::methods::pvrr::PvrrFamily;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
-use refract_scene::pvrr::PvrrPlanner;
 
 impl From<GpuError> for RenderError {
     fn from(err: GpuError) -> Self {
@@ -30,37 +29,17 @@ impl From<GpuError> for RenderError {
     }
 }
 
-/// Keeps the targets in `slot` when they fit (`fits`), else replaces them with new ones from
-/// `make` (the old ones are freed first): targets live across frames of one size.
-fn reuse_or_allocate<T>(
-    slot: &mut Option<T>,
-    fits: impl Fn(&T) -> bool,
-    make: impl FnOnce() -> Result<T, GpuError>,
-) -> Result<(), GpuError> {
-    if !slot.as_ref().is_some_and(fits) {
-        *slot = None;
-        *slot = Some(make()?);
-    }
-    Ok(())
-}
-
-/// The GPU renderer: a device, the compiled pipelines, the uploaded scene and the targets of
-/// the last resolution (reused for every camera and method at that size).
+/// The GPU renderer: a device, the compiled pipelines, the uploaded scene and each family's
+/// targets of the last resolution (reused for every camera and method at that size).
 pub struct GpuRenderer {
     context: GpuContext,
     raster: RasterPipelines,
-    image_space: ImageSpacePipelines,
-    nearby: NearbyPipelines,
-    distance_map: DistanceMapPipelines,
-    pvrr: PvrrPipelines,
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
-    targets: Option<ImageSpaceTargets>,
-    nearby_targets: Option<NearbyTargets>,
-    distance_targets: Option<DistanceMapTargets>,
-    pvrr_targets: Option<PvrrTargets>,
-    /// The per-vertex plan of `pvrr` (kept between frames: `update=on-change`).
-    pvrr_planner: PvrrPlanner,
+    image_space: FamilySlot<ImageSpacePipelines>,
+    nearby: FamilySlot<NearbyPipelines>,
+    distance_map: FamilySlot<DistanceMapPipelines>,
+    pvrr: FamilySlot<PvrrFamily>,
 }
 
 impl GpuRenderer {
@@ -72,13 +51,14 @@ impl GpuRenderer {
     /// Compiles the pipelines on `context`.
     pub fn with_context(context: GpuContext) -> Result<Self, GpuError> {
         let (raster, image_space, nearby, distance_map, pvrr) = context.checked(|| {
-            let raster = RasterPipelines::new(&context.device);
-            let pvrr = PvrrPipelines::new(&context.device, &raster);
+            let device = &context.device;
+            let raster = RasterPipelines::new(device);
+            let pvrr = PvrrFamily::new(device, &raster);
             (
                 raster,
-                ImageSpacePipelines::new(&context.device),
-                NearbyPipelines::new(&context.device),
-                DistanceMapPipelines::new(&context.device),
+                ImageSpacePipelines::new(device),
+                NearbyPipelines::new(device),
+                DistanceMapPipelines::new(device),
                 pvrr,
             )
         })?;
@@ -86,17 +66,12 @@ impl GpuRenderer {
         Ok(Self {
             context,
             raster,
-            image_space,
-            nearby,
-            distance_map,
-            pvrr,
             timestamps,
             scene: None,
-            targets: None,
-            nearby_targets: None,
-            distance_targets: None,
-            pvrr_targets: None,
-            pvrr_planner: PvrrPlanner::default(),
+            image_space: FamilySlot::new(image_space),
+            nearby: FamilySlot::new(nearby),
+            distance_map: FamilySlot::new(distance_map),
+            pvrr: FamilySlot::new(pvrr),
         })
     }
 
@@ -140,267 +115,6 @@ impl GpuRenderer {
             camera,
         )?)
     }
-
-    fn image_space(
-        &mut self,
-        camera: &Camera,
-        kernel: ImageSpaceKernel,
-        id: MethodId,
-        params: ImageSpaceParams,
-        outputs: FrameOutputs,
-        frame: &mut Frame,
-    ) -> Result<FrameTiming, RenderError> {
-        let (_, scene) = self
-            .scene
-            .as_ref()
-            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
-        let (width, height) = (camera.width(), camera.height());
-        reuse_or_allocate(
-            &mut self.targets,
-            |t| t.fits(width, height),
-            || {
-                ImageSpaceTargets::new(
-                    &self.context,
-                    &self.raster,
-                    &self.image_space,
-                    scene,
-                    width,
-                    height,
-                )
-            },
-        )?;
-        let Some(targets) = &self.targets else {
-            unreachable!("allocated above")
-        };
-        let uniforms = frame_uniforms(camera, &scene.environment, params.ior(), params.tir_policy);
-        let start = Instant::now();
-        let mut encoder =
-            self.context
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("image-space frame"),
-                });
-        targets.encode(
-            &self.context,
-            &self.raster,
-            &self.image_space,
-            scene,
-            camera,
-            &uniforms,
-            kernel,
-            id,
-            outputs,
-            self.timestamps.as_ref(),
-            &mut encoder,
-        );
-        let timing = self.submit(encoder, start)?;
-        targets.read(&self.context, id, outputs, frame)?;
-        Ok(timing)
-    }
-
-    /// Submits a frame's commands, waits for them and reads its timing.
-    fn submit(
-        &self,
-        encoder: wgpu::CommandEncoder,
-        start: Instant,
-    ) -> Result<FrameTiming, RenderError> {
-        self.context
-            .checked(|| self.context.queue.submit([encoder.finish()]))?;
-        self.context.wait()?;
-        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(match &self.timestamps {
-            Some(timestamps) => FrameTiming {
-                ms: timestamps.read_ms(&self.context)?,
-                source: TimingSource::GpuTimestamps,
-            },
-            None => FrameTiming {
-                ms: wall_ms,
-                source: TimingSource::Wall,
-            },
-        })
-    }
-
-    /// One frame of `distance-map` (Umenhoffer et al. 2007).
-    fn distance_map(
-        &mut self,
-        camera: &Camera,
-        params: &refract_scene::DistanceMapParams,
-        outputs: FrameOutputs,
-        frame: &mut Frame,
-    ) -> Result<FrameTiming, RenderError> {
-        let (scene, gpu_scene) = self
-            .scene
-            .as_ref()
-            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
-        let size = (camera.width(), camera.height());
-        reuse_or_allocate(
-            &mut self.distance_targets,
-            |t| t.fits(size, params),
-            || {
-                DistanceMapTargets::new(
-                    &self.context,
-                    &self.raster,
-                    &self.distance_map,
-                    gpu_scene,
-                    size,
-                    params,
-                )
-            },
-        )?;
-        let Some(targets) = &self.distance_targets else {
-            unreachable!("allocated above")
-        };
-        let start = Instant::now();
-        let mut encoder =
-            self.context
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("distance-map frame"),
-                });
-        targets.encode(
-            &self.context,
-            &self.raster,
-            &self.distance_map,
-            gpu_scene,
-            scene,
-            camera,
-            params,
-            outputs,
-            self.timestamps.as_ref(),
-            &mut encoder,
-        )?;
-        let timing = self.submit(encoder, start)?;
-        targets.read(&self.context, outputs, frame)?;
-        Ok(timing)
-    }
-
-    /// One frame of `pvrr` (Kakimoto et al. 2007).
-    fn pvrr(
-        &mut self,
-        camera: &Camera,
-        params: &refract_scene::PvrrParams,
-        outputs: FrameOutputs,
-        frame: &mut Frame,
-    ) -> Result<FrameTiming, RenderError> {
-        let (scene, gpu_scene) = self
-            .scene
-            .as_ref()
-            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
-        let size = (camera.width(), camera.height());
-        reuse_or_allocate(
-            &mut self.pvrr_targets,
-            |t| t.fits(size, params),
-            || PvrrTargets::new(&self.context, size, params),
-        )?;
-        let Some(targets) = &mut self.pvrr_targets else {
-            unreachable!("allocated above")
-        };
-        let start = Instant::now();
-        let plan = self.pvrr_planner.plan(scene, camera, params)?;
-        let plan_ms = start.elapsed().as_secs_f64() * 1e3;
-        let mut encoder =
-            self.context
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("pvrr frame"),
-                });
-        targets.encode(
-            &self.context,
-            &self.raster,
-            &self.pvrr,
-            gpu_scene,
-            scene,
-            plan,
-            outputs,
-            self.timestamps.as_ref(),
-            &mut encoder,
-        )?;
-        let mut timing = self.submit(encoder, start)?;
-        if timing.source == TimingSource::GpuTimestamps {
-            // The GPU's timestamps plus the per-vertex plan the CPU made for it.
-            timing.ms += plan_ms;
-        }
-        if let Some(targets) = &self.pvrr_targets {
-            targets.read(&self.context, outputs, frame)?;
-        }
-        Ok(timing)
-    }
-
-    /// One frame of a nearby-geometry method (Wyman 2005b).
-    fn nearby_geometry(
-        &mut self,
-        camera: &Camera,
-        params: &NearbyParams,
-        id: MethodId,
-        kernel: ImageSpaceParams,
-        outputs: FrameOutputs,
-        frame: &mut Frame,
-    ) -> Result<FrameTiming, RenderError> {
-        let (scene, gpu_scene) = self
-            .scene
-            .as_ref()
-            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
-        let (ng_desc, pad) = guard_band_camera(camera.desc(), params.guard_band_percent);
-        let ng_camera =
-            Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
-        let size = (camera.width(), camera.height());
-        let ng_size = (ng_camera.width(), ng_camera.height());
-        reuse_or_allocate(
-            &mut self.nearby_targets,
-            |t| t.fits(size, ng_size),
-            || {
-                NearbyTargets::new(
-                    &self.context,
-                    &self.raster,
-                    &self.nearby,
-                    gpu_scene,
-                    size,
-                    ng_size,
-                )
-            },
-        )?;
-        let Some(targets) = &self.nearby_targets else {
-            unreachable!("allocated above")
-        };
-        let planes = scene.nearby_planes(camera.look_dir());
-        let nearby = NearbyFrame {
-            ng_camera: &ng_camera,
-            pad,
-            planes: &planes,
-            lookup: params.lookup,
-            light: scene.light,
-        };
-        let uniforms = frame_uniforms(
-            camera,
-            &gpu_scene.environment,
-            kernel.ior(),
-            kernel.tir_policy,
-        );
-        let start = Instant::now();
-        let mut encoder =
-            self.context
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("nearby-geometry frame"),
-                });
-        targets.encode(
-            &self.context,
-            &self.raster,
-            &self.nearby,
-            gpu_scene,
-            camera,
-            &uniforms,
-            &nearby,
-            params.two.back,
-            id,
-            outputs,
-            self.timestamps.as_ref(),
-            &mut encoder,
-        );
-        let timing = self.submit(encoder, start)?;
-        targets.read(&self.context, id, outputs, frame)?;
-        Ok(timing)
-    }
 }
 
 impl Renderer for GpuRenderer {
@@ -408,26 +122,19 @@ impl Renderer for GpuRenderer {
         BackendId::Gpu
     }
 
+    /// The registry row's word; `render` declines every other method (tested for every row).
     fn supports(&self, method: MethodId) -> bool {
-        match MethodParams::defaults(method) {
-            MethodParams::Reference(_) => false,
-            MethodParams::Single
-            | MethodParams::TwoInterface(_)
-            | MethodParams::NearbyGeometry(_)
-            | MethodParams::DistanceMap(_) => true,
-            MethodParams::Pvrr(_) => true,
-        }
+        method.info().backends.contains(&BackendId::Gpu)
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         let uploaded = self
             .context
             .checked(|| GpuScene::new(&self.context.device, scene))?;
-        self.targets = None; // bound to the old scene's environment buffer
-        self.nearby_targets = None;
-        self.distance_targets = None;
-        self.pvrr_targets = None;
-        self.pvrr_planner.prepare(scene);
+        self.image_space.prepare(scene);
+        self.nearby.prepare(scene);
+        self.distance_map.prepare(scene);
+        self.pvrr.prepare(scene);
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }
@@ -439,35 +146,38 @@ impl Renderer for GpuRenderer {
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<FrameTiming, RenderError> {
-        let scene = &self
+        let (scene, gpu_scene) = self
             .scene
             .as_ref()
-            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?
-            .0;
-        let ior = scene.refractor.ior();
+            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let id = method.id();
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
-        if let MethodParams::DistanceMap(p) = method {
-            return self.distance_map(camera, p, outputs, frame);
-        }
-        if let MethodParams::Pvrr(p) = method {
-            return self.pvrr(camera, p, outputs, frame);
-        }
-        let unsupported = || RenderError::Unsupported {
-            backend: BackendId::Gpu,
+        let cx = GpuFrameCx {
+            context: &self.context,
+            raster: &self.raster,
+            scene,
+            gpu_scene,
+            camera,
             method: id,
+            outputs,
+            timestamps: self.timestamps.as_ref(),
         };
-        let params = method.image_space_kernel(ior).ok_or_else(unsupported)??;
-        let kernel = match method {
-            MethodParams::Reference(_) | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {
-                return Err(unsupported());
+        match method {
+            MethodParams::Reference(_) => Err(RenderError::Unsupported {
+                backend: BackendId::Gpu,
+                method: id,
+            }),
+            MethodParams::Single => {
+                self.image_space
+                    .run_frame(&cx, &ImageSpaceKernel::Single, frame)
             }
-            MethodParams::Single => ImageSpaceKernel::Single,
-            MethodParams::TwoInterface(p) => ImageSpaceKernel::TwoInterface { back: p.back },
-            MethodParams::NearbyGeometry(p) => {
-                return self.nearby_geometry(camera, p, id, params, outputs, frame);
+            MethodParams::TwoInterface(p) => {
+                self.image_space
+                    .run_frame(&cx, &ImageSpaceKernel::TwoInterface(*p), frame)
             }
-        };
-        self.image_space(camera, kernel, id, params, outputs, frame)
+            MethodParams::NearbyGeometry(p) => self.nearby.run_frame(&cx, p, frame),
+            MethodParams::DistanceMap(p) => self.distance_map.run_frame(&cx, p, frame),
+            MethodParams::Pvrr(p) => self.pvrr.run_frame(&cx, p, frame),
+        }
     }
 }

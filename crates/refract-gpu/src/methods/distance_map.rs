@@ -10,10 +10,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use refract_core::distance_map::{MAX_LAYERS, fresnel_code};
 use refract_core::{Camera, CubeFace, TirPolicy};
-use refract_scene::{Aov, DistanceMapParams, Family, Frame, FrameOutputs, MethodId, Scene};
+use refract_scene::{Aov, DistanceMapParams, Family, Frame, FrameOutputs, MethodId, RenderError};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
+use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::methods::{MethodPipelines, fill};
@@ -142,6 +143,48 @@ pub(crate) struct DistanceMapTargets {
     shade_group: wgpu::BindGroup,
     /// Colour; (hit layer + 1, linear steps, secant steps, bounces); (covered, miss, tir, truncated).
     outputs: OutputBuffers,
+}
+
+impl GpuFamily for DistanceMapPipelines {
+    type Params = DistanceMapParams;
+    type Targets = DistanceMapTargets;
+    const LABEL: &'static str = "distance-map frame";
+
+    fn fits(
+        &self,
+        targets: &DistanceMapTargets,
+        cx: &GpuFrameCx<'_>,
+        params: &DistanceMapParams,
+    ) -> bool {
+        targets.fits(cx.size(), params)
+    }
+
+    fn allocate(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &DistanceMapParams,
+    ) -> Result<DistanceMapTargets, GpuError> {
+        DistanceMapTargets::new(cx.context, cx.raster, self, cx.gpu_scene, cx.size(), params)
+    }
+
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &DistanceMapParams,
+        targets: &mut DistanceMapTargets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
+        Ok(targets.encode(cx, self, params, encoder)?)
+    }
+
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &DistanceMapTargets,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        targets.read(cx.context, cx.outputs, frame)
+    }
 }
 
 impl DistanceMapTargets {
@@ -300,19 +343,23 @@ impl DistanceMapTargets {
 
     /// Encodes one frame: the layers, their ranges, the eye pass, the per-pixel paths.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode(
+    fn encode(
         &self,
-        context: &GpuContext,
-        raster: &RasterPipelines,
+        cx: &GpuFrameCx<'_>,
         pipelines: &DistanceMapPipelines,
-        gpu_scene: &GpuScene,
-        scene: &Scene,
-        camera: &Camera,
         params: &DistanceMapParams,
-        outputs: FrameOutputs,
-        timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
+        let GpuFrameCx {
+            context,
+            raster,
+            gpu_scene,
+            scene,
+            camera,
+            outputs,
+            timestamps,
+            ..
+        } = *cx;
         let (width, height, size, layers) = self.key;
         let queue = &context.queue;
         let center = scene.refractor.mesh().bounding_sphere().center;

@@ -9,11 +9,16 @@ use refract_core::gpu::{
     COVERAGE_BACKGROUND, COVERAGE_DEGENERATE, FrameUniforms, distance_mode_code,
     exit_normal_source_code, exit_normal_source_from_code,
 };
+use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
-use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, TwoInterfaceParams};
+use refract_scene::{
+    Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, RenderError, TwoInterfaceParams,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
+use crate::family::{GpuFamily, GpuFrameCx};
+use crate::frame_uniforms::frame_uniforms;
 use crate::methods::MethodPipelines;
 use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::GpuScene;
@@ -25,10 +30,65 @@ pub(crate) enum ImageSpaceKernel {
     /// `single`.
     Single,
     /// `wyman` and its ablations (the pipeline, chosen by method id, fixes `d~`).
-    TwoInterface {
-        /// Which back surface is rasterised.
-        back: BackSurface,
-    },
+    TwoInterface(TwoInterfaceParams),
+}
+
+impl ImageSpaceKernel {
+    /// The kernel's parameters for a refractor of index `ior` (`single` ignores the distance
+    /// mode and the exit policy).
+    fn params(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
+        match self {
+            ImageSpaceKernel::Single => TwoInterfaceParams::default().kernel(ior),
+            ImageSpaceKernel::TwoInterface(p) => p.kernel(ior),
+        }
+    }
+}
+
+impl GpuFamily for ImageSpacePipelines {
+    type Params = ImageSpaceKernel;
+    type Targets = ImageSpaceTargets;
+    const LABEL: &'static str = "image-space frame";
+
+    fn fits(&self, targets: &ImageSpaceTargets, cx: &GpuFrameCx<'_>, _: &ImageSpaceKernel) -> bool {
+        let (width, height) = cx.size();
+        targets.fits(width, height)
+    }
+
+    fn allocate(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        _: &ImageSpaceKernel,
+    ) -> Result<ImageSpaceTargets, GpuError> {
+        let (width, height) = cx.size();
+        ImageSpaceTargets::new(cx.context, cx.raster, self, cx.gpu_scene, width, height)
+    }
+
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        kernel: &ImageSpaceKernel,
+        targets: &mut ImageSpaceTargets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
+        let params = kernel.params(cx.scene.refractor.ior())?;
+        let uniforms = frame_uniforms(
+            cx.camera,
+            &cx.gpu_scene.environment,
+            params.ior(),
+            params.tir_policy,
+        );
+        targets.encode(cx, self, &uniforms, kernel, encoder);
+        Ok(())
+    }
+
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &ImageSpaceTargets,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        targets.read(cx.context, cx.method, cx.outputs, frame)
+    }
 }
 
 /// The kernel pipelines: `shade_single` and `shade_two_interface` (`DISTANCE_MODE` fixed per
@@ -304,27 +364,33 @@ impl ImageSpaceTargets {
 
     /// Encodes every per-frame pass (back faces for two interfaces, front faces, the kernel) and
     /// the copies of the outputs to the readback buffers.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode(
+    fn encode(
         &self,
-        context: &GpuContext,
-        raster: &RasterPipelines,
+        cx: &GpuFrameCx<'_>,
         pipelines: &ImageSpacePipelines,
-        scene: &GpuScene,
-        camera: &Camera,
         uniforms: &FrameUniforms,
-        kernel: ImageSpaceKernel,
-        id: MethodId,
-        outputs: FrameOutputs,
-        timestamps: Option<&Timestamps>,
+        kernel: &ImageSpaceKernel,
         encoder: &mut wgpu::CommandEncoder,
     ) {
+        let GpuFrameCx {
+            method: id,
+            outputs,
+            timestamps,
+            ..
+        } = *cx;
         let back = match kernel {
-            ImageSpaceKernel::TwoInterface { back } => Some(back),
+            ImageSpaceKernel::TwoInterface(p) => Some(p.back),
             ImageSpaceKernel::Single => None,
         };
         self.refractor.encode(
-            context, raster, scene, camera, uniforms, back, timestamps, encoder,
+            cx.context,
+            cx.raster,
+            cx.gpu_scene,
+            cx.camera,
+            uniforms,
+            back,
+            timestamps,
+            encoder,
         );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -9,11 +9,17 @@ use refract_core::Camera;
 use refract_core::gpu::{
     FrameUniforms, NearbyUniforms, exit_normal_source_code, lookup_code, seed_spacing_code,
 };
-use refract_core::nearby_geometry::{MAX_PLANES, NearbyLookup, Plane, SeedSpacing};
-use refract_scene::{Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams};
+use refract_core::nearby_geometry::{
+    MAX_PLANES, NearbyLookup, Plane, SeedSpacing, guard_band_camera,
+};
+use refract_scene::{
+    Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, NearbyParams,
+    RenderError,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
+use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
 use crate::methods::{MethodPipelines, fill};
@@ -56,6 +62,71 @@ impl NearbyPipelines {
                 _ => unreachable!("not a nearby-geometry method"),
             },
         ))
+    }
+}
+
+impl GpuFamily for NearbyPipelines {
+    type Params = NearbyParams;
+    type Targets = NearbyTargets;
+    const LABEL: &'static str = "nearby-geometry frame";
+
+    fn fits(&self, targets: &NearbyTargets, cx: &GpuFrameCx<'_>, params: &NearbyParams) -> bool {
+        let (ng_desc, _) = guard_band_camera(cx.camera.desc(), params.guard_band_percent);
+        targets.fits(cx.size(), (ng_desc.width, ng_desc.height))
+    }
+
+    fn allocate(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &NearbyParams,
+    ) -> Result<NearbyTargets, GpuError> {
+        let (ng_desc, _) = guard_band_camera(cx.camera.desc(), params.guard_band_percent);
+        NearbyTargets::new(
+            cx.context,
+            cx.raster,
+            self,
+            cx.gpu_scene,
+            cx.size(),
+            (ng_desc.width, ng_desc.height),
+        )
+    }
+
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &NearbyParams,
+        targets: &mut NearbyTargets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
+        let kernel = params.two.kernel(cx.scene.refractor.ior())?;
+        let (ng_desc, pad) = guard_band_camera(cx.camera.desc(), params.guard_band_percent);
+        let ng_camera =
+            Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;
+        let planes = cx.scene.nearby_planes(cx.camera.look_dir());
+        let nearby = NearbyFrame {
+            ng_camera: &ng_camera,
+            pad,
+            planes: &planes,
+            lookup: params.lookup,
+            light: cx.scene.light,
+        };
+        let uniforms = frame_uniforms(
+            cx.camera,
+            &cx.gpu_scene.environment,
+            kernel.ior(),
+            kernel.tir_policy,
+        );
+        targets.encode(cx, self, &uniforms, &nearby, params.two.back, encoder);
+        Ok(())
+    }
+
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &NearbyTargets,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        targets.read(cx.context, cx.method, cx.outputs, frame)
     }
 }
 
@@ -153,21 +224,25 @@ impl NearbyTargets {
 
     /// Encodes the passes of one frame and the copies of its outputs.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode(
+    fn encode(
         &self,
-        context: &GpuContext,
-        raster: &RasterPipelines,
+        cx: &GpuFrameCx<'_>,
         pipelines: &NearbyPipelines,
-        scene: &GpuScene,
-        camera: &Camera,
         uniforms: &FrameUniforms,
         nearby: &NearbyFrame<'_>,
         back: refract_core::BackSurface,
-        id: MethodId,
-        outputs: FrameOutputs,
-        timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
     ) {
+        let GpuFrameCx {
+            context,
+            raster,
+            gpu_scene: scene,
+            camera,
+            method: id,
+            outputs,
+            timestamps,
+            ..
+        } = *cx;
         let ng_frame = frame_uniforms(
             nearby.ng_camera,
             &scene.environment,

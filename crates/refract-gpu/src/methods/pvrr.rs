@@ -6,15 +6,20 @@
 //! shades the view into its map (one storage buffer holds every map of the frame) or, for the
 //! eye, into the frame. The twin of `refract_cpu::pvrr`.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use refract_core::TirPolicy;
 use refract_core::pvrr::PvrrVertex;
-use refract_scene::pvrr::{PvrrPlan, ReflectorKind};
-use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, PvrrParams, Scene, SceneMesh};
+use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, ReflectorKind};
+use refract_scene::{
+    Aov, Family, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
+use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::methods::{MethodPipelines, fill};
@@ -234,6 +239,64 @@ pub(crate) struct PvrrTargets {
     outputs: OutputBuffers,
 }
 
+/// The `pvrr` family: its pipelines and the per-vertex plan (kept between frames:
+/// `update=on-change`), made on the CPU as part of each frame.
+pub(crate) struct PvrrFamily {
+    pipelines: PvrrPipelines,
+    planner: PvrrPlanner,
+}
+
+impl PvrrFamily {
+    pub(crate) fn new(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
+        Self {
+            pipelines: PvrrPipelines::new(device, raster),
+            planner: PvrrPlanner::default(),
+        }
+    }
+}
+
+impl GpuFamily for PvrrFamily {
+    type Params = PvrrParams;
+    type Targets = PvrrTargets;
+    const LABEL: &'static str = "pvrr frame";
+
+    fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.planner.prepare(scene);
+    }
+
+    fn fits(&self, targets: &PvrrTargets, cx: &GpuFrameCx<'_>, params: &PvrrParams) -> bool {
+        targets.fits(cx.size(), params)
+    }
+
+    fn allocate(&self, cx: &GpuFrameCx<'_>, params: &PvrrParams) -> Result<PvrrTargets, GpuError> {
+        PvrrTargets::new(cx.context, cx.size(), params)
+    }
+
+    fn plan(&mut self, cx: &GpuFrameCx<'_>, params: &PvrrParams) -> Result<(), RenderError> {
+        self.planner.plan(cx.scene, cx.camera, params)?;
+        Ok(())
+    }
+
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        _: &PvrrParams,
+        targets: &mut PvrrTargets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
+        Ok(targets.encode(cx, &self.pipelines, self.planner.last(), encoder)?)
+    }
+
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &PvrrTargets,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError> {
+        targets.read(cx.context, cx.outputs, frame)
+    }
+}
+
 impl PvrrTargets {
     pub(crate) fn new(
         context: &GpuContext,
@@ -363,18 +426,22 @@ impl PvrrTargets {
 
     /// Encodes the frame of `plan` (every view, deepest first).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode(
+    fn encode(
         &mut self,
-        context: &GpuContext,
-        raster: &RasterPipelines,
+        cx: &GpuFrameCx<'_>,
         pipelines: &PvrrPipelines,
-        gpu_scene: &GpuScene,
-        scene: &Scene,
         plan: &PvrrPlan,
-        outputs: FrameOutputs,
-        timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
+        let GpuFrameCx {
+            context,
+            raster,
+            gpu_scene,
+            scene,
+            outputs,
+            timestamps,
+            ..
+        } = *cx;
         // Where each view's map lives in `maps`, each draw in `draws` and its vertices.
         let mut map_offsets = vec![0u32; plan.views.len()];
         let mut texels = 0u64;

@@ -1,0 +1,155 @@
+//! The GPU backend's unit of extension: a method family. A family owns its pipelines and says
+//! how to allocate its targets, whether targets of an earlier frame still fit, how to encode a
+//! frame and how to read it back; [`run_frame`], written once, does the rest (reuse or
+//! allocate, the CPU part of the frame, encode, submit, wait, time, read back).
+//! [`crate::GpuRenderer`] holds one [`FamilySlot`] per family and picks it with one exhaustive
+//! `match` over [`refract_scene::MethodParams`].
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use refract_core::Camera;
+use refract_scene::{Frame, FrameOutputs, FrameTiming, MethodId, RenderError, Scene, TimingSource};
+
+use crate::context::{GpuContext, GpuError};
+use crate::passes::raster::RasterPipelines;
+use crate::scene_buffers::GpuScene;
+use crate::timestamps::Timestamps;
+
+/// What every family's frame reads: the device, the shared raster pipelines, the scene (as
+/// loaded and as uploaded), the camera, the method and what the frame writes.
+#[derive(Clone, Copy)]
+pub(crate) struct GpuFrameCx<'a> {
+    pub context: &'a GpuContext,
+    pub raster: &'a RasterPipelines,
+    pub scene: &'a Scene,
+    pub gpu_scene: &'a GpuScene,
+    pub camera: &'a Camera,
+    /// The method rendered: its pipeline, and its registry row's AOV layers.
+    pub method: MethodId,
+    pub outputs: FrameOutputs,
+    /// Timestamp queries around the frame's passes, where the adapter has them.
+    pub timestamps: Option<&'a Timestamps>,
+}
+
+impl GpuFrameCx<'_> {
+    /// The frame's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.camera.width(), self.camera.height())
+    }
+}
+
+/// A method family on the GPU.
+pub(crate) trait GpuFamily {
+    /// The parameters of one run of a method of the family.
+    type Params;
+    /// The family's render targets and buffers of one size (kept across frames).
+    type Targets;
+    /// The label of the frame's command encoder.
+    const LABEL: &'static str;
+
+    /// Prepares per-scene state besides the uploaded scene (targets are dropped by the caller:
+    /// they are bound to the old scene's buffers).
+    fn prepare(&mut self, _scene: &Arc<Scene>) {}
+
+    /// Whether `targets` serve a frame of `cx` with `params`.
+    fn fits(&self, targets: &Self::Targets, cx: &GpuFrameCx<'_>, params: &Self::Params) -> bool;
+
+    /// New targets for a frame of `cx` with `params`, checked against the adapter's limits.
+    fn allocate(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &Self::Params,
+    ) -> Result<Self::Targets, GpuError>;
+
+    /// The CPU part of a frame before its passes are encoded (`pvrr`'s per-vertex plan); its
+    /// time is part of the frame's.
+    fn plan(&mut self, _cx: &GpuFrameCx<'_>, _params: &Self::Params) -> Result<(), RenderError> {
+        Ok(())
+    }
+
+    /// Encodes every per-frame pass and the copies to the readback buffers.
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &Self::Params,
+        targets: &mut Self::Targets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError>;
+
+    /// Reads the submitted frame into `frame`: the colour and, with
+    /// [`FrameOutputs::ColorAndAovs`], exactly the layers of the method's registry row.
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &Self::Targets,
+        frame: &mut Frame,
+    ) -> Result<(), GpuError>;
+}
+
+/// A family and the targets of its last frame.
+pub(crate) struct FamilySlot<F: GpuFamily> {
+    pub family: F,
+    targets: Option<F::Targets>,
+}
+
+impl<F: GpuFamily> FamilySlot<F> {
+    pub(crate) fn new(family: F) -> Self {
+        Self {
+            family,
+            targets: None,
+        }
+    }
+
+    /// Drops the targets (bound to the old scene) and prepares the family for `scene`.
+    pub(crate) fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.targets = None;
+        self.family.prepare(scene);
+    }
+
+    /// One frame: targets reused when they fit (else the old ones are freed first, then new
+    /// ones allocated), the family's CPU part, its passes encoded and submitted, the queue
+    /// waited for, the time read (GPU timestamps plus the CPU part, or the wall clock), the
+    /// outputs read back into `frame`.
+    pub(crate) fn run_frame(
+        &mut self,
+        cx: &GpuFrameCx<'_>,
+        params: &F::Params,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        let targets = match self.targets.take() {
+            Some(targets) if self.family.fits(&targets, cx, params) => self.targets.insert(targets),
+            stale => {
+                drop(stale);
+                self.targets.insert(self.family.allocate(cx, params)?)
+            }
+        };
+        let start = Instant::now();
+        self.family.plan(cx, params)?;
+        let plan_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut encoder =
+            cx.context
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some(F::LABEL),
+                });
+        self.family.encode(cx, params, targets, &mut encoder)?;
+        let context = cx.context;
+        context.checked(|| context.queue.submit([encoder.finish()]))?;
+        context.wait()?;
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let timing = match cx.timestamps {
+            Some(timestamps) => FrameTiming {
+                // The GPU's passes plus the CPU work the frame waited for.
+                ms: timestamps.read_ms(context)? + plan_ms,
+                source: TimingSource::GpuTimestamps,
+            },
+            None => FrameTiming {
+                ms: wall_ms,
+                source: TimingSource::Wall,
+            },
+        };
+        self.family.read(cx, targets, frame)?;
+        Ok(timing)
+    }
+}
