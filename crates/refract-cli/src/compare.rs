@@ -15,9 +15,9 @@ use refract_scene::{
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
-use crate::images::{write_color, write_error_map, write_hdr_script, write_mask};
 use crate::report::{MethodImages, SceneImages, write_reports};
 use crate::timing::time_frames;
+use refract_eval::images::{write_color, write_error_map, write_hdr_script, write_mask};
 
 /// What to compare.
 pub struct CompareOptions {
@@ -39,10 +39,7 @@ pub struct CompareOptions {
     pub out: PathBuf,
 }
 
-/// Error-map scales (the top of each colour bar).
-pub const T2_SCALE_DEG: f32 = 20.0;
-/// |P~2 − P2| scale, fraction of the bounding-sphere diameter.
-pub const P2_SCALE: f32 = 0.2;
+pub use refract_eval::images::{P2_SCALE, T2_SCALE_DEG};
 
 fn bar(len: u64, message: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);

@@ -17,7 +17,6 @@ mod cleanup;
 mod compare;
 mod data_scenes;
 mod export;
-mod images;
 mod info;
 mod memory;
 mod render;
@@ -25,8 +24,6 @@ mod report;
 mod sweep;
 mod sweep_report;
 mod timing;
-mod view;
-mod view_reference;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
@@ -59,7 +56,7 @@ enum Command {
     /// Merge sweep (shard) directories into one report: results.json, plots, index.html.
     Report(sweep_report::ReportArgs),
     /// Open a window: fly around a scene and switch methods, IOR, TIR policy and backend live.
-    View(view::ViewArgs),
+    View(refract_view::ViewArgs),
     /// Write a scene as refract renders it (OBJ meshes with normals, scene.json) for other renderers.
     Export(export::ExportArgs),
     /// List GPU adapters; with a mesh (.obj, .gltf, .glb or builtin:NAME), print its facts and d_N.
@@ -238,7 +235,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Sweep(args)) => sweep::run(&args),
         Some(Command::Report(args)) => sweep_report::run(&args),
-        Some(Command::View(args)) => view::run(args),
+        Some(Command::View(args)) => refract_view::run(args),
         Some(Command::Scenes) => {
             for (name, line, _) in BUILTIN_SCENES {
                 println!("{name:<8} {line}");

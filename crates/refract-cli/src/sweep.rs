@@ -23,8 +23,8 @@ use refract_trace::ReferenceRenderer;
 use serde::{Deserialize, Serialize};
 
 use crate::backends::{self, GpuPolicy};
-use crate::images::{write_color, write_error_map, write_hdr_script, write_mask};
 use crate::timing::time_frames;
+use refract_eval::images::{write_color, write_error_map, write_hdr_script, write_mask};
 
 /// Arguments of `refract sweep`.
 #[derive(Debug, clap::Args)]

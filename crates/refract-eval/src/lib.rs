@@ -6,12 +6,15 @@
 //! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
 //! * [`environment_files`]: lat-long `.exr`/`.hdr` maps (negatives clamped and counted).
 //! * [`frame_files`]: a [`refract_scene::Frame`] as an EXR (colour and every AOV layer) or a PNG.
+//! * [`images`]: tonemapped colour PNGs, false-colour error maps with a colour bar, TIR masks,
+//!   the report's RGBE images.
 //! * [`metrics`]: error metrics of a frame against the reference (design.md, "Measuring").
 //! * [`atomic_write`]: the one way files are written (temporary file, flush, rename).
 
 pub mod atomic_write;
 pub mod environment_files;
 pub mod frame_files;
+pub mod images;
 pub mod metrics;
 pub mod scene_file;
 

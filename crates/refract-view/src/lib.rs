@@ -4,6 +4,11 @@
 //! that writes the PNG and the frame's metrics against the exact reference. `--frames`,
 //! `--script` and `--screenshot` run it unattended (the headless test under Xvfb).
 //! `docs/viewer.md` lists the keys.
+//!
+//! Its own crate so that the backends and the experiments never link a window system, and the
+//! CLI stays a thin shell; its shader is `shaders/display.wgsl`, validated by naga in its tests.
+
+mod reference;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -24,7 +29,7 @@ use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene
 use refract_trace::ReferenceRenderer;
 use winit::application::ApplicationHandler;
 
-use crate::view_reference::{Level, ProgressiveReference};
+use crate::reference::{Level, ProgressiveReference};
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -242,22 +247,8 @@ enum ErrorView {
     T2,
 }
 
-const SHADER: &str = r"
-@group(0) @binding(0) var image: texture_2d<f32>;
-
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(xy * 2.0 - 1.0, 0.0, 1.0);
-}
-
-@fragment
-fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
-    let size = textureDimensions(image);
-    let texel = min(vec2<u32>(p.xy), size - 1u);
-    return vec4<f32>(textureLoad(image, texel, 0).rgb, 1.0);
-}
-";
+/// The display pass: the frame's texture drawn texel for texel (`shaders/display.wgsl`).
+const SHADER: &str = include_str!("../shaders/display.wgsl");
 
 impl Viewer {
     fn params(&self) -> MethodParams {
@@ -731,14 +722,14 @@ impl Viewer {
         );
         let (values, max) = match self.error_view {
             ErrorView::Flip => (maps.flip, 1.0),
-            _ => (maps.t2_deg, crate::compare::T2_SCALE_DEG),
+            _ => (maps.t2_deg, refract_eval::images::T2_SCALE_DEG),
         };
         let lut = nv_flip::magma_lut().to_vec();
         for (px, v) in pixels.chunks_exact_mut(4).zip(values) {
             let rgb = if v.is_nan() {
                 [40, 40, 40]
             } else {
-                crate::images::magma(&lut, v / max)
+                refract_eval::images::magma(&lut, v / max)
             };
             px[..3].copy_from_slice(&rgb);
         }

@@ -1,14 +1,21 @@
 //! PNG output of the comparison: tonemapped colour images, false-colour error maps with a
-//! colour bar, and TIR masks. Every file is written atomically (refract-scene's one writer).
+//! colour bar, and TIR masks. Every file is written atomically ([`crate::atomic_write`]).
 
 use std::path::Path;
 
 use glam::Vec3;
-use refract_eval::atomic_write::write_png_rgb8;
+use refract_scene::SceneError;
+
+use crate::atomic_write::write_png_rgb8;
 use refract_scene::tonemap::to_srgb8;
 
+/// The top of the colour bar of `T2` angle-error maps, degrees.
+pub const T2_SCALE_DEG: f32 = 20.0;
+/// The top of the colour bar of |P~2 − P2| maps, fraction of the bounding-sphere diameter.
+pub const P2_SCALE: f32 = 0.2;
+
 /// Linear radiance, tonemapped to sRGB.
-pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> anyhow::Result<()> {
+pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> Result<(), SceneError> {
     let pixels: Vec<u8> = color.iter().flat_map(|&c| to_srgb8(c)).collect();
     Ok(write_png_rgb8(path, width, height, &pixels)?)
 }
@@ -25,7 +32,7 @@ pub fn write_hdr_script(
     width: u32,
     height: u32,
     color: &[Vec3],
-) -> anyhow::Result<()> {
+) -> Result<(), SceneError> {
     let w = width as usize;
     let mut pixels = vec![0u8; 2 * w * height as usize * 3];
     for (i, &c) in color.iter().enumerate() {
@@ -43,14 +50,15 @@ pub fn write_hdr_script(
         height,
         image::ExtendedColorType::Rgb8,
     )
-    .map_err(|e| anyhow::anyhow!("{}: cannot encode the HDR image: {e}", path.display()))?;
+    .map_err(|e| SceneError::Format {
+        path: path.to_owned(),
+        message: format!("cannot encode the HDR image: {e}"),
+    })?;
     let script = format!(
         "(window.refractHdr = window.refractHdr || {{}})[{key:?}] = \"data:image/png;base64,{}\";\n",
         base64::encode(&png)
     );
-    Ok(refract_eval::atomic_write::write_text_atomically(
-        path, &script,
-    )?)
+    Ok(crate::atomic_write::write_text_atomically(path, &script)?)
 }
 
 /// RGBE of one linear colour: mantissas `⌊c·256/2^e⌋` and the biased exponent `e + 128`,
@@ -73,7 +81,7 @@ fn rgbe(c: Vec3) -> ([u8; 3], u8) {
 }
 
 /// The magma colour map at `t ∈ [0, 1]` (from FLIP's own lookup table).
-pub(crate) fn magma(lut: &[u8], t: f32) -> [u8; 3] {
+pub fn magma(lut: &[u8], t: f32) -> [u8; 3] {
     let k = (t.clamp(0.0, 1.0) * 255.0).round() as usize;
     [lut[3 * k], lut[3 * k + 1], lut[3 * k + 2]]
 }
@@ -89,7 +97,7 @@ pub fn write_error_map(
     height: u32,
     values: &[f32],
     max: f32,
-) -> anyhow::Result<()> {
+) -> Result<(), SceneError> {
     let lut = nv_flip::magma_lut().to_vec();
     let out_width = width + BAR_WIDTH;
     let mut pixels = Vec::with_capacity((out_width * height * 3) as usize);
@@ -121,7 +129,7 @@ pub fn write_mask(
     height: u32,
     mask: &[bool],
     color: &[Vec3],
-) -> anyhow::Result<()> {
+) -> Result<(), SceneError> {
     let pixels: Vec<u8> = mask
         .iter()
         .zip(color)
