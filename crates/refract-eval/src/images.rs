@@ -17,7 +17,7 @@ pub const P2_SCALE: f32 = 0.2;
 /// Linear radiance, tonemapped to sRGB.
 pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> Result<(), SceneError> {
     let pixels: Vec<u8> = color.iter().flat_map(|&c| to_srgb8(c)).collect();
-    Ok(write_png_rgb8(path, width, height, &pixels)?)
+    write_png_rgb8(path, width, height, &pixels)
 }
 
 /// Linear radiance for the report's exposure control, as RGBE (a shared exponent per pixel)
@@ -58,7 +58,7 @@ pub fn write_hdr_script(
         "(window.refractHdr = window.refractHdr || {{}})[{key:?}] = \"data:image/png;base64,{}\";\n",
         base64::encode(&png)
     );
-    Ok(crate::atomic_write::write_text_atomically(path, &script)?)
+    crate::atomic_write::write_text_atomically(path, &script)
 }
 
 /// RGBE of one linear colour: mantissas `⌊c·256/2^e⌋` and the biased exponent `e + 128`,
@@ -119,7 +119,7 @@ pub fn write_error_map(
             });
         }
     }
-    Ok(write_png_rgb8(path, out_width, height, &pixels)?)
+    write_png_rgb8(path, out_width, height, &pixels)
 }
 
 /// A mask: magenta where `mask`, the tonemapped image dimmed elsewhere.
@@ -141,7 +141,7 @@ pub fn write_mask(
             }
         })
         .collect();
-    Ok(write_png_rgb8(path, width, height, &pixels)?)
+    write_png_rgb8(path, width, height, &pixels)
 }
 
 #[cfg(test)]
