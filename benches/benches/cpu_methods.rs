@@ -49,11 +49,11 @@ fn cpu_methods(c: &mut Criterion) {
                 });
             }
             // The two-step path, stage by stage (memory reused as in a frame).
-            let back = params.back_surface();
-            let kernel = params
-                .image_space_kernel(scene.refractor.ior())
-                .expect("an image-space method")
-                .expect("kernel");
+            let MethodParams::ImageSpace(method) = params else {
+                panic!("{id} is of the image-space family")
+            };
+            let back = method.back_surface();
+            let kernel = method.kernel(scene.refractor.ior()).expect("kernel");
             let mut buffers = FrameBuffers::default();
             group.bench_function(format!("{id}/buffers"), |b| {
                 b.iter(|| render_buffers_into(&scene.refractor, &camera, back, &mut buffers))

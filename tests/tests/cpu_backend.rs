@@ -10,8 +10,8 @@ use refract_cpu::{CpuRenderer, front_faces, render_buffers, shade_into};
 use refract_eval::metrics::{MetricsRecord, evaluate};
 use refract_geometry::{Hit, shapes};
 use refract_scene::{
-    Aov, Environment, Family, Frame, FrameOutputs, LatLongMap, MethodId, MethodParams, Renderer,
-    Scene, TwoInterfaceParams,
+    Aov, Environment, Family, Frame, FrameOutputs, ImageSpaceMethod, LatLongMap, MethodId,
+    MethodParams, Renderer, Scene, TwoInterfaceParams,
 };
 use refract_tests::scenes::{builtin, camera, method, render, shared, with_mesh};
 use refract_tests::shared_data;
@@ -23,10 +23,10 @@ fn cpu_frame(scene: &Arc<Scene>, cam: &Camera, params: &MethodParams) -> Frame {
 }
 
 fn second_surface() -> MethodParams {
-    MethodParams::TwoInterface(TwoInterfaceParams {
+    MethodParams::ImageSpace(ImageSpaceMethod::TwoInterface(TwoInterfaceParams {
         back: BackSurface::Second,
         ..TwoInterfaceParams::default()
-    })
+    }))
 }
 
 /// Compares a rasterised buffer with ray-cast hits at every pixel centre: coverage agrees on
@@ -431,11 +431,11 @@ fn reusing_renderer_matches_fresh_frames() {
 
 /// The two-step path: buffers stored whole, then the kernel.
 fn two_step(scene: &Scene, cam: &Camera, params: &MethodParams) -> Frame {
-    let back = params.back_surface();
-    let kernel = params
-        .image_space_kernel(scene.refractor.ior())
-        .expect("an image-space method")
-        .expect("kernel");
+    let MethodParams::ImageSpace(method) = params else {
+        panic!("{} is not an image-space method", params.id())
+    };
+    let back = method.back_surface();
+    let kernel = method.kernel(scene.refractor.ior()).expect("kernel");
     let buffers = render_buffers(&scene.refractor, cam, back);
     let mut frame = Frame::default();
     shade_into(

@@ -14,7 +14,8 @@ use refract_eval::load_scene;
 use refract_gpu::GpuRenderer;
 use refract_scene::tonemap::to_srgb8;
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TwoInterfaceParams,
+    Aov, Frame, FrameOutputs, ImageSpaceMethod, MethodId, MethodParams, Renderer, Scene,
+    TwoInterfaceParams,
 };
 use refract_tests::scenes::{builtin, camera, method, render, shared};
 use refract_tests::shared_data;
@@ -86,10 +87,12 @@ fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
         .filter(|id| id.info().aovs.contains(&Aov::T2))
         .map(method)
         .collect();
-    methods.push(MethodParams::TwoInterface(TwoInterfaceParams {
-        back: BackSurface::Second,
-        ..TwoInterfaceParams::default()
-    }));
+    methods.push(MethodParams::ImageSpace(ImageSpaceMethod::TwoInterface(
+        TwoInterfaceParams {
+            back: BackSurface::Second,
+            ..TwoInterfaceParams::default()
+        },
+    )));
     // A guard band, world-spaced seeds and the second back surface on the NG path.
     let mut seeded = method(MethodId::IterativeSeeded);
     for (name, value) in [("guard", "20"), ("spacing", "world"), ("back", "second")] {

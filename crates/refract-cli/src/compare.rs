@@ -9,9 +9,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use refract_eval::load_scene;
 use refract_eval::metrics::{MetricsRecord, evaluate_method, reference_record};
-use refract_scene::{
-    Aov, BackendId, Family, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings,
-};
+use refract_scene::{Aov, BackendId, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings};
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
@@ -139,7 +137,8 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                 let (mut record, maps) = evaluate_method(&truth, &frame, &camera, scene, method);
                 let (id, backend) = (method.id(), renderer.backend());
                 let stem = format!("{id}-{backend}");
-                let has_miss = id.info().family == Family::NearbyGeometry;
+                // Methods that look up nearby geometry get a map of where they missed it.
+                let has_miss = id.info().aovs.contains(&Aov::NgTexel);
                 if has_miss {
                     write_mask(
                         &dir.join(format!("miss-{stem}.png")),

@@ -80,19 +80,14 @@ fn method_params(args: &RenderArgs) -> anyhow::Result<MethodParams> {
         .method
         .parse()
         .map_err(|e| anyhow::anyhow!("--method: {e}"))?;
-    let mut params = MethodParams::defaults(id);
-    match &mut params {
-        MethodParams::Reference(settings) => {
-            settings.mode = match args.trace {
-                TraceArg::Transmission => TraceMode::Transmission,
-                TraceArg::Full => TraceMode::Full,
-            };
-            settings.max_depth = args.depth;
-            settings.spp = args.spp;
-        }
-        MethodParams::TwoInterface(p) => p.tir = args.tir.into(),
-        MethodParams::NearbyGeometry(p) => p.two.tir = args.tir.into(),
-        MethodParams::Single | MethodParams::DistanceMap(_) | MethodParams::Pvrr(_) => {}
+    let mut params = MethodParams::defaults(id).with_tir_policy(args.tir.into());
+    if let MethodParams::Reference(settings) = &mut params {
+        settings.mode = match args.trace {
+            TraceArg::Transmission => TraceMode::Transmission,
+            TraceArg::Full => TraceMode::Full,
+        };
+        settings.max_depth = args.depth;
+        settings.spp = args.spp;
     }
     for assignment in &args.params {
         let (name, value) = crate::parse_param(assignment)?;

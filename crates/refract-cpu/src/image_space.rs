@@ -12,34 +12,14 @@ use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
 use refract_scene::{
-    Aov, Environment, Frame, FrameOutputs, MethodId, Refractor, RenderError, Scene,
-    TwoInterfaceParams,
+    Aov, Environment, Frame, FrameOutputs, ImageSpaceMethod, MethodId, Refractor, RenderError,
+    Scene,
 };
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
 use crate::family::{CpuFamily, FrameCx};
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::shade::{BandRow, BufferRow, ShadeContext};
-
-/// One image-space method run: which interfaces, and the kernel's parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ImageSpaceMethod {
-    /// `single`: one interface.
-    Single,
-    /// `wyman` and its ablations: two interfaces (back surface, `d~`, exit TIR policy).
-    TwoInterface(TwoInterfaceParams),
-}
-
-impl ImageSpaceMethod {
-    /// The kernel's parameters for a refractor of index `ior` (`single` ignores the distance
-    /// mode and the exit policy).
-    pub fn kernel(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
-        match self {
-            ImageSpaceMethod::Single => TwoInterfaceParams::default().kernel(ior),
-            ImageSpaceMethod::TwoInterface(p) => p.kernel(ior),
-        }
-    }
-}
 
 /// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
 /// not apply (background pixels, degenerate inputs).

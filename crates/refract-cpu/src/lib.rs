@@ -33,8 +33,7 @@ pub mod surfaces;
 pub use buffers::{BackFaces, front_faces, front_faces_into};
 pub use family::{CpuFamily, FrameCx};
 pub use image_space::{
-    FrameBuffers, ImageSpaceMethod, ImageSpacePasses, render_buffers, render_buffers_into,
-    shade_into,
+    FrameBuffers, ImageSpacePasses, render_buffers, render_buffers_into, shade_into,
 };
 pub use raster::{
     BAND_ROWS, Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, band_pixels, rasterize,

@@ -13,7 +13,7 @@ use refract_scene::{
 
 use crate::distance_map::DistancePasses;
 use crate::family::{CpuFamily, FrameCx};
-use crate::image_space::{ImageSpaceMethod, ImageSpacePasses};
+use crate::image_space::ImageSpacePasses;
 use crate::nearby_geometry::NearbyPasses;
 use crate::pvrr::PvrrPasses;
 
@@ -86,13 +86,7 @@ impl Renderer for CpuRenderer {
                 backend: BackendId::Cpu,
                 method: id,
             }),
-            MethodParams::Single => self
-                .image_space
-                .render(&cx, &ImageSpaceMethod::Single, frame),
-            MethodParams::TwoInterface(p) => {
-                self.image_space
-                    .render(&cx, &ImageSpaceMethod::TwoInterface(*p), frame)
-            }
+            MethodParams::ImageSpace(p) => self.image_space.render(&cx, p, frame),
             MethodParams::NearbyGeometry(p) => self.nearby.render(&cx, p, frame),
             MethodParams::DistanceMap(p) => self.distance_map.render(&cx, p, frame),
             MethodParams::Pvrr(p) => self.pvrr.render(&cx, p, frame),

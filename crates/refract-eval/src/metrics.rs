@@ -6,9 +6,7 @@
 
 use glam::Vec3;
 use refract_core::Camera;
-use refract_core::nearby_geometry::{
-    NearbyLookup, SeedSpacing, guaranteed_feature_px, guard_band_camera,
-};
+use refract_core::nearby_geometry::{SeedSpacing, guaranteed_feature_px, guard_band_camera};
 use refract_core::vector::angle_between;
 use serde::{Deserialize, Serialize};
 
@@ -410,8 +408,11 @@ fn nearest_object_hit(scene: &Scene, origin: Vec3, dir: Vec3) -> Option<Vec3> {
         .map(|t| ray.at(t))
 }
 
-/// [`evaluate`], and for a nearby-geometry method (Wyman 2005b) also [`evaluate_nearby`] with
-/// the NG camera its parameters imply (the guard band) and its seeds.
+/// [`evaluate`], and the metrics of the layers the method's registry row writes beside the
+/// common ones: with `ng_texel` (Wyman 2005b's lookups) [`evaluate_nearby`] with the NG camera
+/// its `guard` parameter implies and its `seeds`/`spacing`; with `linear_steps` the search work
+/// of the distance maps; with `zoom` the zooming region's share (Kakimoto et al.). No family is
+/// named: a new family's layers and parameters drive its metrics.
 pub fn evaluate_method(
     reference: &Frame,
     frame: &Frame,
@@ -420,18 +421,21 @@ pub fn evaluate_method(
     method: &MethodParams,
 ) -> (MetricsRecord, ErrorMaps) {
     let (mut record, maps) = evaluate(reference, frame, camera, scene.refractor.diameter());
-    if let MethodParams::NearbyGeometry(p) = method {
-        let (desc, _) = guard_band_camera(camera.desc(), p.guard_band_percent);
+    let writes = |aov| method.id().info().aovs.contains(&aov);
+    let integer = |name| method.get(name).and_then(|v| v.parse::<u32>().ok());
+    if writes(Aov::NgTexel) {
+        let (desc, _) = guard_band_camera(camera.desc(), integer("guard").unwrap_or(0));
         // The NG camera differs from a valid camera only by its field of view and size.
         if let Ok(ng_camera) = Camera::new(desc) {
-            let seeds = match p.lookup {
-                NearbyLookup::Seeded { seeds, spacing, .. } => Some((seeds, spacing)),
-                _ => None,
+            let spacing = match method.get("spacing").as_deref() {
+                Some("world") => SeedSpacing::World,
+                _ => SeedSpacing::Screen,
             };
+            let seeds = integer("seeds").map(|k| (k, spacing));
             evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
         }
     }
-    if let (MethodParams::DistanceMap(_), Some(covered)) = (method, frame.flag(Aov::Covered)) {
+    if let (true, Some(covered)) = (writes(Aov::LinearSteps), frame.flag(Aov::Covered)) {
         let paths: Vec<usize> = (0..frame.pixel_count()).filter(|&i| covered[i]).collect();
         let count_mean = |aov| {
             frame
@@ -445,9 +449,11 @@ pub fn evaluate_method(
             .flag(Aov::Miss)
             .and_then(|m| mean(paths.iter().map(|&i| f64::from(u8::from(m[i])))));
     }
-    if let (MethodParams::Pvrr(_), Some(covered), Some(zoom)) =
-        (method, frame.flag(Aov::Covered), frame.flag(Aov::Zoom))
-    {
+    if let (true, Some(covered), Some(zoom)) = (
+        writes(Aov::Zoom),
+        frame.flag(Aov::Covered),
+        frame.flag(Aov::Zoom),
+    ) {
         record.zoom_share = mean(
             covered
                 .iter()

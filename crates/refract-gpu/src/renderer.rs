@@ -15,7 +15,7 @@ use refract_scene::{
 use crate::context::{GpuContext, GpuError};
 use crate::family::{FamilySlot, GpuFrameCx};
 use crate::methods::distance_map::DistanceMapPipelines;
-use crate::methods::image_space::{ImageSpaceKernel, ImageSpacePipelines};
+use crate::methods::image_space::ImageSpacePipelines;
 use crate::methods::nearby_geometry::NearbyPipelines;
 use crate::methods::pvrr::PvrrFamily;
 use crate::passes::raster::RasterPipelines;
@@ -167,14 +167,7 @@ impl Renderer for GpuRenderer {
                 backend: BackendId::Gpu,
                 method: id,
             }),
-            MethodParams::Single => {
-                self.image_space
-                    .run_frame(&cx, &ImageSpaceKernel::Single, frame)
-            }
-            MethodParams::TwoInterface(p) => {
-                self.image_space
-                    .run_frame(&cx, &ImageSpaceKernel::TwoInterface(*p), frame)
-            }
+            MethodParams::ImageSpace(p) => self.image_space.run_frame(&cx, p, frame),
             MethodParams::NearbyGeometry(p) => self.nearby.run_frame(&cx, p, frame),
             MethodParams::DistanceMap(p) => self.distance_map.run_frame(&cx, p, frame),
             MethodParams::Pvrr(p) => self.pvrr.run_frame(&cx, p, frame),

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use refract_core::distance_map::{MAX_LAYERS, fresnel_code};
 use refract_core::{Camera, CubeFace, TirPolicy};
-use refract_scene::{Aov, DistanceMapParams, Family, Frame, FrameOutputs, MethodId, RenderError};
+use refract_scene::{Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
@@ -85,7 +85,6 @@ impl DistanceMapPipelines {
         let methods = MethodPipelines::new(
             device,
             "distance_map",
-            Family::DistanceMap,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -102,7 +101,7 @@ impl DistanceMapPipelines {
                 storage_entry(12, false),
                 uniform_entry(13, wgpu::ShaderStages::COMPUTE),
             ],
-            |_| ("shade_distance_map", Vec::new()),
+            |_: &DistanceMapParams| ("shade_distance_map", Vec::new()),
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("distance_map ranges"),

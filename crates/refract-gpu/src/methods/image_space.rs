@@ -9,11 +9,8 @@ use refract_core::gpu::{
     COVERAGE_BACKGROUND, COVERAGE_DEGENERATE, FrameUniforms, distance_mode_code,
     exit_normal_source_code, exit_normal_source_from_code,
 };
-use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
-use refract_scene::{
-    Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, RenderError, TwoInterfaceParams,
-};
+use refract_scene::{Aov, Frame, FrameOutputs, ImageSpaceMethod, MethodId, RenderError};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
@@ -24,32 +21,12 @@ use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FO
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
 
-/// An image-space method as the GPU runs it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ImageSpaceKernel {
-    /// `single`.
-    Single,
-    /// `wyman` and its ablations (the pipeline, chosen by method id, fixes `d~`).
-    TwoInterface(TwoInterfaceParams),
-}
-
-impl ImageSpaceKernel {
-    /// The kernel's parameters for a refractor of index `ior` (`single` ignores the distance
-    /// mode and the exit policy).
-    fn params(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
-        match self {
-            ImageSpaceKernel::Single => TwoInterfaceParams::default().kernel(ior),
-            ImageSpaceKernel::TwoInterface(p) => p.kernel(ior),
-        }
-    }
-}
-
 impl GpuFamily for ImageSpacePipelines {
-    type Params = ImageSpaceKernel;
+    type Params = ImageSpaceMethod;
     type Targets = ImageSpaceTargets;
     const LABEL: &'static str = "image-space frame";
 
-    fn fits(&self, targets: &ImageSpaceTargets, cx: &GpuFrameCx<'_>, _: &ImageSpaceKernel) -> bool {
+    fn fits(&self, targets: &ImageSpaceTargets, cx: &GpuFrameCx<'_>, _: &ImageSpaceMethod) -> bool {
         let (width, height) = cx.size();
         targets.fits(width, height)
     }
@@ -57,7 +34,7 @@ impl GpuFamily for ImageSpacePipelines {
     fn allocate(
         &self,
         cx: &GpuFrameCx<'_>,
-        _: &ImageSpaceKernel,
+        _: &ImageSpaceMethod,
     ) -> Result<ImageSpaceTargets, GpuError> {
         let (width, height) = cx.size();
         ImageSpaceTargets::new(cx.context, cx.raster, self, cx.gpu_scene, width, height)
@@ -66,11 +43,11 @@ impl GpuFamily for ImageSpacePipelines {
     fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
-        kernel: &ImageSpaceKernel,
+        kernel: &ImageSpaceMethod,
         targets: &mut ImageSpaceTargets,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError> {
-        let params = kernel.params(cx.scene.refractor.ior())?;
+        let params = kernel.kernel(cx.scene.refractor.ior())?;
         let uniforms = frame_uniforms(
             cx.camera,
             &cx.gpu_scene.environment,
@@ -100,7 +77,6 @@ impl ImageSpacePipelines {
         Self(MethodPipelines::new(
             device,
             "image_space",
-            Family::ImageSpace,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -112,18 +88,12 @@ impl ImageSpacePipelines {
                 storage_entry(7, false),
                 storage_entry(8, false),
             ],
-            |params| match params {
-                MethodParams::Single => ("shade_single", Vec::new()),
-                MethodParams::TwoInterface(TwoInterfaceParams { distance, .. }) => (
+            |method: &ImageSpaceMethod| match method {
+                ImageSpaceMethod::Single => ("shade_single", Vec::new()),
+                ImageSpaceMethod::TwoInterface(p) => (
                     "shade_two_interface",
-                    vec![("DISTANCE_MODE", f64::from(distance_mode_code(distance)))],
+                    vec![("DISTANCE_MODE", f64::from(distance_mode_code(p.distance)))],
                 ),
-                MethodParams::Reference(_)
-                | MethodParams::NearbyGeometry(_)
-                | MethodParams::DistanceMap(_)
-                | MethodParams::Pvrr(_) => {
-                    unreachable!("not an image-space method")
-                }
             },
         ))
     }
@@ -369,7 +339,7 @@ impl ImageSpaceTargets {
         cx: &GpuFrameCx<'_>,
         pipelines: &ImageSpacePipelines,
         uniforms: &FrameUniforms,
-        kernel: &ImageSpaceKernel,
+        kernel: &ImageSpaceMethod,
         encoder: &mut wgpu::CommandEncoder,
     ) {
         let GpuFrameCx {
@@ -379,8 +349,8 @@ impl ImageSpaceTargets {
             ..
         } = *cx;
         let back = match kernel {
-            ImageSpaceKernel::TwoInterface(p) => Some(p.back),
-            ImageSpaceKernel::Single => None,
+            ImageSpaceMethod::TwoInterface(p) => Some(p.back),
+            ImageSpaceMethod::Single => None,
         };
         self.refractor.encode(
             cx.context,

@@ -5,7 +5,7 @@ pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
 pub(crate) mod pvrr;
 
-use refract_scene::{Family, FrameOutputs, MethodId, MethodParams, REGISTRY};
+use refract_scene::{FrameOutputs, MethodId, MethodParams, REGISTRY};
 
 use crate::shaders::module_source;
 
@@ -17,14 +17,14 @@ pub(crate) struct MethodPipelines {
 }
 
 impl MethodPipelines {
-    /// Compiles module `module` (`shaders.rs`) with `entries` as its layout; `entry` gives each
+    /// Compiles module `module` (`shaders.rs`) with `entries` as its layout, one pipeline per
+    /// registry row whose parameters are a `P` (the family's parameter type); `entry` gives each
     /// method's entry point and its override constants besides `WRITE_AOVS`.
-    pub(crate) fn new(
+    pub(crate) fn new<P: TryFrom<MethodParams>>(
         device: &wgpu::Device,
         module: &str,
-        family: Family,
         entries: &[wgpu::BindGroupLayoutEntry],
-        entry: impl Fn(MethodParams) -> (&'static str, Vec<(&'static str, f64)>),
+        entry: impl Fn(&P) -> (&'static str, Vec<(&'static str, f64)>),
     ) -> Self {
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(module),
@@ -40,8 +40,11 @@ impl MethodPipelines {
             immediate_size: 0,
         });
         let mut pipelines = Vec::new();
-        for id in REGISTRY.iter().filter(|m| m.family == family).map(|m| m.id) {
-            let (entry_point, method_constants) = entry(MethodParams::defaults(id));
+        let rows = REGISTRY
+            .iter()
+            .filter_map(|m| P::try_from((m.defaults)()).ok().map(|p| (m.id, p)));
+        for (id, params) in rows {
+            let (entry_point, method_constants) = entry(&params);
             for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
                 let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
                 let mut constants = vec![("WRITE_AOVS", write_aovs)];

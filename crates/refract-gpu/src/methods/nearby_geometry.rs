@@ -13,8 +13,7 @@ use refract_core::nearby_geometry::{
     MAX_PLANES, NearbyLookup, Plane, SeedSpacing, guard_band_camera,
 };
 use refract_scene::{
-    Aov, DirectionalLight, Family, Frame, FrameOutputs, MethodId, MethodParams, NearbyParams,
-    RenderError,
+    Aov, DirectionalLight, Frame, FrameOutputs, MethodId, NearbyParams, RenderError,
 };
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
@@ -35,7 +34,6 @@ impl NearbyPipelines {
         Self(MethodPipelines::new(
             device,
             "nearby_geometry",
-            Family::NearbyGeometry,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -54,12 +52,11 @@ impl NearbyPipelines {
                 texture_entry(14),
                 uniform_entry(15, wgpu::ShaderStages::COMPUTE),
             ],
-            |params| match params {
-                MethodParams::NearbyGeometry(p) => (
+            |p: &NearbyParams| {
+                (
                     "shade_nearby",
                     vec![("LOOKUP", f64::from(lookup_code(p.lookup)))],
-                ),
-                _ => unreachable!("not a nearby-geometry method"),
+                )
             },
         ))
     }

@@ -14,7 +14,7 @@ use refract_core::TirPolicy;
 use refract_core::pvrr::PvrrVertex;
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, ReflectorKind};
 use refract_scene::{
-    Aov, Family, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
+    Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
 };
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
@@ -70,7 +70,6 @@ impl PvrrPipelines {
         let methods = MethodPipelines::new(
             device,
             "pvrr",
-            Family::Pvrr,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -84,7 +83,7 @@ impl PvrrPipelines {
                 storage_entry(9, true),
                 uniform_entry(10, wgpu::ShaderStages::COMPUTE),
             ],
-            |_| ("shade_pvrr", Vec::new()),
+            |_: &PvrrParams| ("shade_pvrr", Vec::new()),
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster.wgsl (pvrr)"),
