@@ -69,6 +69,7 @@ fn cpu_methods(c: &mut Criterion) {
                         FrameOutputs::Color,
                         &mut frame,
                     )
+                    .expect("frame")
                 })
             });
         }

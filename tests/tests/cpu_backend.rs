@@ -446,7 +446,8 @@ fn two_step(scene: &Scene, cam: &Camera, params: &MethodParams) -> Frame {
         params.id(),
         FrameOutputs::ColorAndAovs,
         &mut frame,
-    );
+    )
+    .expect("the row's layers");
     frame
 }
 

@@ -19,11 +19,11 @@ use refract_core::distance_map::{
 };
 use refract_core::{Camera, CubeFace};
 use refract_scene::{
-    Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError, Scene, SceneMesh,
+    Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, PixelLayers, RenderError, Scene,
+    SceneMesh,
 };
 
 use crate::family::{CpuFamily, FrameCx};
-use crate::image_space::fill;
 use crate::raster::{
     DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
 };
@@ -347,6 +347,21 @@ struct DistanceAov {
     tir: bool,
 }
 
+impl PixelLayers for DistanceAov {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::Tir => LayerValue::Flag(self.tir),
+            Aov::Miss => LayerValue::Flag(self.miss),
+            Aov::HitLayer => LayerValue::Count(self.hit_layer),
+            Aov::LinearSteps => LayerValue::Count(self.linear_steps),
+            Aov::SecantSteps => LayerValue::Count(self.secant_steps),
+            Aov::Bounces => LayerValue::Count(self.bounces),
+            _ => return None,
+        })
+    }
+}
+
 impl DistanceAov {
     fn of(result: &PathResult) -> Self {
         Self {
@@ -464,7 +479,7 @@ impl CpuFamily for DistancePasses {
                 .zip(self.aovs.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, (c, a))| (*c, *a) = shade(i));
-            write_layers(&self.aovs, MethodId::DistanceMap, frame);
+            frame.write_row_layers(cx.method, &self.aovs)?;
         } else {
             frame
                 .color
@@ -473,21 +488,5 @@ impl CpuFamily for DistancePasses {
                 .for_each(|(i, c)| *c = shade(i).0);
         }
         Ok(())
-    }
-}
-
-/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
-fn write_layers(aovs: &[DistanceAov], method: MethodId, frame: &mut Frame) {
-    for &aov in method.info().aovs {
-        match aov {
-            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
-            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
-            Aov::Miss => fill(frame.flag_mut(aov), aovs, |a| a.miss),
-            Aov::HitLayer => fill(frame.count_mut(aov), aovs, |a| a.hit_layer),
-            Aov::LinearSteps => fill(frame.count_mut(aov), aovs, |a| a.linear_steps),
-            Aov::SecantSteps => fill(frame.count_mut(aov), aovs, |a| a.secant_steps),
-            Aov::Bounces => fill(frame.count_mut(aov), aovs, |a| a.bounces),
-            other => unreachable!("distance-map does not compute {}", other.name()),
-        }
     }
 }

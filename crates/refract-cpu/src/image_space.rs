@@ -12,8 +12,8 @@ use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
 use refract_scene::{
-    Aov, Environment, Frame, FrameOutputs, ImageSpaceMethod, MethodId, Refractor, RenderError,
-    Scene,
+    Aov, Environment, Frame, FrameOutputs, ImageSpaceMethod, LayerValue, MethodId, PixelLayers,
+    Refractor, RenderError, Scene,
 };
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
@@ -37,6 +37,22 @@ pub(crate) struct MethodAov {
     pub n2_source: Option<ExitNormalSource>,
     /// Total internal reflection at the entry or exit.
     pub tir: bool,
+}
+
+impl PixelLayers for MethodAov {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::Tir => LayerValue::Flag(self.tir),
+            Aov::P2 => LayerValue::Vec3(self.p2),
+            Aov::N2 => LayerValue::Vec3(self.n2),
+            Aov::T2 => LayerValue::Vec3(self.t2),
+            Aov::ExitNormalSource => {
+                LayerValue::Count(self.n2_source.map_or(0, exit_normal_source_code))
+            }
+            _ => return None,
+        })
+    }
 }
 
 impl MethodAov {
@@ -100,7 +116,7 @@ pub fn shade_into(
     method: MethodId,
     outputs: FrameOutputs,
     frame: &mut Frame,
-) {
+) -> Result<(), RenderError> {
     let (width, height) = (camera.width(), camera.height());
     frame.resize_for_overwrite(width, height);
     let mut aovs = Vec::new();
@@ -125,8 +141,9 @@ pub fn shade_into(
             context.row(y, &front, colors, Some(aovs));
         });
     if outputs == FrameOutputs::ColorAndAovs {
-        write_layers(&aovs, method, frame);
+        frame.write_row_layers(method, &aovs)?;
     }
+    Ok(())
 }
 
 /// The pixels of a band of rows just rasterised: colours, and AOVs when asked for.
@@ -211,36 +228,8 @@ impl CpuFamily for ImageSpacePasses {
             |rows, (colors, aovs)| shade_band(&context, rows, colors, aovs),
         );
         if with_aovs {
-            write_layers(&self.aovs[..n], cx.method, frame);
+            frame.write_row_layers(cx.method, &self.aovs[..n])?;
         }
         Ok(())
     }
-}
-
-/// The kernel's per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
-fn write_layers(aovs: &[MethodAov], method: MethodId, frame: &mut Frame) {
-    for &aov in method.info().aovs {
-        match aov {
-            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
-            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
-            Aov::P2 => fill(frame.vec3_mut(aov), aovs, |a| a.p2),
-            Aov::N2 => fill(frame.vec3_mut(aov), aovs, |a| a.n2),
-            Aov::T2 => fill(frame.vec3_mut(aov), aovs, |a| a.t2),
-            Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
-                a.n2_source.map_or(0, exit_normal_source_code)
-            }),
-            other => unreachable!("the image-space kernels do not compute {}", other.name()),
-        }
-    }
-}
-
-/// One AOV layer from the per-pixel outputs `aovs` (any family's), in parallel.
-pub(crate) fn fill<A: Sync, T: Send>(
-    out: &mut [T],
-    aovs: &[A],
-    get: impl Fn(&A) -> T + Sync + Send,
-) {
-    out.par_iter_mut()
-        .zip(aovs.par_iter())
-        .for_each(|(o, a)| *o = get(a));
 }

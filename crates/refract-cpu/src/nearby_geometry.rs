@@ -21,11 +21,12 @@ use refract_core::nearby_geometry::{
     NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
     view_depth,
 };
-use refract_scene::{Aov, Frame, MethodId, NearbyParams, RenderError, Scene, SceneMesh};
+use refract_scene::{
+    Aov, Frame, LayerValue, NearbyParams, PixelLayers, RenderError, Scene, SceneMesh,
+};
 
 use crate::buffers::{BackFaces, front_faces_into};
 use crate::family::{CpuFamily, FrameCx};
-use crate::image_space::fill;
 use crate::pixel_group::PixelGroup;
 use crate::raster::{DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::scene_meshes::SceneMeshes;
@@ -167,6 +168,26 @@ struct NearbyAov {
     converged: bool,
 }
 
+impl PixelLayers for NearbyAov {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::Tir => LayerValue::Flag(self.tir),
+            Aov::Converged => LayerValue::Flag(self.converged),
+            Aov::P2 => LayerValue::Vec3(self.p2),
+            Aov::N2 => LayerValue::Vec3(self.n2),
+            Aov::T2 => LayerValue::Vec3(self.t2),
+            Aov::PGeom => LayerValue::Vec3(self.p_geom),
+            Aov::NgTexel => LayerValue::Vec3(self.ng_texel),
+            Aov::Iterations => LayerValue::Count(self.iterations),
+            Aov::ExitNormalSource => {
+                LayerValue::Count(self.n2_source.map_or(0, exit_normal_source_code))
+            }
+            _ => return None,
+        })
+    }
+}
+
 impl NearbyAov {
     const NONE: Self = Self {
         covered: false,
@@ -250,7 +271,7 @@ impl CpuFamily for NearbyPasses {
             rows.for_each(|(y, colors)| pixels.row(y as u32, colors, None));
         }
         if cx.with_aovs() {
-            write_layers(&self.aovs[..n], cx.method, frame);
+            frame.write_row_layers(cx.method, &self.aovs[..n])?;
         }
         Ok(())
     }
@@ -445,30 +466,6 @@ impl PixelContext<'_> {
                 (color, aov)
             }
             None => (self.scene.environment.radiance(aov.t2), aov),
-        }
-    }
-}
-
-/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
-fn write_layers(aovs: &[NearbyAov], method: MethodId, frame: &mut Frame) {
-    for &aov in method.info().aovs {
-        match aov {
-            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
-            Aov::Tir => fill(frame.flag_mut(aov), aovs, |a| a.tir),
-            Aov::Converged => fill(frame.flag_mut(aov), aovs, |a| a.converged),
-            Aov::P2 => fill(frame.vec3_mut(aov), aovs, |a| a.p2),
-            Aov::N2 => fill(frame.vec3_mut(aov), aovs, |a| a.n2),
-            Aov::T2 => fill(frame.vec3_mut(aov), aovs, |a| a.t2),
-            Aov::PGeom => fill(frame.vec3_mut(aov), aovs, |a| a.p_geom),
-            Aov::NgTexel => fill(frame.vec3_mut(aov), aovs, |a| a.ng_texel),
-            Aov::Iterations => fill(frame.count_mut(aov), aovs, |a| a.iterations),
-            Aov::ExitNormalSource => fill(frame.count_mut(aov), aovs, |a| {
-                a.n2_source.map_or(0, exit_normal_source_code)
-            }),
-            other => unreachable!(
-                "the nearby-geometry methods do not compute {}",
-                other.name()
-            ),
         }
     }
 }

@@ -14,12 +14,11 @@ use refract_core::Camera;
 use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
+    Aov, Frame, FrameOutputs, LayerValue, PixelLayers, PvrrParams, RenderError, Scene, SceneMesh,
 };
 
 use crate::distance_map::surface_material;
 use crate::family::{CpuFamily, FrameCx};
-use crate::image_space::fill;
 use crate::raster::{DepthTest, Faces, SurfaceBuffer, rasterize_into};
 use crate::scene_meshes::SceneMeshes;
 
@@ -50,6 +49,16 @@ impl MapTexels for Image {
 struct PvrrAov {
     covered: bool,
     zoom: bool,
+}
+
+impl PixelLayers for PvrrAov {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        match aov {
+            Aov::Covered => Some(LayerValue::Flag(self.covered)),
+            Aov::Zoom => Some(LayerValue::Flag(self.zoom)),
+            _ => None,
+        }
+    }
 }
 
 /// The CPU passes of `pvrr`; the plan and every buffer are kept between frames.
@@ -151,7 +160,7 @@ impl CpuFamily for PvrrPasses {
             with_aovs.then_some(&mut self.aovs[..]),
         );
         if with_aovs {
-            write_layers(&self.aovs, frame);
+            frame.write_row_layers(cx.method, &self.aovs)?;
         }
         Ok(())
     }
@@ -278,16 +287,5 @@ fn render_view(
             .par_iter_mut()
             .enumerate()
             .for_each(|(i, c)| *c = shade(i).0),
-    }
-}
-
-/// The per-pixel outputs as the frame's layers: exactly the registry row's AOVs.
-fn write_layers(aovs: &[PvrrAov], frame: &mut Frame) {
-    for &aov in MethodId::Pvrr.info().aovs {
-        match aov {
-            Aov::Covered => fill(frame.flag_mut(aov), aovs, |a| a.covered),
-            Aov::Zoom => fill(frame.flag_mut(aov), aovs, |a| a.zoom),
-            other => unreachable!("pvrr does not compute {}", other.name()),
-        }
     }
 }

@@ -84,7 +84,7 @@ pub(crate) trait GpuFamily {
         cx: &GpuFrameCx<'_>,
         targets: &Self::Targets,
         frame: &mut Frame,
-    ) -> Result<(), GpuError>;
+    ) -> Result<(), RenderError>;
 }
 
 /// A family and the targets of its last frame.

@@ -4,6 +4,10 @@
 use std::collections::BTreeMap;
 
 use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::registry::MethodId;
+use crate::renderer::RenderError;
 
 /// A per-pixel output beside the colour (an "arbitrary output variable"). Quantities that do not
 /// exist at a pixel are NaN (vectors), 0 (counts) or false (flags).
@@ -60,6 +64,24 @@ pub enum Aov {
     /// 2007 §4.2, left out as in the paper), is trapped in the lens, or lies past the last
     /// level of the reflection stack.
     Zoom,
+}
+
+/// One pixel's value of one AOV layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LayerValue {
+    /// Of an [`AovKind::Vec3`] layer.
+    Vec3(Vec3),
+    /// Of an [`AovKind::Count`] layer.
+    Count(u32),
+    /// Of an [`AovKind::Flag`] layer.
+    Flag(bool),
+}
+
+/// A family's per-pixel outputs beside the colour, as the frame's layers: what
+/// [`Frame::write_row_layers`] writes for the layers of a method's registry row.
+pub trait PixelLayers: Sync {
+    /// This pixel's value of `aov`, `None` for a layer the family does not compute.
+    fn value(&self, aov: Aov) -> Option<LayerValue>;
 }
 
 /// The type of an [`Aov`]'s per-pixel values.
@@ -236,6 +258,45 @@ impl Frame {
         self.color.len()
     }
 
+    /// Writes exactly the layers of `method`'s registry row from the per-pixel outputs `pixels`
+    /// (row-major, one per pixel; each layer in parallel). A layer of the row the family does
+    /// not compute is [`RenderError::MissingLayer`], never a panic; a value of another kind than
+    /// its layer's leaves the layer's empty value there (NaN, 0, `false`). A test renders
+    /// every row on both backends and checks its layers.
+    pub fn write_row_layers<P: PixelLayers>(
+        &mut self,
+        method: MethodId,
+        pixels: &[P],
+    ) -> Result<(), RenderError> {
+        for &aov in method.info().aovs {
+            if pixels.first().is_some_and(|p| p.value(aov).is_none()) {
+                return Err(RenderError::MissingLayer {
+                    method,
+                    layer: aov.name(),
+                });
+            }
+            let pixels = pixels.par_iter();
+            match self.layer_mut(aov) {
+                Layer::Vec3(out) => out.par_iter_mut().zip(pixels).for_each(|(o, p)| {
+                    *o = match p.value(aov) {
+                        Some(LayerValue::Vec3(v)) => v,
+                        _ => Vec3::NAN,
+                    }
+                }),
+                Layer::Count(out) => out.par_iter_mut().zip(pixels).for_each(|(o, p)| {
+                    *o = match p.value(aov) {
+                        Some(LayerValue::Count(v)) => v,
+                        _ => 0,
+                    }
+                }),
+                Layer::Flag(out) => out.par_iter_mut().zip(pixels).for_each(|(o, p)| {
+                    *o = matches!(p.value(aov), Some(LayerValue::Flag(true)));
+                }),
+            }
+        }
+        Ok(())
+    }
+
     /// The layers present with their AOVs, in a fixed order.
     pub fn layers(&self) -> impl Iterator<Item = (Aov, &Layer)> + '_ {
         self.layers.iter().map(|(aov, layer)| (*aov, layer))
@@ -342,5 +403,46 @@ impl Frame {
             Layer::Flag(v) => v,
             _ => panic!("{} is not a flag AOV", aov.name()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A family that computes coverage and `T2` only, and gives `T2` as a flag by mistake.
+    struct Partial(bool);
+
+    impl PixelLayers for Partial {
+        fn value(&self, aov: Aov) -> Option<LayerValue> {
+            match aov {
+                Aov::Covered | Aov::Tir => Some(LayerValue::Flag(self.0)),
+                Aov::T2 => Some(LayerValue::Flag(true)),
+                _ => None,
+            }
+        }
+    }
+
+    /// The row's layers and only those are written; a value of the wrong kind leaves the
+    /// layer's empty value; a layer the family does not compute is an error naming it.
+    #[test]
+    fn frames_get_exactly_the_row_layers() {
+        let mut frame = Frame::new(2, 1);
+        let pixels = [Partial(true), Partial(false)];
+        // `single` writes covered, T2, tir.
+        frame
+            .write_row_layers(MethodId::Single, &pixels)
+            .expect("single's layers");
+        assert_eq!(
+            frame.aovs().collect::<Vec<_>>(),
+            [Aov::Covered, Aov::T2, Aov::Tir]
+        );
+        assert_eq!(frame.flag(Aov::Covered), Some(&[true, false][..]));
+        assert!(frame.vec3(Aov::T2).expect("T2").iter().all(|v| v.is_nan()));
+        // `wyman` also writes P2, N2 and the exit-normal source: not computed here.
+        let err = frame
+            .write_row_layers(MethodId::Wyman, &pixels)
+            .expect_err("P2 is missing");
+        assert!(err.to_string().contains("P2"), "{err}");
     }
 }

@@ -28,7 +28,7 @@ pub mod tonemap;
 
 pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::SceneError;
-pub use frame::{Aov, AovKind, Frame, Layer};
+pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, PixelLayers};
 pub use registry::{
     BackendId, DistanceMapParams, Family, FamilyParams, ImageSpaceMethod, InterfaceRule, MethodId,
     MethodInfo, MethodParams, NearbyParams, ParamValue, PvrrParams, REGISTRY, TraceMode,

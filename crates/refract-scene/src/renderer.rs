@@ -56,6 +56,16 @@ pub enum RenderError {
     /// `render` before `prepare`.
     #[error("the {0} backend has no scene: call prepare first")]
     NotPrepared(BackendId),
+    /// The family does not compute a layer its registry row lists (a defect of the family).
+    #[error(
+        "method `{method}` lists the layer {layer} in its registry row, but its family does not compute it"
+    )]
+    MissingLayer {
+        /// The method.
+        method: MethodId,
+        /// The layer's name.
+        layer: &'static str,
+    },
     /// A parameter the method cannot use (e.g. an index of refraction ≤ 0).
     #[error("{0}")]
     Parameter(String),

@@ -10,14 +10,16 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use refract_core::distance_map::{MAX_LAYERS, fresnel_code};
 use refract_core::{Camera, CubeFace, TirPolicy};
-use refract_scene::{Aov, DistanceMapParams, Frame, FrameOutputs, MethodId, RenderError};
+use refract_scene::{
+    Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, RenderError,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
+use crate::methods::MethodPipelines;
 use crate::methods::image_space::{OutputBuffers, check_limits};
-use crate::methods::{MethodPipelines, fill};
 use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
 };
@@ -181,7 +183,7 @@ impl GpuFamily for DistanceMapPipelines {
         cx: &GpuFrameCx<'_>,
         targets: &DistanceMapTargets,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         targets.read(cx.context, cx.outputs, frame)
     }
 }
@@ -479,7 +481,7 @@ impl DistanceMapTargets {
         context: &GpuContext,
         outputs: FrameOutputs,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         let (width, height, _, _) = self.key;
         let color = self.outputs.read(context, 0)?;
         frame.resize_for_overwrite(width, height);
@@ -491,20 +493,36 @@ impl DistanceMapTargets {
         }
         let counts = self.outputs.read(context, 1)?;
         let flags = self.outputs.read(context, 2)?;
-        let count = |i: usize, k: usize| counts[i][k].round() as u32;
-        let flag = |i: usize, k: usize| flags[i][k] > 0.5;
-        for &aov in MethodId::DistanceMap.info().aovs {
-            match aov {
-                Aov::Covered => fill(frame.flag_mut(aov), |i| flag(i, 0)),
-                Aov::Miss => fill(frame.flag_mut(aov), |i| flag(i, 1)),
-                Aov::Tir => fill(frame.flag_mut(aov), |i| flag(i, 2)),
-                Aov::HitLayer => fill(frame.count_mut(aov), |i| count(i, 0)),
-                Aov::LinearSteps => fill(frame.count_mut(aov), |i| count(i, 1)),
-                Aov::SecantSteps => fill(frame.count_mut(aov), |i| count(i, 2)),
-                Aov::Bounces => fill(frame.count_mut(aov), |i| count(i, 3)),
-                other => unreachable!("distance-map does not compute {}", other.name()),
-            }
-        }
+        let pixels: Vec<DistancePixel> = counts
+            .into_iter()
+            .zip(flags)
+            .map(|(counts, flags)| DistancePixel { counts, flags })
+            .collect();
+        frame.write_row_layers(MethodId::DistanceMap, &pixels)?;
         Ok(())
+    }
+}
+
+/// One pixel of the path outputs: counts (hit layer, linear steps, secant steps, bounces) and
+/// flags (covered, miss, TIR), as the shader stores them.
+struct DistancePixel {
+    counts: [f32; 4],
+    flags: [f32; 4],
+}
+
+impl PixelLayers for DistancePixel {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        let count = |k: usize| LayerValue::Count(self.counts[k].round() as u32);
+        let flag = |k: usize| LayerValue::Flag(self.flags[k] > 0.5);
+        Some(match aov {
+            Aov::Covered => flag(0),
+            Aov::Miss => flag(1),
+            Aov::Tir => flag(2),
+            Aov::HitLayer => count(0),
+            Aov::LinearSteps => count(1),
+            Aov::SecantSteps => count(2),
+            Aov::Bounces => count(3),
+            _ => return None,
+        })
     }
 }

@@ -10,7 +10,9 @@ use refract_core::gpu::{
     exit_normal_source_code, exit_normal_source_from_code,
 };
 use refract_core::{BackSurface, Camera};
-use refract_scene::{Aov, Frame, FrameOutputs, ImageSpaceMethod, MethodId, RenderError};
+use refract_scene::{
+    Aov, Frame, FrameOutputs, ImageSpaceMethod, LayerValue, MethodId, PixelLayers, RenderError,
+};
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
@@ -63,7 +65,7 @@ impl GpuFamily for ImageSpacePipelines {
         cx: &GpuFrameCx<'_>,
         targets: &ImageSpaceTargets,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         targets.read(cx.context, cx.method, cx.outputs, frame)
     }
 }
@@ -390,7 +392,7 @@ impl ImageSpaceTargets {
         method: MethodId,
         outputs: FrameOutputs,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         let color = self.outputs.read(context, 0)?;
         frame.resize_for_overwrite(self.width, self.height);
         for (out, c) in frame.color.iter_mut().zip(&color) {
@@ -407,26 +409,8 @@ impl ImageSpaceTargets {
         let pixels: Vec<DecodedPixel> = (0..frame.pixel_count())
             .map(|i| DecodedPixel::new(color[i], t2[i], p2[i], n2[i]))
             .collect();
-        for &aov in method.info().aovs {
-            match aov {
-                Aov::Covered => fill(frame.flag_mut(aov), &pixels, |p| p.covered),
-                Aov::Tir => fill(frame.flag_mut(aov), &pixels, |p| p.tir),
-                Aov::T2 => fill(frame.vec3_mut(aov), &pixels, |p| p.t2),
-                Aov::P2 => fill(frame.vec3_mut(aov), &pixels, |p| p.p2),
-                Aov::N2 => fill(frame.vec3_mut(aov), &pixels, |p| p.n2),
-                Aov::ExitNormalSource => fill(frame.count_mut(aov), &pixels, |p| {
-                    p.n2_source.map_or(0, exit_normal_source_code)
-                }),
-                other => unreachable!("the image-space kernels do not compute {}", other.name()),
-            }
-        }
+        frame.write_row_layers(method, &pixels)?;
         Ok(())
-    }
-}
-
-fn fill<T>(out: &mut [T], pixels: &[DecodedPixel], get: impl Fn(&DecodedPixel) -> T) {
-    for (o, p) in out.iter_mut().zip(pixels) {
-        *o = get(p);
     }
 }
 
@@ -441,6 +425,22 @@ pub(crate) struct DecodedPixel {
     pub n2: Vec3,
     pub n2_source: Option<refract_core::ExitNormalSource>,
     pub tir: bool,
+}
+
+impl PixelLayers for DecodedPixel {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::Tir => LayerValue::Flag(self.tir),
+            Aov::T2 => LayerValue::Vec3(self.t2),
+            Aov::P2 => LayerValue::Vec3(self.p2),
+            Aov::N2 => LayerValue::Vec3(self.n2),
+            Aov::ExitNormalSource => {
+                LayerValue::Count(self.n2_source.map_or(0, exit_normal_source_code))
+            }
+            _ => return None,
+        })
+    }
 }
 
 impl DecodedPixel {

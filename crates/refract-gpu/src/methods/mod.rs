@@ -76,10 +76,3 @@ impl MethodPipelines {
             .expect("a pipeline for every method of the family")
     }
 }
-
-/// Fills a frame layer from a per-pixel getter (the decoded output buffers).
-pub(crate) fn fill<T>(out: &mut [T], get: impl Fn(usize) -> T) {
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = get(i);
-    }
-}

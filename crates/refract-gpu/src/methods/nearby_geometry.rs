@@ -6,22 +6,21 @@
 
 use glam::{UVec2, Vec3};
 use refract_core::Camera;
-use refract_core::gpu::{
-    FrameUniforms, NearbyUniforms, exit_normal_source_code, lookup_code, seed_spacing_code,
-};
+use refract_core::gpu::{FrameUniforms, NearbyUniforms, lookup_code, seed_spacing_code};
 use refract_core::nearby_geometry::{
     MAX_PLANES, NearbyLookup, Plane, SeedSpacing, guard_band_camera,
 };
 use refract_scene::{
-    Aov, DirectionalLight, Frame, FrameOutputs, MethodId, NearbyParams, RenderError,
+    Aov, DirectionalLight, Frame, FrameOutputs, LayerValue, MethodId, NearbyParams, PixelLayers,
+    RenderError,
 };
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
+use crate::methods::MethodPipelines;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
-use crate::methods::{MethodPipelines, fill};
 use crate::passes::raster::{RasterPipelines, SurfaceTargets};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
@@ -122,7 +121,7 @@ impl GpuFamily for NearbyPipelines {
         cx: &GpuFrameCx<'_>,
         targets: &NearbyTargets,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         targets.read(cx.context, cx.method, cx.outputs, frame)
     }
 }
@@ -297,7 +296,7 @@ impl NearbyTargets {
         method: MethodId,
         outputs: FrameOutputs,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         let (width, height, _, _) = self.size;
         let color = self.outputs.read(context, 0)?;
         frame.resize_for_overwrite(width, height);
@@ -314,51 +313,47 @@ impl NearbyTargets {
         let pixels: Vec<DecodedPixel> = (0..n)
             .map(|i| DecodedPixel::new(color[i], planes[0][i], planes[1][i], planes[2][i]))
             .collect();
-        let (p_geom, ng) = (&planes[3], &planes[4]);
-        let hit = |i: usize| pixels[i].covered && p_geom[i][3] as u32 & 1 == 1;
-        for &aov in method.info().aovs {
-            match aov {
-                Aov::Covered => fill(frame.flag_mut(aov), |i| pixels[i].covered),
-                Aov::Tir => fill(frame.flag_mut(aov), |i| pixels[i].tir),
-                Aov::T2 => fill(frame.vec3_mut(aov), |i| pixels[i].t2),
-                Aov::P2 => fill(frame.vec3_mut(aov), |i| pixels[i].p2),
-                Aov::N2 => fill(frame.vec3_mut(aov), |i| pixels[i].n2),
-                Aov::ExitNormalSource => fill(frame.count_mut(aov), |i| {
-                    pixels[i].n2_source.map_or(0, exit_normal_source_code)
-                }),
-                Aov::PGeom => fill(frame.vec3_mut(aov), |i| {
-                    let p = p_geom[i];
-                    if hit(i) {
-                        Vec3::new(p[0], p[1], p[2])
-                    } else {
-                        Vec3::NAN
-                    }
-                }),
-                Aov::NgTexel => fill(frame.vec3_mut(aov), |i| {
-                    let t = ng[i];
-                    if hit(i) {
-                        Vec3::new(t[0], t[1], t[2].round())
-                    } else {
-                        Vec3::NAN
-                    }
-                }),
-                Aov::Iterations => fill(frame.count_mut(aov), |i| {
-                    if pixels[i].covered {
-                        ng[i][3].round() as u32
-                    } else {
-                        0
-                    }
-                }),
-                Aov::Converged => fill(frame.flag_mut(aov), |i| {
-                    pixels[i].covered && p_geom[i][3] as u32 & 2 == 2
-                }),
-                other => unreachable!(
-                    "the nearby-geometry methods do not compute {}",
-                    other.name()
-                ),
-            }
-        }
+        let pixels: Vec<NearbyPixel> = pixels
+            .into_iter()
+            .enumerate()
+            .map(|(i, base)| NearbyPixel {
+                base,
+                p_geom: planes[3][i],
+                ng: planes[4][i],
+            })
+            .collect();
+        frame.write_row_layers(method, &pixels)?;
         Ok(())
+    }
+}
+
+/// One pixel of the nearby-geometry outputs: the image-space ones, `P_geom` (w: 1 hit, + 2
+/// converged) and the NG texel (x, y, object id, iterations).
+struct NearbyPixel {
+    base: DecodedPixel,
+    p_geom: [f32; 4],
+    ng: [f32; 4],
+}
+
+impl NearbyPixel {
+    /// The lookup found a surface in the NG texture.
+    fn hit(&self) -> bool {
+        self.base.covered && self.p_geom[3] as u32 & 1 == 1
+    }
+}
+
+impl PixelLayers for NearbyPixel {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        let (p, t) = (self.p_geom, self.ng);
+        Some(match aov {
+            Aov::PGeom if self.hit() => LayerValue::Vec3(Vec3::new(p[0], p[1], p[2])),
+            Aov::NgTexel if self.hit() => LayerValue::Vec3(Vec3::new(t[0], t[1], t[2].round())),
+            Aov::PGeom | Aov::NgTexel => LayerValue::Vec3(Vec3::NAN),
+            Aov::Iterations if self.base.covered => LayerValue::Count(t[3].round() as u32),
+            Aov::Iterations => LayerValue::Count(0),
+            Aov::Converged => LayerValue::Flag(self.base.covered && p[3] as u32 & 2 == 2),
+            other => return self.base.value(other),
+        })
     }
 }
 

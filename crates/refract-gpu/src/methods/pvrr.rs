@@ -14,15 +14,16 @@ use refract_core::TirPolicy;
 use refract_core::pvrr::PvrrVertex;
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, ReflectorKind};
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, PvrrParams, RenderError, Scene, SceneMesh,
+    Aov, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, PvrrParams, RenderError, Scene,
+    SceneMesh,
 };
 
 use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
+use crate::methods::MethodPipelines;
 use crate::methods::image_space::{OutputBuffers, check_limits};
-use crate::methods::{MethodPipelines, fill};
 use crate::passes::raster::{DEPTH_FORMAT, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::{GpuMesh, GpuScene, Vertex};
 use crate::shaders::module_source;
@@ -291,7 +292,7 @@ impl GpuFamily for PvrrFamily {
         cx: &GpuFrameCx<'_>,
         targets: &PvrrTargets,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         targets.read(cx.context, cx.outputs, frame)
     }
 }
@@ -603,7 +604,7 @@ impl PvrrTargets {
         context: &GpuContext,
         outputs: FrameOutputs,
         frame: &mut Frame,
-    ) -> Result<(), GpuError> {
+    ) -> Result<(), RenderError> {
         let (width, height, _) = self.key;
         let color = self.outputs.read(context, 0)?;
         frame.resize_for_overwrite(width, height);
@@ -614,14 +615,21 @@ impl PvrrTargets {
             return Ok(());
         }
         let flags = self.outputs.read(context, 1)?;
-        let flag = |i: usize, k: usize| flags[i][k] > 0.5;
-        for &aov in MethodId::Pvrr.info().aovs {
-            match aov {
-                Aov::Covered => fill(frame.flag_mut(aov), |i| flag(i, 0)),
-                Aov::Zoom => fill(frame.flag_mut(aov), |i| flag(i, 1)),
-                other => unreachable!("pvrr does not compute {}", other.name()),
-            }
-        }
+        let pixels: Vec<PvrrPixel> = flags.into_iter().map(PvrrPixel).collect();
+        frame.write_row_layers(MethodId::Pvrr, &pixels)?;
         Ok(())
+    }
+}
+
+/// One pixel's flags as the shader stores them: covered, zoom.
+struct PvrrPixel([f32; 4]);
+
+impl PixelLayers for PvrrPixel {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        match aov {
+            Aov::Covered => Some(LayerValue::Flag(self.0[0] > 0.5)),
+            Aov::Zoom => Some(LayerValue::Flag(self.0[1] > 0.5)),
+            _ => None,
+        }
     }
 }
