@@ -84,7 +84,7 @@ fn obj(mesh: &Mesh) -> String {
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let loaded = load_scene(&args.scene)?;
     let scene = loaded.scene;
-    crate::cleanup::create_dir(&args.out)
+    refract_lab::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the directory", args.out.display()))?;
     write_text_atomically(
         &args.out.join("refractor.obj"),

@@ -7,23 +7,18 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use refract_core::exit::TirPolicy;
 use refract_eval::BUILTIN_SCENES;
+use refract_lab::backends::{self, GpuPolicy};
+use refract_lab::{bench, claims, compare, sweep, sweep_report};
 use refract_scene::registry::ParamKind;
-use refract_scene::{MethodId, MethodParams, REGISTRY};
+use refract_scene::{MethodId, REGISTRY};
 
-mod backends;
-mod bench;
-mod claims;
 mod cleanup;
-mod compare;
-mod data_scenes;
 mod export;
 mod info;
-mod memory;
+mod progress;
 mod render;
-mod report;
-mod sweep;
-mod sweep_report;
-mod timing;
+
+use progress::Bars;
 
 /// Measure how wrong and how fast real-time refraction techniques are, on your meshes.
 ///
@@ -124,35 +119,7 @@ pub fn parse_param(assignment: &str) -> anyhow::Result<(&str, &str)> {
         .ok_or_else(|| anyhow::anyhow!("--param {assignment}: expected NAME=VALUE"))
 }
 
-/// The parameters of `ids` with `tir` and every `--param` applied to the methods that have it;
-/// a parameter no selected method has is an error.
-fn method_params(
-    ids: &[MethodId],
-    tir: TirPolicy,
-    assignments: &[String],
-) -> anyhow::Result<Vec<MethodParams>> {
-    let mut methods: Vec<MethodParams> = ids
-        .iter()
-        .map(|&id| MethodParams::defaults(id).with_tir_policy(tir))
-        .collect();
-    for assignment in assignments {
-        let (name, value) = parse_param(assignment)?;
-        let mut used = false;
-        for method in &mut methods {
-            if method.get(name).is_some() {
-                method.set(name, value, "--param")?;
-                used = true;
-            }
-        }
-        anyhow::ensure!(
-            used,
-            "--param {assignment}: none of the selected methods has a parameter `{name}` (see `refract methods`)"
-        );
-    }
-    Ok(methods)
-}
-
-fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions> {
+fn compare_options(args: CompareArgs) -> anyhow::Result<refract_lab::jobs::CompareOptions> {
     let backends = backends::parse_backends(&args.backends)?;
     // The default list tolerates a missing adapter (with a notice); an explicit list does not.
     let explicit = args.backends != ["cpu", "gpu"];
@@ -163,15 +130,20 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions>
         !ids.contains(&MethodId::Reference),
         "--methods: the reference is always rendered; list the methods to compare with it"
     );
-    Ok(compare::CompareOptions {
+    let assignments = args
+        .params
+        .iter()
+        .map(|a| parse_param(a))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(refract_lab::jobs::CompareOptions {
         backends,
         gpu_policy: if explicit {
-            backends::GpuPolicy::Required
+            GpuPolicy::Required
         } else {
-            backends::GpuPolicy::IfAvailable
+            GpuPolicy::IfAvailable
         },
         scenes: args.scenes,
-        methods: method_params(&ids, args.tir.into(), &args.params)?,
+        methods: compare::method_params(&ids, args.tir.into(), &assignments, "--param")?,
         res: args.res,
         spp: args.spp,
         frames: args.frames,
@@ -179,20 +151,29 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<compare::CompareOptions>
     })
 }
 
-fn default_job() -> anyhow::Result<()> {
-    let ids: Vec<MethodId> = MethodId::approximations().collect();
-    let options = compare::CompareOptions {
-        backends: vec![refract_scene::BackendId::Cpu, refract_scene::BackendId::Gpu],
-        gpu_policy: backends::GpuPolicy::IfAvailable,
-        scenes: BUILTIN_SCENES.iter().map(|s| s.0.to_owned()).collect(),
-        methods: method_params(&ids, TirPolicy::ClampToCritical, &[])?,
-        res: 512,
-        spp: 1,
-        frames: 5,
-        out: PathBuf::from("out"),
-    };
-    let records = compare::run(&options)?;
-    compare::print_summary(&records, &options.out);
+/// Runs a comparison with progress bars and prints its summary.
+fn run_compare(options: &refract_lab::jobs::CompareOptions) -> anyhow::Result<()> {
+    let records = compare::run(options, &Bars::new())?;
+    print!("{}", compare::summary(&records, &options.out));
+    Ok(())
+}
+
+/// `refract sweep`: the shard's job list with `--list`, else its jobs run.
+fn run_sweep(args: &sweep::SweepArgs) -> anyhow::Result<()> {
+    if args.list {
+        for job in sweep::shard_jobs(args)? {
+            println!("{:>5} {}", job.index, job.id);
+        }
+        return Ok(());
+    }
+    let done = sweep::run(args, &Bars::new())?;
+    eprintln!(
+        "done: {} finished, {} failed (recorded in {}), {} skipped as finished before",
+        done.finished,
+        done.failed,
+        done.jobs_dir.display(),
+        done.skipped
+    );
     Ok(())
 }
 
@@ -225,16 +206,26 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     cleanup::install_signal_handler();
     let result = match cli.command {
-        None => default_job(),
-        Some(Command::Compare(args)) => compare_options(args).and_then(|options| {
-            let records = compare::run(&options)?;
-            compare::print_summary(&records, &options.out);
-            Ok(())
-        }),
+        None => compare::default_options()
+            .map_err(anyhow::Error::from)
+            .and_then(|options| run_compare(&options)),
+        Some(Command::Compare(args)) => compare_options(args).and_then(|o| run_compare(&o)),
         Some(Command::Render(args)) => render::run(&args),
-        Some(Command::Bench(args)) => bench::run(&args),
-        Some(Command::Sweep(args)) => sweep::run(&args),
-        Some(Command::Report(args)) => sweep_report::run(&args),
+        Some(Command::Bench(args)) => bench::run(&args, &Bars::new())
+            .map(|md| println!("\n{md}"))
+            .map_err(Into::into),
+        Some(Command::Sweep(args)) => run_sweep(&args),
+        Some(Command::Report(args)) => sweep_report::run(&args)
+            .map(|r| {
+                println!(
+                    "{} jobs ({} failed) -> {}/index.html, report.md, results.json, {} plots",
+                    r.jobs,
+                    r.failed,
+                    r.out.display(),
+                    r.plots
+                );
+            })
+            .map_err(Into::into),
         Some(Command::View(args)) => refract_view::run(args),
         Some(Command::Scenes) => {
             for (name, line, _) in BUILTIN_SCENES {
@@ -249,16 +240,18 @@ fn main() -> ExitCode {
         }
         Some(Command::Info(args)) => info::run(&args),
         Some(Command::Export(args)) => export::run(&args),
-        Some(Command::Claims(args)) => claims::run(&args),
+        Some(Command::Claims(args)) => claims::run(&args, &Bars::new())
+            .map(|md| println!("{md}"))
+            .map_err(Into::into),
     };
     match result {
         Ok(()) => {
-            cleanup::keep_created();
+            refract_lab::output_dirs::keep_created();
             ExitCode::SUCCESS
         }
         Err(err) => {
             // Nothing half-made: directories this run created go with the failure.
-            cleanup::remove_created();
+            refract_lab::output_dirs::remove_created();
             eprintln!("error: {err:#}");
             ExitCode::FAILURE
         }

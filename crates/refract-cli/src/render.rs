@@ -10,7 +10,9 @@ use refract_eval::load_scene;
 use refract_scene::{BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceMode};
 use refract_trace::ReferenceRenderer;
 
-use crate::{TirArg, backends};
+use refract_lab::backends;
+
+use crate::TirArg;
 
 /// The reference tracer's mode.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -116,23 +118,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let exr = extension.as_deref() == Some("exr");
     let (per_pixel, backends) = match (method.id() == MethodId::Reference, exr) {
         (true, true) => (
-            crate::memory::RENDER_REFERENCE_EXR_BYTES_PER_PIXEL,
+            refract_lab::memory::RENDER_REFERENCE_EXR_BYTES_PER_PIXEL,
             vec![BackendId::Trace],
         ),
         (true, false) => (
-            crate::memory::RENDER_REFERENCE_PNG_BYTES_PER_PIXEL,
+            refract_lab::memory::RENDER_REFERENCE_PNG_BYTES_PER_PIXEL,
             vec![BackendId::Trace],
         ),
         (false, true) => (
-            crate::memory::RENDER_METHOD_EXR_BYTES_PER_PIXEL,
+            refract_lab::memory::RENDER_METHOD_EXR_BYTES_PER_PIXEL,
             vec![backend],
         ),
         (false, false) => (
-            crate::memory::RENDER_METHOD_PNG_BYTES_PER_PIXEL,
+            refract_lab::memory::RENDER_METHOD_PNG_BYTES_PER_PIXEL,
             vec![backend],
         ),
     };
-    crate::memory::check("this render", width, height, per_pixel, &backends)?;
+    refract_lab::memory::check("this render", width, height, per_pixel, &backends)?;
     let loaded = load_scene(&args.scene)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
@@ -146,9 +148,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut renderer: Box<dyn Renderer> = if method.id() == MethodId::Reference {
         Box::new(ReferenceRenderer::new())
     } else {
-        backends::open(&[backend], backends::GpuPolicy::Required)?
-            .pop()
-            .context("no renderer")?
+        backends::open(
+            &[backend],
+            backends::GpuPolicy::Required,
+            &crate::progress::Bars::new(),
+        )?
+        .pop()
+        .context("no renderer")?
     };
     backends::check_supported(std::slice::from_ref(&renderer), &[method])?;
     let start = Instant::now();

@@ -465,6 +465,18 @@ pub fn evaluate_method(
     (record, maps)
 }
 
+/// Pixels where the reference's path meets an opaque object and the method's lookup found none
+/// (Wyman 2005b Fig. 6, 8: "rays completely miss the dragon").
+pub fn missed_geometry(truth: &Frame, frame: &Frame) -> Vec<bool> {
+    let (Some(t), Some(o)) = (truth.vec3(Aov::PGeom), frame.vec3(Aov::PGeom)) else {
+        return vec![false; frame.pixel_count()];
+    };
+    let covered = frame.flag(Aov::Covered);
+    (0..frame.pixel_count())
+        .map(|i| covered.is_some_and(|c| c[i]) && !t[i].is_nan() && o[i].is_nan())
+        .collect()
+}
+
 /// The reference's own row: its refractor pixels, TIR shares and render time.
 pub fn reference_record(reference: &Frame, ms: f64) -> MetricsRecord {
     let truth = Layers::of(reference);

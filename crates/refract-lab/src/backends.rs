@@ -5,6 +5,8 @@ use refract_cpu::CpuRenderer;
 use refract_gpu::GpuRenderer;
 use refract_scene::{BackendId, MethodParams, Renderer};
 
+use crate::progress::{Note, Progress};
+
 /// What to do when no GPU adapter exists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GpuPolicy {
@@ -15,19 +17,24 @@ pub enum GpuPolicy {
 }
 
 /// Parses a `--backends` list (`cpu`, `gpu`).
-pub fn parse_backends(names: &[String]) -> anyhow::Result<Vec<BackendId>> {
+pub fn parse_backends(names: &[String]) -> crate::Result<Vec<BackendId>> {
     names
         .iter()
         .map(|name| match name.as_str() {
             "cpu" => Ok(BackendId::Cpu),
             "gpu" => Ok(BackendId::Gpu),
-            other => anyhow::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
+            other => crate::bail!("--backends: unknown backend `{other}`; expected cpu or gpu"),
         })
         .collect()
 }
 
-/// Opens the renderers of `backends` (the reference is not one of them).
-pub fn open(backends: &[BackendId], policy: GpuPolicy) -> anyhow::Result<Vec<Box<dyn Renderer>>> {
+/// Opens the renderers of `backends` (the reference is not one of them); the GPU adapter used,
+/// or why the GPU is left out, goes to `progress`.
+pub fn open(
+    backends: &[BackendId],
+    policy: GpuPolicy,
+    progress: &dyn Progress,
+) -> crate::Result<Vec<Box<dyn Renderer>>> {
     let mut renderers: Vec<Box<dyn Renderer>> = Vec::new();
     for &backend in backends {
         match backend {
@@ -35,16 +42,19 @@ pub fn open(backends: &[BackendId], policy: GpuPolicy) -> anyhow::Result<Vec<Box
             BackendId::Gpu => match GpuRenderer::new() {
                 Ok(gpu) => {
                     let info = &gpu.context().info;
-                    eprintln!("GPU: {} ({:?})", info.name, info.backend);
+                    progress.note(Note::Info(format!(
+                        "GPU: {} ({:?})",
+                        info.name, info.backend
+                    )));
                     renderers.push(Box::new(gpu));
                 }
                 Err(err) if policy == GpuPolicy::IfAvailable => {
-                    eprintln!("note: {err}; running on the CPU only");
+                    progress.note(Note::Skipped(format!("{err}; running on the CPU only")));
                 }
                 Err(err) => return Err(err.into()),
             },
             BackendId::Trace => {
-                anyhow::bail!("--backends: the reference always runs; expected cpu or gpu")
+                crate::bail!("--backends: the reference always runs; expected cpu or gpu")
             }
         }
     }
@@ -55,7 +65,7 @@ pub fn open(backends: &[BackendId], policy: GpuPolicy) -> anyhow::Result<Vec<Box
 pub fn check_supported(
     renderers: &[Box<dyn Renderer>],
     methods: &[MethodParams],
-) -> anyhow::Result<()> {
+) -> crate::Result<()> {
     for renderer in renderers {
         for method in methods {
             if !renderer.supports(method.id()) {

@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use crate::progress::{Note, Progress};
+
 use refract_eval::load_scene_str;
 use refract_scene::Scene;
 
@@ -37,19 +39,27 @@ pub const DATA_SCENES: [(&str, &str); 6] = [
     ),
 ];
 
-/// The embedded scene `name` with its meshes read from `data`, or `None` (after a note on
-/// stderr) when `data/meshes` does not exist.
-pub fn load(name: &str, data: &Path) -> anyhow::Result<Option<Scene>> {
+/// The embedded scene `name` with its meshes read from `data`, or `None` (after a note to
+/// `progress`) when `data/meshes` does not exist.
+pub fn load(name: &str, data: &Path, progress: &dyn Progress) -> crate::Result<Option<Scene>> {
     let Some(&(_, text)) = DATA_SCENES.iter().find(|s| s.0 == name) else {
-        anyhow::bail!("no embedded scene `{name}`");
+        crate::bail!("no embedded scene `{name}`");
     };
-    load_text(name, text, data)
+    load_text(name, text, data, progress)
 }
 
 /// A scene from TOML text whose mesh paths start with `../../shared/data`, read from `data`.
-pub fn load_text(name: &str, text: &str, data: &Path) -> anyhow::Result<Option<Scene>> {
+pub fn load_text(
+    name: &str,
+    text: &str,
+    data: &Path,
+    progress: &dyn Progress,
+) -> crate::Result<Option<Scene>> {
     if text.contains(SCENE_DATA_PREFIX) && !data.join("meshes").is_dir() {
-        eprintln!("note: {}/meshes not found; skipping {name}", data.display());
+        progress.note(Note::Skipped(format!(
+            "{}/meshes not found; skipping {name}",
+            data.display()
+        )));
         return Ok(None);
     }
     let text = text.replace(SCENE_DATA_PREFIX, &data.display().to_string());

@@ -10,8 +10,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Context;
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::error::Context;
 use refract_core::Camera;
 use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::load_scene;
@@ -20,30 +19,33 @@ use refract_scene::{
     Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
 };
 use refract_trace::ReferenceRenderer;
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
 use crate::backends::{self, GpuPolicy};
+use crate::jobs::{Job, JobImages, JobResult};
+use crate::progress::{Note, Progress};
 use crate::timing::time_frames;
 use refract_eval::images::{write_color, write_error_map, write_hdr_script, write_mask};
 
 /// Arguments of `refract sweep`.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct SweepArgs {
     /// The sweep file (TOML, `docs/sweeps.md`).
     pub file: PathBuf,
     /// Run every N-th job starting at job I (`I/N`, `0 ≤ I < N`), e.g.
     /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
-    #[arg(long, value_parser = parse_shard)]
+    #[cfg_attr(feature = "clap", arg(long, value_parser = parse_shard))]
     pub shard: Option<Shard>,
     /// Output directory (jobs/, images/); shards of one sweep may share it or not.
-    #[arg(long, default_value = "sweep-out")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "sweep-out"))]
     pub out: PathBuf,
     /// A directory where reference frames are kept, keyed by everything they depend on, and
     /// shared between shards and runs (default: each shard renders the references it needs).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub cache: Option<PathBuf>,
     /// List the jobs (this shard's) and exit.
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub list: bool,
 }
 
@@ -56,7 +58,8 @@ pub struct Shard {
     pub count: usize,
 }
 
-fn parse_shard(text: &str) -> Result<Shard, String> {
+/// Parses `I/N` (shard `I` of `N`, `0 ≤ I < N ≤ 100000`), as `--shard` takes it.
+pub fn parse_shard(text: &str) -> Result<Shard, String> {
     let err = || format!("`{text}`: expected I/N with 0 ≤ I < N ≤ 100000");
     let (i, n) = text.split_once('/').ok_or_else(err)?;
     let (index, count) = (
@@ -116,80 +119,6 @@ fn yes() -> bool {
     true
 }
 
-/// One job: every input that determines its result.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Job {
-    /// Its position in the sweep's job list.
-    pub index: usize,
-    /// A file-name-safe id made of its inputs (`chart-ior1.2-256-cpu-iterative-seeded-seeds7`).
-    pub id: String,
-    /// The scene as written in the sweep file.
-    pub scene: String,
-    /// The IOR replacing the scene's, if any.
-    pub ior: Option<f32>,
-    /// Square resolution.
-    pub res: u32,
-    /// `cpu` or `gpu`.
-    pub backend: String,
-    /// Method id.
-    pub method: String,
-    /// The swept parameters of this job (the rest are the method's defaults).
-    pub params: BTreeMap<String, String>,
-}
-
-/// A job's recorded outcome (`OUT/jobs/<id>.json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct JobResult {
-    /// The job.
-    pub job: Job,
-    /// `ok` or `error`.
-    pub status: String,
-    /// The error of a failed job.
-    pub error: Option<String>,
-    /// The metrics of a finished job (its `ms_per_frame` is this machine's).
-    pub metrics: Option<MetricsRecord>,
-    /// The job's images, relative to the output directory (when the sweep writes them).
-    pub images: Option<JobImages>,
-}
-
-/// A job's images, paths relative to the output directory.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct JobImages {
-    /// The method's tonemapped colour (PNG).
-    pub color: String,
-    /// Its FLIP map.
-    pub flip: String,
-    /// Its T2-error map.
-    pub t2: String,
-    /// The reference's tonemapped colour.
-    pub reference: String,
-    /// The missed-objects mask (nearby-geometry methods).
-    pub miss: Option<String>,
-    /// The method's linear colour for the exposure control (`images::write_hdr_script`).
-    pub color_hdr: Option<String>,
-    /// The reference's linear colour.
-    pub reference_hdr: Option<String>,
-}
-
-impl JobImages {
-    /// Every file.
-    pub fn files(&self) -> Vec<&str> {
-        let mut files = vec![
-            self.color.as_str(),
-            self.flip.as_str(),
-            self.t2.as_str(),
-            self.reference.as_str(),
-        ];
-        files.extend(
-            [&self.miss, &self.color_hdr, &self.reference_hdr]
-                .into_iter()
-                .flatten()
-                .map(String::as_str),
-        );
-        files
-    }
-}
-
 /// A parsed sweep: its jobs and run settings.
 pub struct Sweep {
     /// Every job, in order.
@@ -229,34 +158,34 @@ fn scene_label(spec: &str) -> String {
 impl Sweep {
     /// Reads and checks a sweep file: every method, backend, parameter and number is checked
     /// here, with errors naming the file and key.
-    pub fn load(path: &Path) -> anyhow::Result<Self> {
+    pub fn load(path: &Path) -> crate::Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read the sweep file", path.display()))?;
         let file: SweepFile = toml::from_str(&text)
             .with_context(|| format!("{}: invalid sweep file", path.display()))?;
         let origin = path.display().to_string();
         let base = path.parent().map(Path::to_owned).unwrap_or_default();
-        anyhow::ensure!(!file.scenes.is_empty(), "{origin}: `scenes` is empty");
-        anyhow::ensure!(!file.methods.is_empty(), "{origin}: `methods` is empty");
+        crate::ensure!(!file.scenes.is_empty(), "{origin}: `scenes` is empty");
+        crate::ensure!(!file.methods.is_empty(), "{origin}: `methods` is empty");
         for &res in &file.res {
-            anyhow::ensure!(
+            crate::ensure!(
                 (1..=8192).contains(&res),
                 "{origin}: res = {res}: expected sizes from 1 to 8192"
             );
         }
         for &ior in &file.ior {
-            anyhow::ensure!(
+            crate::ensure!(
                 ior > 0.0 && ior <= refract_scene::scene::MAX_IOR,
                 "{origin}: ior = {ior}: expected {}",
                 refract_scene::scene::IOR_EXPECTED
             );
         }
-        anyhow::ensure!(
+        crate::ensure!(
             (1..=4096).contains(&file.spp),
             "{origin}: spp = {}: expected 1 to 4096",
             file.spp
         );
-        anyhow::ensure!(
+        crate::ensure!(
             (1..=1000).contains(&file.frames),
             "{origin}: frames = {}: expected 1 to 1000",
             file.frames
@@ -267,15 +196,15 @@ impl Sweep {
             .iter()
             .map(|m| {
                 m.parse()
-                    .map_err(|e| anyhow::anyhow!("{origin}: methods: {e}"))
+                    .map_err(|e| crate::LabError::invalid(format_args!("{origin}: methods: {e}")))
             })
-            .collect::<anyhow::Result<_>>()?;
-        anyhow::ensure!(
+            .collect::<crate::Result<_>>()?;
+        crate::ensure!(
             !methods.contains(&MethodId::Reference),
             "{origin}: methods: the reference is rendered for every job; list the methods to compare with it"
         );
         for name in file.params.keys() {
-            anyhow::ensure!(
+            crate::ensure!(
                 methods
                     .iter()
                     .any(|m| m.info().params.iter().any(|p| p.name == name)),
@@ -406,16 +335,37 @@ struct Prepared {
     reference_images: (String, String),
 }
 
-/// Runs `refract sweep`.
-pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
+/// The jobs of `args.shard` of the sweep file (what `refract sweep --list` prints).
+pub fn shard_jobs(args: &SweepArgs) -> crate::Result<Vec<Job>> {
+    let sweep = Sweep::load(&args.file)?;
+    Ok(sweep.shard(args.shard).into_iter().cloned().collect())
+}
+
+/// What a sweep run did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SweepSummary {
+    /// Jobs of the whole sweep.
+    pub jobs: usize,
+    /// Jobs of this shard.
+    pub in_shard: usize,
+    /// Jobs run and finished now.
+    pub finished: usize,
+    /// Jobs run now that failed (recorded, run again next time).
+    pub failed: usize,
+    /// Jobs skipped as finished before.
+    pub skipped: usize,
+    /// Where the job results are.
+    pub jobs_dir: PathBuf,
+}
+
+/// The stage of the jobs (one step per job run).
+pub const STAGE_JOBS: &str = "jobs";
+
+/// Runs the jobs of `args.shard` that have no result yet, recording each (`OUT/jobs/<id>.json`);
+/// a job that fails or panics is recorded as failed and noted to `progress`.
+pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSummary> {
     let sweep = Sweep::load(&args.file)?;
     let mine = sweep.shard(args.shard);
-    if args.list {
-        for job in &mine {
-            println!("{:>5} {}", job.index, job.id);
-        }
-        return Ok(());
-    }
     let jobs_dir = args.out.join("jobs");
     let images_dir = args.out.join("images");
     for dir in [&jobs_dir, &images_dir] {
@@ -431,18 +381,14 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         .copied()
         .filter(|job| !finished(&jobs_dir, job))
         .collect();
-    eprintln!(
+    progress.note(Note::Info(format!(
         "{}: {} jobs, {} in this shard, {} to run",
         args.file.display(),
         sweep.jobs.len(),
         mine.len(),
         todo.len()
-    );
-    let progress = ProgressBar::new(todo.len() as u64);
-    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
-        progress.set_style(style.progress_chars("=> "));
-    }
-    progress.set_message("jobs");
+    )));
+    progress.start(STAGE_JOBS, todo.len() as u64);
     let mut prepared: HashMap<(String, Option<u32>, u32), Prepared> = HashMap::new();
     let mut renderers: HashMap<String, Box<dyn Renderer>> = HashMap::new();
     let mut prepared_for: HashMap<String, (String, Option<u32>, u32)> = HashMap::new();
@@ -456,6 +402,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
                 &mut prepared,
                 &mut renderers,
                 &mut prepared_for,
+                progress,
             )
         }));
         let result = match outcome {
@@ -484,19 +431,21 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             }
         };
         if let Some(error) = &result.error {
-            progress.suspend(|| eprintln!("job {} failed: {error}", job.id));
+            progress.note(Note::Warning(format!("job {} failed: {error}", job.id)));
         }
         let json = serde_json::to_string_pretty(&result).context("serialising a job result")?;
         write_text_atomically(&jobs_dir.join(format!("{}.json", job.id)), &json)?;
-        progress.inc(1);
+        progress.advance(STAGE_JOBS, 1);
     }
-    progress.finish_and_clear();
-    eprintln!(
-        "done: {ok} finished, {failed} failed (recorded in {}), {} skipped as finished before",
-        jobs_dir.display(),
-        mine.len() - ok - failed
-    );
-    Ok(())
+    progress.finish(STAGE_JOBS);
+    Ok(SweepSummary {
+        jobs: sweep.jobs.len(),
+        in_shard: mine.len(),
+        finished: ok,
+        failed,
+        skipped: mine.len() - ok - failed,
+        jobs_dir,
+    })
 }
 
 fn record_failure(job: &Job, error: String) -> JobResult {
@@ -528,7 +477,7 @@ fn scene_spec(sweep: &Sweep, spec: &str) -> String {
 
 /// The text a reference frame depends on: the scene (its file's text, or the built-in's name),
 /// the IOR, the resolution and the tracer settings.
-fn reference_key(sweep: &Sweep, job: &Job, settings: &MethodParams) -> anyhow::Result<String> {
+fn reference_key(sweep: &Sweep, job: &Job, settings: &MethodParams) -> crate::Result<String> {
     let spec = scene_spec(sweep, &job.scene);
     let scene_text = if spec.ends_with(".toml") {
         std::fs::read_to_string(&spec).with_context(|| format!("{spec}: cannot read"))?
@@ -552,7 +501,8 @@ fn run_job(
     prepared: &mut HashMap<(String, Option<u32>, u32), Prepared>,
     renderers: &mut HashMap<String, Box<dyn Renderer>>,
     prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
-) -> anyhow::Result<(MetricsRecord, Option<JobImages>)> {
+    progress: &dyn Progress,
+) -> crate::Result<(MetricsRecord, Option<JobImages>)> {
     let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
     let settings = MethodParams::Reference(TraceSettings {
         spp: sweep.spp,
@@ -619,7 +569,7 @@ fn run_job(
     };
     let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
     if !renderers.contains_key(&job.backend) {
-        let mut opened = backends::open(&[backend], GpuPolicy::Required)?;
+        let mut opened = backends::open(&[backend], GpuPolicy::Required, progress)?;
         renderers.insert(job.backend.clone(), opened.remove(0));
     }
     let Some(renderer) = renderers.get_mut(&job.backend) else {
@@ -634,7 +584,7 @@ fn run_job(
     for (name, value) in &job.params {
         method.set(name, value, "sweep job")?;
     }
-    anyhow::ensure!(
+    crate::ensure!(
         renderer.supports(id),
         "the {backend} backend does not support {id}"
     );
@@ -673,7 +623,7 @@ fn run_job(
         w,
         h,
         &maps.t2_deg,
-        crate::compare::T2_SCALE_DEG,
+        refract_eval::images::T2_SCALE_DEG,
     )?;
     if let Some(hdr) = &images.color_hdr {
         write_hdr_script(&args.out.join(hdr), hdr, w, h, &frame.color)?;
@@ -683,7 +633,7 @@ fn run_job(
             &args.out.join(miss),
             w,
             h,
-            &crate::compare::missed_geometry(&p.truth, &frame),
+            &refract_eval::metrics::missed_geometry(&p.truth, &frame),
             &frame.color,
         )?;
     }
@@ -694,7 +644,7 @@ fn run_job(
 mod tests {
     use super::*;
 
-    fn sweep(text: &str) -> anyhow::Result<Sweep> {
+    fn sweep(text: &str) -> crate::Result<Sweep> {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("s.toml");
         std::fs::write(&path, text).expect("write");

@@ -4,12 +4,13 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::Context;
+use crate::error::Context;
 use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::metrics::MetricsRecord;
 
-use crate::compare::{CompareOptions, P2_SCALE, T2_SCALE_DEG};
-use crate::sweep::{Job, JobImages, JobResult};
+use refract_eval::images::{P2_SCALE, T2_SCALE_DEG};
+
+use crate::jobs::{CompareOptions, Job, JobImages, JobResult};
 
 /// The images of one method on one backend.
 pub struct MethodImages {
@@ -29,7 +30,7 @@ pub struct SceneImages {
     pub methods: Vec<MethodImages>,
 }
 
-fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
+fn write_atomically(path: &Path, text: &str) -> crate::Result<()> {
     Ok(write_text_atomically(path, text)?)
 }
 
@@ -135,7 +136,7 @@ pub fn write_reports(
     records: &[MetricsRecord],
     scenes: &[SceneImages],
     options: &CompareOptions,
-) -> anyhow::Result<()> {
+) -> crate::Result<()> {
     let json = serde_json::to_string_pretty(records).context("serialising metrics")?;
     write_atomically(&out.join("metrics.json"), &json)?;
 

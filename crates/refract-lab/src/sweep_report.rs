@@ -7,22 +7,23 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use crate::error::Context;
 use plotters::prelude::*;
 use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::{MethodId, REGISTRY};
 
-use crate::sweep::JobResult;
+use crate::jobs::JobResult;
 
 /// Arguments of `refract report`.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ReportArgs {
     /// Sweep output directories (each with `jobs/`), e.g. one per shard.
-    #[arg(required = true)]
+    #[cfg_attr(feature = "clap", arg(required = true))]
     pub dirs: Vec<PathBuf>,
     /// Where the merged report goes.
-    #[arg(long, default_value = "report")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "report"))]
     pub out: PathBuf,
 }
 
@@ -34,7 +35,7 @@ const REPORT_JS: &str = include_str!("../assets/report.js");
 /// Every job result under `dirs`, one per job id (a successful result wins over a failed one;
 /// among equals the later directory wins), in job order. Image paths are made relative to
 /// the merged report by copying the images into `out/images`.
-pub fn merge(dirs: &[PathBuf]) -> anyhow::Result<Vec<(JobResult, PathBuf)>> {
+pub fn merge(dirs: &[PathBuf]) -> crate::Result<Vec<(JobResult, PathBuf)>> {
     let mut by_id: BTreeMap<String, (JobResult, PathBuf)> = BTreeMap::new();
     for dir in dirs {
         let jobs = dir.join("jobs");
@@ -62,10 +63,24 @@ pub fn merge(dirs: &[PathBuf]) -> anyhow::Result<Vec<(JobResult, PathBuf)>> {
     Ok(results)
 }
 
-/// Runs `refract report`.
-pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
+/// What `refract report` wrote.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReportSummary {
+    /// Job results gathered.
+    pub jobs: usize,
+    /// Of which failed.
+    pub failed: usize,
+    /// Plots written.
+    pub plots: usize,
+    /// The output directory (`index.html`, `report.md`, `results.json`).
+    pub out: PathBuf,
+}
+
+/// Gathers the job results under `args.dirs` (shards) into `args.out`: their images,
+/// `results.json`, the plots, `report.md` and the interactive `index.html`.
+pub fn run(args: &ReportArgs) -> crate::Result<ReportSummary> {
     let results = merge(&args.dirs)?;
-    anyhow::ensure!(
+    crate::ensure!(
         !results.is_empty(),
         "no job results under {}",
         args.dirs
@@ -98,20 +113,18 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
     )?;
     let plots = write_html(&args.out, &results)?;
     write_text_atomically(&args.out.join("report.md"), &markdown(&results, &plots))?;
-    let failed = results.iter().filter(|r| r.status != "ok").count();
-    println!(
-        "{} jobs ({failed} failed) -> {}/index.html, report.md, results.json, {} plots",
-        results.len(),
-        args.out.display(),
-        plots.len()
-    );
-    Ok(())
+    Ok(ReportSummary {
+        jobs: results.len(),
+        failed: results.iter().filter(|r| r.status != "ok").count(),
+        plots: plots.len(),
+        out: args.out.clone(),
+    })
 }
 
 /// Writes the plots, the scripts and the interactive `index.html` of `results` into `out`
 /// (whose `images/` or scene directories hold the images the results name); returns the plots
 /// as `(file, title)`.
-pub fn write_html(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String, String)>> {
+pub fn write_html(out: &Path, results: &[JobResult]) -> crate::Result<Vec<(String, String)>> {
     let plots = write_plots(out, results)?;
     write_text_atomically(&out.join("img-comparison-slider.js"), SLIDER_JS)?;
     write_text_atomically(&out.join("report.js"), REPORT_JS)?;
@@ -295,7 +308,7 @@ fn plot(
     y_label: &str,
     series: &[Series],
     lines: bool,
-) -> anyhow::Result<()> {
+) -> crate::Result<()> {
     let points = series.iter().flat_map(|s| s.points.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in points {
@@ -351,12 +364,17 @@ fn plot(
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
+    draw().map_err(|e| {
+        crate::LabError::invalid(format_args!(
+            "{}: cannot draw the plot: {e}",
+            path.display()
+        ))
+    })
 }
 
 /// The plots the results support: an axis with at least two values gets its plot. Returns
 /// `(file, title)` pairs.
-fn write_plots(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String, String)>> {
+fn write_plots(out: &Path, results: &[JobResult]) -> crate::Result<Vec<(String, String)>> {
     let distinct = |f: &dyn Fn(&JobResult) -> Option<String>| {
         let mut values: Vec<String> = results.iter().filter_map(f).collect();
         values.sort();
@@ -371,7 +389,7 @@ fn write_plots(out: &Path, results: &[JobResult]) -> anyhow::Result<Vec<(String,
         }
         plot(&out.join(file), title, x, y, &s, lines)?;
         plots.push((file.to_owned(), title.to_owned()));
-        anyhow::Ok(())
+        Ok::<(), crate::LabError>(())
     };
     if distinct(&|r| r.job.ior.map(|i| i.to_string())) >= 2 {
         add(
@@ -469,7 +487,7 @@ fn html(
     results: &[JobResult],
     plots: &[(String, String)],
     all_images: bool,
-) -> anyhow::Result<String> {
+) -> crate::Result<String> {
     let cols = columns();
     let mut h = String::new();
     let _ = write!(

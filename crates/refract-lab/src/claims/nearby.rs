@@ -10,13 +10,14 @@ use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene};
 
 use super::{Bench, Claim, ClaimsArgs, claim_rows, value};
 use crate::data_scenes;
+use crate::progress::Progress;
 
 /// The resolution of the feature-size claim (§4.3: "at 512² resolutions").
 const FEATURE_RES: u32 = 512;
 /// The IOR sweep of Fig. 11.
 const IORS: [f32; 4] = [1.05, 1.1, 1.2, 1.4];
 
-fn with(id: MethodId, settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
+fn with(id: MethodId, settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     let mut params = MethodParams::defaults(id);
     for (name, v) in settings {
         params.set(name, v, "claims")?;
@@ -44,10 +45,14 @@ fn pct(v: Option<f64>) -> String {
 }
 
 /// The scenes of the lookups' claims: `chart`, and `sphere-igea`, `igea-bunny` with the data.
-fn lookup_scenes(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<Vec<Scene>> {
+fn lookup_scenes(
+    args: &ClaimsArgs,
+    notes: &mut Vec<String>,
+    progress: &dyn Progress,
+) -> crate::Result<Vec<Scene>> {
     let mut scenes = vec![load_scene("chart")?.scene];
     for name in ["sphere-igea", "igea-bunny"] {
-        match data_scenes::load(name, &args.data)? {
+        match data_scenes::load(name, &args.data, progress)? {
             Some(scene) => scenes.push(scene),
             None => notes.push(format!(
                 "{name}: the shared meshes are missing; its rows are skipped."
@@ -58,7 +63,7 @@ fn lookup_scenes(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<V
 }
 
 /// Measures the claims and returns the markdown section.
-pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
+pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
     let mut bench = Bench::new();
     let mut notes = Vec::new();
     let mut claims = vec![
@@ -76,7 +81,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         },
     ];
     let mut spacing_rows = Vec::new();
-    for scene in lookup_scenes(args, &mut notes)? {
+    for scene in lookup_scenes(args, &mut notes, progress)? {
         let truth = bench.truth(scene, args.res)?;
         let name = truth.scene.name.clone();
         if name == "chart" {
@@ -138,7 +143,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     }
 
     // Fig. 9 and Fig. 12 on the statue (igea) before the bunny at 512².
-    let statue = data_scenes::load("igea-bunny", &args.data)?;
+    let statue = data_scenes::load("igea-bunny", &args.data, progress)?;
     let mut feature_rows = Vec::new();
     let mut fig12 = None;
     if let Some(scene) = statue {
@@ -157,7 +162,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     // Fig. 11: the IOR sweep on igea before the bunny.
     let mut sweep = Vec::new();
     for ior in IORS {
-        let Some(mut scene) = data_scenes::load("igea-bunny", &args.data)? else {
+        let Some(mut scene) = data_scenes::load("igea-bunny", &args.data, progress)? else {
             break;
         };
         scene.refractor.set_ior(ior)?;

@@ -2,54 +2,83 @@
 //! with images, error maps, `metrics.json`, `report.md` and `index.html`.
 
 use refract_eval::FrameFiles;
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Context;
-use indicatif::{ProgressBar, ProgressStyle};
-use refract_eval::load_scene;
+use crate::error::Context;
+use refract_core::TirPolicy;
 use refract_eval::metrics::{MetricsRecord, evaluate_method, reference_record};
-use refract_scene::{Aov, BackendId, Frame, FrameOutputs, MethodParams, Renderer, TraceSettings};
+use refract_eval::{BUILTIN_SCENES, load_scene};
+use refract_scene::{
+    Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceSettings,
+};
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
+use crate::jobs::CompareOptions;
+use crate::progress::{Note, Progress};
 use crate::report::{MethodImages, SceneImages, write_reports};
 use crate::timing::time_frames;
-use refract_eval::images::{write_color, write_error_map, write_hdr_script, write_mask};
+use refract_eval::images::{
+    P2_SCALE, T2_SCALE_DEG, write_color, write_error_map, write_hdr_script, write_mask,
+};
 
-/// What to compare.
-pub struct CompareOptions {
-    /// Backends.
-    pub backends: Vec<BackendId>,
-    /// What a missing adapter means.
-    pub gpu_policy: GpuPolicy,
-    /// Scene names or files.
-    pub scenes: Vec<String>,
-    /// Methods with their parameters.
-    pub methods: Vec<MethodParams>,
-    /// Square resolution.
-    pub res: u32,
-    /// Reference samples per pixel.
-    pub spp: u32,
-    /// Timed frames per method (after 2 warm-up frames).
-    pub frames: u32,
-    /// Output directory.
-    pub out: PathBuf,
-}
-
-pub use refract_eval::images::{P2_SCALE, T2_SCALE_DEG};
-
-fn bar(len: u64, message: &str) -> ProgressBar {
-    let bar = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
-        bar.set_style(style.progress_chars("=> "));
+/// The parameters of `ids` with the exit TIR policy `tir` and every `(name, value)` of
+/// `assignments` applied to the methods that have that parameter (`origin` names where they
+/// came from in errors); a parameter none of the methods has is an error.
+pub fn method_params(
+    ids: &[MethodId],
+    tir: TirPolicy,
+    assignments: &[(&str, &str)],
+    origin: &str,
+) -> crate::Result<Vec<MethodParams>> {
+    let mut methods: Vec<MethodParams> = ids
+        .iter()
+        .map(|&id| MethodParams::defaults(id).with_tir_policy(tir))
+        .collect();
+    for &(name, value) in assignments {
+        let mut used = false;
+        for method in &mut methods {
+            if method.get(name).is_some() {
+                method.set(name, value, origin)?;
+                used = true;
+            }
+        }
+        crate::ensure!(
+            used,
+            "{origin} {name}={value}: none of the selected methods has a parameter `{name}` (see `refract methods`)"
+        );
     }
-    bar.set_message(message.to_owned());
-    bar
+    Ok(methods)
 }
 
-/// Runs the comparison and writes everything into `options.out`; returns the records.
-pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
+/// The default job (`cargo run --release`, `refract` without a command): every method but the
+/// reference on both backends (the CPU only without an adapter) on every built-in scene at
+/// 512², 1 reference sample per pixel, 5 timed frames, into `out/`.
+pub fn default_options() -> crate::Result<CompareOptions> {
+    let ids: Vec<MethodId> = MethodId::approximations().collect();
+    Ok(CompareOptions {
+        backends: vec![BackendId::Cpu, BackendId::Gpu],
+        gpu_policy: GpuPolicy::IfAvailable,
+        scenes: BUILTIN_SCENES.iter().map(|s| s.0.to_owned()).collect(),
+        methods: method_params(&ids, TirPolicy::ClampToCritical, &[], "default job")?,
+        res: 512,
+        spp: 1,
+        frames: 5,
+        out: PathBuf::from("out"),
+    })
+}
+
+/// The stage of the reference renders (one step per scene).
+pub const STAGE_REFERENCE: &str = "reference";
+/// The stage of the method frames (one step per scene, method and backend).
+pub const STAGE_METHODS: &str = "methods";
+
+/// Runs the comparison and writes everything into `options.out`; returns the records (the
+/// reference's row, then one per method and backend, per scene). Scene warnings and skipped
+/// (method, scene) pairs go to `progress` as notes.
+pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<Vec<MetricsRecord>> {
     crate::memory::check(
         "this comparison",
         options.res,
@@ -57,7 +86,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         crate::memory::COMPARE_BYTES_PER_PIXEL,
         &options.backends,
     )?;
-    crate::cleanup::create_dir(&options.out).with_context(|| {
+    crate::output_dirs::create_dir(&options.out).with_context(|| {
         format!(
             "{}: cannot create the output directory",
             options.out.display()
@@ -67,11 +96,11 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
     for spec in &options.scenes {
         let loaded = load_scene(spec)?;
         for warning in &loaded.warnings {
-            eprintln!("warning: {warning}");
+            progress.note(Note::Warning(warning.clone()));
         }
         scenes.push(Arc::new(loaded.scene));
     }
-    let mut renderers = backends::open(&options.backends, options.gpu_policy)?;
+    let mut renderers = backends::open(&options.backends, options.gpu_policy, progress)?;
     backends::check_supported(&renderers, &options.methods)?;
     let mut reference = ReferenceRenderer::new();
     let settings = MethodParams::Reference(TraceSettings {
@@ -79,10 +108,10 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         ..TraceSettings::default()
     });
 
-    let references = bar(scenes.len() as u64, "reference");
-    let progress = bar(
+    progress.start(STAGE_REFERENCE, scenes.len() as u64);
+    progress.start(
+        STAGE_METHODS,
         (scenes.len() * options.methods.len() * renderers.len()) as u64,
-        "methods",
     );
     let mut records = Vec::new();
     let mut scene_images = Vec::new();
@@ -90,14 +119,14 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
     for scene in &scenes {
         let camera = scene.camera(w, h)?;
         let dir = options.out.join(&scene.name);
-        crate::cleanup::create_dir(&dir)
+        crate::output_dirs::create_dir(&dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
 
         reference.prepare(scene)?;
         let mut truth = Frame::default();
         let timing =
             reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
-        references.inc(1);
+        progress.advance(STAGE_REFERENCE, 1);
         write_color(&dir.join("reference.png"), w, h, &truth.color)?;
         let key = format!("{}/reference.hdr.js", scene.name);
         write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
@@ -120,8 +149,8 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
         }
         for method in &options.methods {
             if let Err(reason) = refract_scene::scene_support(method.id(), scene) {
-                eprintln!("note: {reason}: skipped");
-                progress.inc(renderers.len() as u64);
+                progress.note(Note::Skipped(format!("{reason}: skipped")));
+                progress.advance(STAGE_METHODS, renderers.len() as u64);
                 continue;
             }
             for renderer in &mut renderers {
@@ -144,7 +173,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                         &dir.join(format!("miss-{stem}.png")),
                         w,
                         h,
-                        &missed_geometry(&truth, &frame),
+                        &refract_eval::metrics::missed_geometry(&truth, &frame),
                         &frame.color,
                     )?;
                 }
@@ -194,7 +223,7 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
                     has_p2,
                     has_miss,
                 });
-                progress.inc(1);
+                progress.advance(STAGE_METHODS, 1);
             }
         }
         scene_images.push(SceneImages {
@@ -202,22 +231,10 @@ pub fn run(options: &CompareOptions) -> anyhow::Result<Vec<MetricsRecord>> {
             methods: images,
         });
     }
-    references.finish_and_clear();
-    progress.finish_and_clear();
+    progress.finish(STAGE_REFERENCE);
+    progress.finish(STAGE_METHODS);
     write_reports(&options.out, &records, &scene_images, options)?;
     Ok(records)
-}
-
-/// Pixels where the reference's path meets an opaque object and the method's lookup found none
-/// (Wyman 2005b Fig. 6, 8: "rays completely miss the dragon").
-pub(crate) fn missed_geometry(truth: &Frame, frame: &Frame) -> Vec<bool> {
-    let (Some(t), Some(o)) = (truth.vec3(Aov::PGeom), frame.vec3(Aov::PGeom)) else {
-        return vec![false; frame.pixel_count()];
-    };
-    let covered = frame.flag(Aov::Covered);
-    (0..frame.pixel_count())
-        .map(|i| covered.is_some_and(|c| c[i]) && !t[i].is_nan() && o[i].is_nan())
-        .collect()
 }
 
 /// The frame's TIR flags (all false when it has no `tir` layer).
@@ -227,12 +244,14 @@ fn tir_mask(frame: &Frame) -> Vec<bool> {
         .map_or_else(|| vec![false; frame.pixel_count()], <[bool]>::to_vec)
 }
 
-/// The summary table printed at the end.
-pub fn print_summary(records: &[MetricsRecord], out: &Path) {
+/// The summary table of a comparison (what `refract compare` prints at the end).
+pub fn summary(records: &[MetricsRecord], out: &Path) -> String {
+    let mut text = String::new();
     let f = |v: Option<f64>, digits: usize| {
         v.map_or_else(|| "-".to_owned(), |v| format!("{v:.digits$}"))
     };
-    println!(
+    let _ = writeln!(
+        text,
         "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
         "scene",
         "method",
@@ -246,7 +265,8 @@ pub fn print_summary(records: &[MetricsRecord], out: &Path) {
         "ms/frame"
     );
     for r in records {
-        println!(
+        let _ = writeln!(
+            text,
             "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
             r.scene,
             r.method,
@@ -260,11 +280,14 @@ pub fn print_summary(records: &[MetricsRecord], out: &Path) {
             f(r.ms_per_frame, 1)
         );
     }
-    println!(
+    let _ = writeln!(
+        text,
         "\nrefractor pixels only; T2 and P2 at the first exit, without TIR there (docs/metrics.md)"
     );
-    println!(
+    let _ = writeln!(
+        text,
         "\nwrote {}/index.html, report.md and metrics.json",
         out.display()
     );
+    text
 }

@@ -12,12 +12,13 @@ use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene
 
 use super::{Bench, Claim, ClaimsArgs, claim_rows, less, value};
 use crate::data_scenes;
+use crate::progress::Progress;
 use crate::timing::time_frames;
 
 /// The chapter's setting (§17.4): 800 × 600, 3 layers of 6 × 512², depth 2.
 const CHAPTER_SIZE: (u32, u32) = (800, 600);
 
-fn dm(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
+fn dm(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     let mut params = MethodParams::defaults(MethodId::DistanceMap);
     for (name, v) in settings {
         params.set(name, v, "claims")?;
@@ -26,9 +27,13 @@ fn dm(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
 }
 
 /// The room scenes: `mirror-room` (built in) and `teapot-box` with the shared data.
-fn rooms(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<Vec<Scene>> {
+fn rooms(
+    args: &ClaimsArgs,
+    notes: &mut Vec<String>,
+    progress: &dyn Progress,
+) -> crate::Result<Vec<Scene>> {
     let mut scenes = vec![load_scene("mirror-room")?.scene];
-    match data_scenes::load("teapot-box", &args.data)? {
+    match data_scenes::load("teapot-box", &args.data, progress)? {
         Some(scene) => scenes.push(scene),
         None => {
             notes.push("teapot-box: the shared meshes are missing; its rows are skipped.".into())
@@ -38,7 +43,7 @@ fn rooms(args: &ClaimsArgs, notes: &mut Vec<String>) -> anyhow::Result<Vec<Scene
 }
 
 /// Measures the claims and returns the markdown section.
-pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
+pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
     let mut bench = Bench::new();
     let mut notes = Vec::new();
     let mut claims = vec![
@@ -61,7 +66,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
     ];
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
-    for scene in rooms(args, &mut notes)? {
+    for scene in rooms(args, &mut notes, progress)? {
         let t = bench.truth_with(Arc::new(scene), args.res, TraceMode::Transmission)?;
         let name = t.scene.name.clone();
         let mut flips = Vec::new();

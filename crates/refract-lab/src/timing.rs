@@ -16,14 +16,14 @@ pub struct FrameTimes {
 pub fn time_frames(
     warm_up: u32,
     frames: u32,
-    mut frame: impl FnMut() -> anyhow::Result<f64>,
-) -> anyhow::Result<FrameTimes> {
+    mut frame: impl FnMut() -> crate::Result<f64>,
+) -> crate::Result<FrameTimes> {
     for _ in 0..warm_up {
         frame()?;
     }
     let mut times = (0..frames.max(1))
         .map(|_| frame())
-        .collect::<anyhow::Result<Vec<f64>>>()?;
+        .collect::<crate::Result<Vec<f64>>>()?;
     times.sort_by(f64::total_cmp);
     Ok(FrameTimes {
         median: times[times.len() / 2],

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Context;
+use crate::error::Context;
 use refract_core::Camera;
 use refract_cpu::CpuRenderer;
 use refract_eval::atomic_write::write_text_atomically;
@@ -17,6 +17,7 @@ use refract_scene::{
 };
 use refract_trace::ReferenceRenderer;
 
+use crate::progress::Progress;
 use crate::timing::time_frames;
 
 mod distance_map;
@@ -24,17 +25,18 @@ mod nearby;
 mod pvrr;
 
 /// Arguments of `refract claims`.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ClaimsArgs {
     /// Square resolution of the error measurements.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=2048))]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=2048)))]
     pub res: u32,
     /// Where the shared meshes are (`meshes/cow.obj`); scenes whose mesh is missing are skipped
     /// with a note in the file.
-    #[arg(long, default_value = "../shared/data")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "../shared/data"))]
     pub data: PathBuf,
     /// The file to write.
-    #[arg(long, default_value = "docs/claims.md")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "docs/claims.md"))]
     pub out: PathBuf,
 }
 
@@ -66,7 +68,7 @@ fn less(a: Option<f64>, b: Option<f64>) -> bool {
 
 /// The scenes of the claims: the paper's sphere (IOR 1.5) and, when the data exists, its cow
 /// (IOR 1.2, Wyman 2005a's results).
-fn scenes(data: &Path) -> anyhow::Result<(Vec<Arc<Scene>>, Vec<String>)> {
+fn scenes(data: &Path) -> crate::Result<(Vec<Arc<Scene>>, Vec<String>)> {
     let mut scenes = vec![Arc::new(load_scene("sphere")?.scene)];
     let mut notes = Vec::new();
     let cow = data.join("meshes/cow.obj");
@@ -86,8 +88,9 @@ fn scenes(data: &Path) -> anyhow::Result<(Vec<Arc<Scene>>, Vec<String>)> {
     Ok((scenes, notes))
 }
 
-/// Runs `refract claims`.
-pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
+/// Measures every claim, writes `args.out` (docs/claims.md) and returns its text; scenes left
+/// out for want of `args.data` go to `progress`.
+pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
     let (scenes, notes) = scenes(&args.data)?;
     let mut measured = Vec::new();
     let mut cpu = CpuRenderer::new();
@@ -144,16 +147,15 @@ pub fn run(args: &ClaimsArgs) -> anyhow::Result<()> {
         });
     }
     let mut md = document(args, &measured, &notes, cow_fps);
-    md.push_str(&nearby::section(args)?);
-    md.push_str(&distance_map::section(args)?);
+    md.push_str(&nearby::section(args, progress)?);
+    md.push_str(&distance_map::section(args, progress)?);
     md.push_str(&pvrr::section(args)?);
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        crate::cleanup::create_dir(dir)
+        crate::output_dirs::create_dir(dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
     }
     write_text_atomically(&args.out, &md)?;
-    println!("{md}");
-    Ok(())
+    Ok(md)
 }
 
 /// The CPU backend and the reference, for the sections that measure methods per scene.
@@ -178,7 +180,7 @@ impl Bench {
     }
 
     /// The reference (default settings) of `scene` at `res`², the CPU prepared for it.
-    pub fn truth(&mut self, scene: Scene, res: u32) -> anyhow::Result<Truth> {
+    pub fn truth(&mut self, scene: Scene, res: u32) -> crate::Result<Truth> {
         self.truth_with(Arc::new(scene), res, TraceMode::Transmission)
     }
 
@@ -188,7 +190,7 @@ impl Bench {
         scene: Arc<Scene>,
         res: u32,
         mode: TraceMode,
-    ) -> anyhow::Result<Truth> {
+    ) -> crate::Result<Truth> {
         let camera = scene.camera(res, res)?;
         self.reference.prepare(&scene)?;
         let mut frame = Frame::default();
@@ -215,7 +217,7 @@ impl Bench {
         &mut self,
         truth: &Truth,
         params: &MethodParams,
-    ) -> anyhow::Result<(Frame, MetricsRecord)> {
+    ) -> crate::Result<(Frame, MetricsRecord)> {
         let mut frame = Frame::default();
         self.cpu.render(
             &truth.camera,

@@ -24,7 +24,7 @@ use refract_scene::{
 use super::{Bench, Claim, ClaimsArgs, Truth, claim_rows, less, value};
 use crate::timing::time_frames;
 
-fn pvrr(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
+fn pvrr(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     let mut params = MethodParams::defaults(MethodId::Pvrr);
     for (name, v) in settings {
         params.set(name, v, "claims")?;
@@ -34,7 +34,7 @@ fn pvrr(settings: &[(&str, &str)]) -> anyhow::Result<MethodParams> {
 
 /// `convex-mirror` with its mirror a patch of signed radius `radius` and `n × n` vertices
 /// (placed as the built-in one: turned 30°).
-fn with_mirror(radius: f32, n: u32) -> anyhow::Result<Scene> {
+fn with_mirror(radius: f32, n: u32) -> crate::Result<Scene> {
     let mut mesh = shapes::mirror_patch(refract_geometry::builtin::MIRROR_SIZE, radius, n, 0..n)?;
     let mut scene = load_scene("convex-mirror")?.scene;
     mesh.transform(&Affine3A::from_rotation_y(30f32.to_radians()));
@@ -45,7 +45,7 @@ fn with_mirror(radius: f32, n: u32) -> anyhow::Result<Scene> {
 }
 
 /// `spectacles` with the biconvex lens built with `rings` rings (placed as the built-in one).
-fn with_lens(rings: u32) -> anyhow::Result<Scene> {
+fn with_lens(rings: u32) -> crate::Result<Scene> {
     let mut scene = load_scene("spectacles")?.scene;
     let mut mesh = LensDesc {
         rings,
@@ -148,7 +148,7 @@ fn mean_abs(a: &Frame, b: &Frame, pixels: impl Iterator<Item = usize>) -> Option
 }
 
 /// Measures the claims and returns the markdown section.
-pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
+pub fn section(args: &ClaimsArgs) -> crate::Result<String> {
     let mut bench = Bench::new();
     let res = args.res;
     let mut claims = vec![
@@ -380,7 +380,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
             }
         }
     }
-    let composed = composed.ok_or_else(|| anyhow::anyhow!("no reference"))?;
+    let composed = composed.ok_or_else(|| crate::LabError::invalid("no reference"))?;
     let composed = Truth {
         scene: Arc::new(base),
         ..composed
@@ -423,7 +423,7 @@ pub fn section(args: &ClaimsArgs) -> anyhow::Result<String> {
         fps.push(1e3 / times.median);
     }
     let MethodParams::Pvrr(p) = pvrr(&[])? else {
-        anyhow::bail!("pvrr parameters expected");
+        crate::bail!("pvrr parameters expected");
     };
     let mut planner = PvrrPlanner::default();
     planner.prepare(&scene);

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Context;
+use crate::error::Context;
 use refract_core::Camera;
 use refract_core::exit::TirPolicy;
 use refract_eval::atomic_write::write_text_atomically;
@@ -21,49 +21,61 @@ use serde::Serialize;
 
 use crate::backends::{self, GpuPolicy};
 use crate::data_scenes;
+use crate::progress::{Note, Progress};
 use crate::timing::{FrameTimes, time_frames};
 
 /// Arguments of `refract bench`.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct BenchArgs {
     /// Comma-separated models: sphere (built-in), cow, teapot, bunny, horse (from --data).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "sphere,cow,teapot,bunny,horse"
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_delimiter = ',',
+            default_value = "sphere,cow,teapot,bunny,horse"
+        )
     )]
     pub scenes: Vec<String>,
     /// Comma-separated methods (Table 1 has wyman = 2-sided and single = 1-sided).
-    #[arg(long, value_delimiter = ',', default_value = "wyman,single")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_delimiter = ',', default_value = "wyman,single")
+    )]
     pub methods: Vec<MethodId>,
     /// Comma-separated backends: cpu, gpu (gpu is skipped with a notice without an adapter).
-    #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_delimiter = ',', default_value = "cpu,gpu")
+    )]
     pub backends: Vec<String>,
     /// Square resolution (Table 1: 1024).
-    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=8192))]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=8192)))]
     pub res: u32,
     /// Timed frames per method (median reported; at least 20 for the table).
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000)))]
     pub frames: u32,
     /// Where the meshes are (`meshes/cow.obj`, ...).
-    #[arg(long, default_value = "../shared/data")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "../shared/data"))]
     pub data: PathBuf,
     /// Output directory for bench.json and bench.md.
-    #[arg(long, default_value = "out")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "out"))]
     pub out: PathBuf,
     /// A small run for smoke tests: 128², 3 frames, sphere and cow only (`--table nearby`:
     /// 64² and 128², the sphere row only).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub quick: bool,
     /// Which table: `image-space` (Wyman 2005a Table 1) or `nearby` (Wyman 2005b Table 1:
     /// `iterative-seeded` on the paper's four scenes, our models mapped by size, at 1024² and
     /// 512²; `--scenes`, `--methods` and `--res` do not apply).
-    #[arg(long, value_enum, default_value_t = Table::ImageSpace)]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = Table::ImageSpace))]
     pub table: Table,
 }
 
 /// The tables `refract bench` reproduces.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Table {
     /// Wyman 2005a Table 1.
     ImageSpace,
@@ -109,10 +121,14 @@ const MODELS: [(&str, &str, f32); 5] = [
     ("horse", "horse.obj", 1.2),
 ];
 
-fn load_model(name: &str, data: &std::path::Path) -> anyhow::Result<Option<(Mesh, f32)>> {
+fn load_model(
+    name: &str,
+    data: &std::path::Path,
+    progress: &dyn Progress,
+) -> crate::Result<Option<(Mesh, f32)>> {
     let Some(&(_, file, ior)) = MODELS.iter().find(|m| m.0 == name) else {
         let names: Vec<&str> = MODELS.iter().map(|m| m.0).collect();
-        anyhow::bail!(
+        crate::bail!(
             "--scenes: unknown model `{name}`; expected one of {}",
             names.join(", ")
         );
@@ -122,7 +138,10 @@ fn load_model(name: &str, data: &std::path::Path) -> anyhow::Result<Option<(Mesh
     }
     let path = data.join("meshes").join(file);
     if !path.is_file() {
-        eprintln!("note: {} not found; skipping {name}", path.display());
+        progress.note(Note::Skipped(format!(
+            "{} not found; skipping {name}",
+            path.display()
+        )));
         return Ok(None);
     }
     Ok(Some((load_mesh(&path, &LoadOptions::default())?.mesh, ior)))
@@ -153,25 +172,25 @@ fn triangles(scene: &refract_scene::Scene) -> usize {
 }
 
 /// Runs Wyman 2005b Table 1.
-fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
+fn run_nearby(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     let (resolutions, frames, rows) = if args.quick {
         (vec![64, 128], 3, &NEARBY_PAPER[..1])
     } else {
         (vec![1024, 512], args.frames, &NEARBY_PAPER[..])
     };
-    crate::cleanup::create_dir(&args.out)
+    crate::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
     let method = MethodParams::defaults(MethodId::IterativeSeeded);
     let backend_ids = backends::parse_backends(&args.backends)?;
-    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable, progress)?;
     backends::check_supported(&renderers, std::slice::from_ref(&method))?;
     let mut records = Vec::new();
     let mut frame = Frame::default();
     for &(_, name, _, _) in rows {
         let loaded = if name == "sphere-plane" {
-            data_scenes::load_text(name, SPHERE_PLANE, &args.data)?
+            data_scenes::load_text(name, SPHERE_PLANE, &args.data, progress)?
         } else {
-            data_scenes::load(name, &args.data)?
+            data_scenes::load(name, &args.data, progress)?
         };
         let Some(scene) = loaded else { continue };
         let scene = Arc::new(scene);
@@ -184,10 +203,10 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
             for renderer in &mut renderers {
                 let record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
                     .record(name, triangles);
-                println!(
+                progress.note(Note::Row(format!(
                     "{:<13} {:>7} tris {:<4} {:>5}² {:>9.2} ms  {:>7.1} fps",
                     name, triangles, record.backend, res, record.ms_median, record.fps
-                );
+                )));
                 records.push(record);
             }
         }
@@ -196,8 +215,7 @@ fn run_nearby(args: &BenchArgs) -> anyhow::Result<()> {
     write(&args.out.join("bench-nearby.json"), &json)?;
     let md = nearby_table(&records, &resolutions, frames, &method);
     write(&args.out.join("bench-nearby.md"), &md)?;
-    println!("\n{md}");
-    Ok(())
+    Ok(md)
 }
 
 /// The chapter's figures (§17.4, GeForce 8800 GTX, 800 × 600, 3 layers of 6 × 512² rebuilt
@@ -207,22 +225,22 @@ const DISTANCE_MAP_PAPER: [(&str, f64); 2] = [("off", 25.0), ("on", 50.0)];
 /// Runs the distance-map row: the chapter's setting (`--quick`: 160 × 120, 64² faces, 3
 /// frames) on `teapot-box` (the copper teapot in the room; `mirror-room` without the shared
 /// data), min-max off and on, every backend.
-fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
+fn run_distance_map(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     let ((width, height), face, frames) = if args.quick {
         ((160, 120), 64, 3)
     } else {
         ((800, 600), 512, args.frames)
     };
-    crate::cleanup::create_dir(&args.out)
+    crate::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
-    let scene = match data_scenes::load("teapot-box", &args.data)? {
+    let scene = match data_scenes::load("teapot-box", &args.data, progress)? {
         Some(scene) => scene,
         None => refract_eval::load_scene("mirror-room")?.scene,
     };
     let scene = Arc::new(scene);
     let triangles = triangles(&scene);
     let backend_ids = backends::parse_backends(&args.backends)?;
-    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable, progress)?;
     let camera = scene.camera(width, height)?;
     let mut records = Vec::new();
     let mut frame = Frame::default();
@@ -241,10 +259,10 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
             let mut record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
                 .record(&scene.name, triangles);
             record.method = format!("distance-map minmax={minmax}");
-            println!(
+            progress.note(Note::Row(format!(
                 "{:<12} {:<4} {width}x{height} faces {face}² minmax={minmax:<3} {:>9.2} ms {:>7.1} fps",
                 scene.name, record.backend, record.ms_median, record.fps
-            );
+            )));
             records.push(record);
         }
     }
@@ -272,11 +290,7 @@ fn run_distance_map(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     write(&args.out.join("bench-distance-map.md"), &md)?;
-    println!(
-        "
-{md}"
-    );
-    Ok(())
+    Ok(md)
 }
 
 /// One row of the pvrr table: label, scene, parameters, the paper's fps range.
@@ -319,16 +333,16 @@ const PVRR_PAPER: [PvrrCase; 5] = [
 
 /// Runs the pvrr table: every row of [`PVRR_PAPER`] at 1024² with 1024-texel maps
 /// (`--quick`: 128², 128-texel maps, 3 frames), every backend, colour only.
-fn run_pvrr(args: &BenchArgs) -> anyhow::Result<()> {
+fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     let (res, map, frames) = if args.quick {
         (128, 128, 3)
     } else {
         (1024, 1024, args.frames)
     };
-    crate::cleanup::create_dir(&args.out)
+    crate::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
     let backend_ids = backends::parse_backends(&args.backends)?;
-    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable, progress)?;
     let mut records = Vec::new();
     let mut rows = Vec::new();
     let mut frame = Frame::default();
@@ -353,10 +367,10 @@ fn run_pvrr(args: &BenchArgs) -> anyhow::Result<()> {
             let mut record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
                 .record(&scene.name, triangles);
             record.method = format!("pvrr {}", method.describe());
-            println!(
+            progress.note(Note::Row(format!(
                 "{label:<44} {:<4} {res}² {:>9.2} ms {:>7.1} fps ({rays} rays, {views} views)",
                 record.backend, record.ms_median, record.fps
-            );
+            )));
             rows.push((label, rays, views, paper, record.clone()));
             records.push(record);
         }
@@ -386,8 +400,7 @@ fn run_pvrr(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     write(&args.out.join("bench-pvrr.md"), &md)?;
-    println!("\n{md}");
-    Ok(())
+    Ok(md)
 }
 
 /// Wyman 2005b Table 1's layout with our figures, the paper's and the ratios.
@@ -492,7 +505,7 @@ fn timed(
     method: &MethodParams,
     frames: u32,
     frame: &mut Frame,
-) -> anyhow::Result<Timed> {
+) -> crate::Result<Timed> {
     let times = time_frames(3, frames, || {
         Ok(renderer
             .render(camera, method, FrameOutputs::Color, frame)?
@@ -508,17 +521,18 @@ fn timed(
     })
 }
 
-/// Runs the benchmark and writes `bench.json` and `bench.md` (`bench-nearby.*` for
-/// `--table nearby`).
-pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+/// Runs the benchmark, writes `bench.json` and `bench.md` (`bench-nearby.*` for
+/// `--table nearby`, ...) and returns the Markdown table; each row measured goes to `progress`
+/// as it is measured.
+pub fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     if args.table == Table::Nearby {
-        return run_nearby(args);
+        return run_nearby(args, progress);
     }
     if args.table == Table::DistanceMap {
-        return run_distance_map(args);
+        return run_distance_map(args, progress);
     }
     if args.table == Table::Pvrr {
-        return run_pvrr(args);
+        return run_pvrr(args, progress);
     }
     let (res, frames) = if args.quick {
         (128, 3)
@@ -530,9 +544,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     } else {
         args.scenes.clone()
     };
-    crate::cleanup::create_dir(&args.out)
+    crate::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
-    anyhow::ensure!(
+    crate::ensure!(
         !args.methods.contains(&MethodId::Reference),
         "--methods: the reference is always timed; list the methods to benchmark"
     );
@@ -542,13 +556,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         .map(|&id| MethodParams::defaults(id).with_tir_policy(TirPolicy::ClampToCritical))
         .collect();
     let backend_ids = backends::parse_backends(&args.backends)?;
-    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable, progress)?;
     backends::check_supported(&renderers, &methods)?;
     let mut records = Vec::new();
     let mut reference_seconds = Vec::new();
     let mut frame = Frame::default();
     for name in &scenes {
-        let Some((mesh, ior)) = load_model(name, &args.data)? else {
+        let Some((mesh, ior)) = load_model(name, &args.data, progress)? else {
             continue;
         };
         let triangles = mesh.triangles.len();
@@ -568,7 +582,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             for renderer in &mut renderers {
                 let record = timed(renderer.as_mut(), &camera, method, frames, &mut frame)?
                     .record(name, triangles);
-                println!(
+                progress.note(Note::Row(format!(
                     "{:<8} {:>7} tris {:<9} {:<4} {:>9.2} ms  {:>7.1} fps",
                     record.scene,
                     triangles,
@@ -576,7 +590,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     record.backend,
                     record.ms_median,
                     record.fps
-                );
+                )));
                 records.push(record);
             }
         }
@@ -585,11 +599,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     write(&args.out.join("bench.json"), &json)?;
     let md = table(&records, &reference_seconds, res, frames);
     write(&args.out.join("bench.md"), &md)?;
-    println!("\n{md}");
-    Ok(())
+    Ok(md)
 }
 
-fn write(path: &std::path::Path, text: &str) -> anyhow::Result<()> {
+fn write(path: &std::path::Path, text: &str) -> crate::Result<()> {
     Ok(write_text_atomically(path, text)?)
 }
 

@@ -50,11 +50,11 @@ pub fn check(
     height: u32,
     per_pixel: u64,
     backends: &[BackendId],
-) -> anyhow::Result<()> {
+) -> crate::Result<()> {
     let pixels = u64::from(width) * u64::from(height);
     let needed = estimate(pixels, per_pixel, backends);
     if let Some(limit) = available() {
-        anyhow::ensure!(
+        crate::ensure!(
             needed <= limit,
             "{what} at {width}x{height} needs about {:.1} GiB ({per_pixel} bytes a pixel measured{}), \
              but {:.1} GiB are available; choose a smaller --res",
