@@ -108,7 +108,119 @@ fn crates_depend_only_downward() {
             links(renderer)
         );
     }
+    // The experiments sit on the renderers and the files; nothing below them knows them.
+    let lab = deps("refract-lab");
+    for below in [
+        "refract-eval",
+        "refract-trace",
+        "refract-cpu",
+        "refract-gpu",
+    ] {
+        assert!(lab.contains(below), "refract-lab runs {below}");
+    }
+    assert!(
+        !lab.contains("refract-view") && !lab.contains("refract-cli"),
+        "refract-lab: {lab:?}"
+    );
+    assert!(
+        !deps("refract-view").contains("refract-cli")
+            && !deps("refract-view").contains("refract-lab"),
+        "the viewer depends on the renderers and the files only"
+    );
+    for name in [
+        "refract-core",
+        "refract-geometry",
+        "refract-scene",
+        "refract-eval",
+        "refract-trace",
+        "refract-cpu",
+        "refract-gpu",
+    ] {
+        let d = deps(name);
+        assert!(
+            !d.contains("refract-lab") && !d.contains("refract-view"),
+            "{name} must not depend on the experiments or the viewer: {d:?}"
+        );
+    }
     println!("{packages:#?}");
+}
+
+/// The `.rs` files under `dir`, recursively.
+fn rust_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir)
+        .expect("a source directory")
+        .flatten()
+    {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(rust_files(&path));
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            files.push(path);
+        }
+    }
+    files
+}
+
+/// The experiments library never prints (progress and notes go through its `Progress`
+/// callback), and its modules import each other without a circle.
+#[test]
+fn the_experiments_library_is_quiet_and_layered() {
+    let src = refract_tests::workspace_root().join("crates/refract-lab/src");
+    let files = rust_files(&src);
+    assert!(files.len() >= 10, "read refract-lab's sources");
+    let mut edges: Vec<(String, String)> = Vec::new();
+    let module_of = |path: &std::path::Path| {
+        let rel = path.strip_prefix(&src).expect("under src");
+        let first = rel
+            .components()
+            .next()
+            .expect("a component")
+            .as_os_str()
+            .to_string_lossy()
+            .into_owned();
+        first.trim_end_matches(".rs").to_owned()
+    };
+    for path in &files {
+        let text = std::fs::read_to_string(path).expect("read");
+        for needle in ["println!", "eprintln!", "print!(", "eprint!(", "dbg!"] {
+            assert!(
+                !text.contains(needle),
+                "{} prints ({needle}); report through Progress instead",
+                path.display()
+            );
+        }
+        let from = module_of(path);
+        for (i, _) in text.match_indices("crate::") {
+            let rest = &text[i + "crate::".len()..];
+            let to: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if src.join(format!("{to}.rs")).is_file() && to != from {
+                edges.push((from.clone(), to));
+            }
+        }
+    }
+    // No module reaches itself through the imports of others.
+    let reaches = |start: &str| {
+        let mut seen = std::collections::BTreeSet::new();
+        let mut stack = vec![start.to_owned()];
+        while let Some(m) = stack.pop() {
+            for (a, b) in &edges {
+                if *a == m && seen.insert(b.clone()) {
+                    stack.push(b.clone());
+                }
+            }
+        }
+        seen
+    };
+    for (from, _) in &edges {
+        assert!(
+            !reaches(from).contains(from),
+            "refract-lab's module `{from}` imports itself through others: {edges:?}"
+        );
+    }
 }
 
 /// The reference's sources name nothing of the backends' approximations: the polynomial
