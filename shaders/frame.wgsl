@@ -43,3 +43,7 @@ fn world_to_pixel(p_ws: vec3<f32>) -> vec4<f32> {
         1.0,
     );
 }
+
+// What a pixel shows when its pipeline was built with a method code the shader does not know
+// (an override constant out of range): magenta, never another method's result.
+const UNKNOWN_CODE_COLOR: vec3<f32> = vec3<f32>(1.0, 0.0, 1.0);

@@ -210,6 +210,10 @@ fn shade_two_interface(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let px = front_pixel(id);
     let i = px.index;
+    if DISTANCE_MODE != DISTANCE_INTERPOLATED && DISTANCE_MODE != DISTANCE_VIEW_ONLY && DISTANCE_MODE != DISTANCE_NORMAL_ONLY {
+        out_color[i] = vec4<f32>(UNKNOWN_CODE_COLOR, f32(COVERAGE_BACKGROUND));
+        return;
+    }
     if !px.covered {
         write_background(px);
         return;

@@ -191,6 +191,7 @@ fn find_nearby(p2: vec3<f32>, t2: vec3<f32>) -> Found {
         }
         return iterate(p2, t2, plane.x, nearby.iterations);
     }
+    // LOOKUP_SEEDED from here (shade_nearby paints every other code magenta).
     let segment = frustum_segment(p2, t2);
     if segment.z < 0.5 {
         return miss;
@@ -237,6 +238,10 @@ fn shade_nearby(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let px = front_pixel(id);
     let i = px.index;
+    if LOOKUP != LOOKUP_KAY_GREENBERG && LOOKUP != LOOKUP_RAY_PLANE && LOOKUP != LOOKUP_ITERATIVE && LOOKUP != LOOKUP_SEEDED {
+        out_color[i] = vec4<f32>(UNKNOWN_CODE_COLOR, f32(COVERAGE_BACKGROUND));
+        return;
+    }
     var none: Found;
     none.hit = false;
     let object_texel = vec2<i32>(i32(id.x + nearby.pad_x), i32(id.y + nearby.pad_y));

@@ -148,14 +148,18 @@ fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f3
 }
 
 // interpolated_distance.rs: approximate_distance.
+// A code that is none of the three is NaN, never another mode's distance.
 fn approximate_distance(mode: u32, theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f32) -> f32 {
+    if mode == DISTANCE_INTERPOLATED {
+        return interpolated_distance(theta_i, theta_t, eta, d_v, d_n);
+    }
     if mode == DISTANCE_VIEW_ONLY {
         return d_v;
     }
     if mode == DISTANCE_NORMAL_ONLY {
         return d_n;
     }
-    return interpolated_distance(theta_i, theta_t, eta, d_v, d_n);
+    return bitcast<f32>(0x7fc00000u);
 }
 
 // exit.rs: exit_normal_outside_silhouette.

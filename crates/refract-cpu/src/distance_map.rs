@@ -161,17 +161,17 @@ impl DistanceMap {
                             }
                         },
                     ),
-                    Some(floor) => rasterize_peeled(
-                        &raster,
-                        camera,
-                        face,
-                        faces,
-                        buffer,
-                        floor,
-                        &mut self.floor_depth,
-                        center,
-                        out,
-                    ),
+                    Some(floor) => {
+                        let peel = PeeledFace {
+                            raster: &raster,
+                            camera,
+                            face,
+                            faces,
+                            floor,
+                            center,
+                        };
+                        rasterize_peeled(&peel, buffer, &mut self.floor_depth, out);
+                    }
                 }
             }
             layer.range = range_of(&layer.distance);
@@ -180,21 +180,35 @@ impl DistanceMap {
     }
 }
 
+/// One cube-map face of a peeled layer: the meshes, the face's camera and which faces are
+/// drawn, the previous layer's distances (`floor`) from the reference point `center`.
+#[derive(Clone, Copy)]
+struct PeeledFace<'a> {
+    raster: &'a crate::raster::RasterMesh<'a>,
+    camera: &'a Camera,
+    face: CubeFace,
+    faces: Faces,
+    floor: &'a [f32],
+    center: Vec3,
+}
+
 /// Depth peeling of one face: the window depth of the point a relative `10⁻³` beyond the
 /// previous layer's distance on each texel's centre ray (`+∞` where that layer is empty, so
 /// nothing is behind it), then the nearest fragment deeper than that.
-#[allow(clippy::too_many_arguments)]
 fn rasterize_peeled(
-    raster: &crate::raster::RasterMesh<'_>,
-    camera: &Camera,
-    face: CubeFace,
-    faces: Faces,
+    peel: &PeeledFace<'_>,
     buffer: &mut SurfaceBuffer,
-    floor: &[f32],
     floor_depth: &mut Vec<f32>,
-    center: Vec3,
     out: &mut [f32],
 ) {
+    let PeeledFace {
+        raster,
+        camera,
+        face,
+        faces,
+        floor,
+        center,
+    } = *peel;
     let size = camera.width();
     floor_depth.resize(floor.len(), f32::INFINITY);
     floor_depth

@@ -123,16 +123,14 @@ impl CpuFamily for PvrrPasses {
                 first: index + 1,
                 images: rest,
             };
-            render_view(
+            let pass = ViewPass {
                 scene,
                 plan,
                 view,
                 meshes,
-                &children,
-                &mut self.buffers[index],
-                &mut image.texels,
-                None,
-            );
+                children: &children,
+            };
+            render_view(&pass, &mut self.buffers[index], &mut image.texels, None);
         }
         let (width, height) = (camera.width(), camera.height());
         frame.resize_for_overwrite(width, height);
@@ -149,12 +147,15 @@ impl CpuFamily for PvrrPasses {
             first: 1,
             images: self.images.get(1..).unwrap_or_default(),
         };
-        render_view(
+        let eye = ViewPass {
             scene,
             plan,
-            &plan.views[0],
-            &self.everything,
-            &children,
+            view: &plan.views[0],
+            meshes: &self.everything,
+            children: &children,
+        };
+        render_view(
+            &eye,
             &mut self.buffers[0],
             &mut frame.color,
             with_aovs.then_some(&mut self.aovs[..]),
@@ -211,17 +212,31 @@ impl ChildMaps<'_> {
 }
 
 /// Renders `view` into `out` (one radiance per pixel) and, for the eye, its AOVs.
-#[allow(clippy::too_many_arguments)]
+/// One view of a frame's plan and what it is drawn with.
+#[derive(Clone, Copy)]
+struct ViewPass<'a> {
+    scene: &'a Scene,
+    plan: &'a PvrrPlan,
+    view: &'a PvrrView,
+    /// The scene's meshes the view sees (all but its own reflector's, for a map).
+    meshes: &'a SceneMeshes,
+    /// The maps of the views this view's reflectors look up.
+    children: &'a ChildMaps<'a>,
+}
+
 fn render_view(
-    scene: &Scene,
-    plan: &PvrrPlan,
-    view: &PvrrView,
-    meshes: &SceneMeshes,
-    children: &ChildMaps<'_>,
+    pass: &ViewPass<'_>,
     buffer: &mut SurfaceBuffer,
     out: &mut [Vec3],
     aovs: Option<&mut [PvrrAov]>,
 ) {
+    let ViewPass {
+        scene,
+        plan,
+        view,
+        meshes,
+        children,
+    } = *pass;
     let camera = &view.camera;
     let raster = meshes.raster();
     rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);

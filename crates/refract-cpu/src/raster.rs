@@ -735,6 +735,8 @@ pub fn rasterize_peel_into(
     );
 }
 
+// The one worker behind `rasterize_bands` and `rasterize_peel_into`: their parameters plus the
+// peeling floor; a struct would only rename them.
 #[allow(clippy::too_many_arguments)]
 fn rasterize_bands_above<O, F>(
     mesh: &RasterMesh<'_>,

@@ -280,3 +280,26 @@ proptest! {
         prop_assert!(mismatches <= 2, "{} path mismatches", mismatches);
     }
 }
+
+/// A distance-mode code the WGSL twin does not know gives NaN, never another mode's distance
+/// (the image-space kernel then paints the pixel magenta: `UNKNOWN_CODE_COLOR`).
+#[test]
+fn unknown_distance_modes_are_not_another_mode() {
+    let Some(context) = context() else {
+        return;
+    };
+    let known: Vec<f32> = [
+        DistanceMode::Interpolated,
+        DistanceMode::ViewOnly,
+        DistanceMode::NormalOnly,
+    ]
+    .iter()
+    .map(|&m| distance_mode_code(m) as f32)
+    .collect();
+    let unknown = (0..16).map(|c| c as f32).find(|c| !known.contains(c));
+    let unknown = unknown.expect("a code outside the three");
+    let a = vec![Vec4::new(0.4, 0.3, 0.7, 2.0); 4];
+    let b = vec![Vec4::new(1.0, unknown, 0.0, 0.0); 4];
+    let out = evaluate(context, "test_distance", &a, &b).expect("gpu");
+    assert!(out.iter().all(|v| v.y.is_nan()), "{out:?}");
+}

@@ -21,7 +21,7 @@ use crate::frame_uniforms::frame_uniforms;
 use crate::methods::MethodPipelines;
 use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::passes::raster::{
-    DEPTH_FORMAT, RasterKind, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
+    DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
 };
 use crate::scene_buffers::GpuScene;
 use crate::shaders::module_source;
@@ -343,7 +343,6 @@ impl DistanceMapTargets {
     }
 
     /// Encodes one frame: the layers, their ranges, the eye pass, the per-pixel paths.
-    #[allow(clippy::too_many_arguments)]
     fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -428,15 +427,17 @@ impl DistanceMapTargets {
                 let f = face as usize;
                 let slice = &self.slices[(layer * 6) as usize + f];
                 let peel = (layer >= 3).then(|| &self.peel_groups[((layer - 3) * 6) as usize + f]);
-                raster.encode_with(
+                raster.encode(
                     encoder,
-                    kind,
-                    &face_cameras[f],
-                    &self.face_groups[f],
-                    peel,
-                    &meshes,
-                    &[&slice[0], &slice[1], &slice[2]],
-                    &self.face_depth,
+                    &RasterPass {
+                        kind,
+                        camera: &face_cameras[f],
+                        uniforms: &self.face_groups[f],
+                        peel,
+                        meshes: &meshes,
+                        targets: &[&slice[0], &slice[1], &slice[2]],
+                        depth: &self.face_depth,
+                    },
                     first.take(),
                 );
             }

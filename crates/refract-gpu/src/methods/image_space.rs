@@ -5,11 +5,11 @@
 //! [`refract_scene::Frame`] with the method's AOV layers.
 
 use glam::Vec3;
+use refract_core::BackSurface;
 use refract_core::gpu::{
     COVERAGE_BACKGROUND, COVERAGE_DEGENERATE, FrameUniforms, distance_mode_code,
     exit_normal_source_code, exit_normal_source_from_code,
 };
-use refract_core::{BackSurface, Camera};
 use refract_scene::{
     Aov, Frame, FrameOutputs, ImageSpaceMethod, LayerValue, MethodId, PixelLayers, RenderError,
 };
@@ -19,7 +19,9 @@ use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::MethodPipelines;
-use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::passes::raster::{
+    DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, TARGET_FORMAT, target,
+};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
 
@@ -148,18 +150,21 @@ impl RefractorTargets {
 
     /// Writes the uniforms and encodes the back faces (when `back` is given) and the front
     /// faces; the first pass writes the frame's start timestamp.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode(
         &self,
-        context: &GpuContext,
-        raster: &RasterPipelines,
-        scene: &GpuScene,
-        camera: &Camera,
+        cx: &GpuFrameCx<'_>,
         uniforms: &FrameUniforms,
         back: Option<BackSurface>,
-        timestamps: Option<&Timestamps>,
         encoder: &mut wgpu::CommandEncoder,
     ) {
+        let GpuFrameCx {
+            context,
+            raster,
+            gpu_scene: scene,
+            camera,
+            timestamps,
+            ..
+        } = *cx;
         context
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
@@ -167,23 +172,29 @@ impl RefractorTargets {
         if let Some(back) = back {
             raster.encode(
                 encoder,
-                RasterKind::BackFaces(back),
-                camera,
-                &self.raster_group,
-                &[&scene.refractor],
-                &[&self.back],
-                &self.depth,
+                &RasterPass {
+                    kind: RasterKind::BackFaces(back),
+                    camera,
+                    uniforms: &self.raster_group,
+                    peel: None,
+                    meshes: &[&scene.refractor],
+                    targets: &[&self.back],
+                    depth: &self.depth,
+                },
                 first.take(),
             );
         }
         raster.encode(
             encoder,
-            RasterKind::FrontFaces,
-            camera,
-            &self.raster_group,
-            &[&scene.refractor],
-            &[&self.front_p1, &self.front_n1],
-            &self.depth,
+            &RasterPass {
+                kind: RasterKind::FrontFaces,
+                camera,
+                uniforms: &self.raster_group,
+                peel: None,
+                meshes: &[&scene.refractor],
+                targets: &[&self.front_p1, &self.front_n1],
+                depth: &self.depth,
+            },
             first.take(),
         );
     }
@@ -354,16 +365,7 @@ impl ImageSpaceTargets {
             ImageSpaceMethod::TwoInterface(p) => Some(p.back),
             ImageSpaceMethod::Single => None,
         };
-        self.refractor.encode(
-            cx.context,
-            cx.raster,
-            cx.gpu_scene,
-            cx.camera,
-            uniforms,
-            back,
-            timestamps,
-            encoder,
-        );
+        self.refractor.encode(cx, uniforms, back, encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("image-space kernel"),

@@ -219,7 +219,6 @@ impl NearbyTargets {
     }
 
     /// Encodes the passes of one frame and the copies of its outputs.
-    #[allow(clippy::too_many_arguments)]
     fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -233,7 +232,6 @@ impl NearbyTargets {
             context,
             raster,
             gpu_scene: scene,
-            camera,
             method: id,
             outputs,
             timestamps,
@@ -250,16 +248,7 @@ impl NearbyTargets {
             0,
             bytemuck::bytes_of(&nearby_uniforms(nearby)),
         );
-        self.refractor.encode(
-            context,
-            raster,
-            scene,
-            camera,
-            uniforms,
-            Some(back),
-            timestamps,
-            encoder,
-        );
+        self.refractor.encode(cx, uniforms, Some(back), encoder);
         let objects: Vec<_> = scene.objects.iter().collect();
         self.ng.encode(
             &context.queue,

@@ -425,7 +425,6 @@ impl PvrrTargets {
     }
 
     /// Encodes the frame of `plan` (every view, deepest first).
-    #[allow(clippy::too_many_arguments)]
     fn encode(
         &mut self,
         cx: &GpuFrameCx<'_>,

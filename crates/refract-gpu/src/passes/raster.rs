@@ -86,6 +86,25 @@ pub(crate) struct RasterPipelines {
     pipelines: Vec<(RasterKind, bool, wgpu::RenderPipeline)>,
 }
 
+/// One raster pass: which faces of which meshes, seen by which camera, into which targets.
+#[derive(Clone, Copy)]
+pub(crate) struct RasterPass<'a> {
+    /// What the pass writes and its depth test.
+    pub kind: RasterKind,
+    /// The camera (mirrored cube-map face cameras flip the winding).
+    pub camera: &'a Camera,
+    /// Group 0: the frame uniforms.
+    pub uniforms: &'a wgpu::BindGroup,
+    /// Group 1, for [`RasterKind::SurfacePeel`]: the previous layer.
+    pub peel: Option<&'a wgpu::BindGroup>,
+    /// The meshes drawn.
+    pub meshes: &'a [&'a GpuMesh],
+    /// The colour targets.
+    pub targets: &'a [&'a wgpu::TextureView],
+    /// The depth target.
+    pub depth: &'a wgpu::TextureView,
+}
+
 impl RasterPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -229,39 +248,23 @@ impl RasterPipelines {
             .expect("a pipeline for every kind and winding")
     }
 
-    /// Encodes one raster pass of `meshes` into `targets` (as many as `kind` writes) with
-    /// `depth`, cleared first. `timestamp` writes the frame's first timestamp at the start.
-    #[allow(clippy::too_many_arguments)]
+    /// Encodes `pass`: its meshes into its targets (as many as its kind writes) with its depth,
+    /// cleared first. `timestamp` writes the frame's first timestamp at the start.
     pub(crate) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        kind: RasterKind,
-        camera: &Camera,
-        uniforms: &wgpu::BindGroup,
-        meshes: &[&GpuMesh],
-        targets: &[&wgpu::TextureView],
-        depth: &wgpu::TextureView,
+        pass: &RasterPass<'_>,
         timestamp: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        self.encode_with(
-            encoder, kind, camera, uniforms, None, meshes, targets, depth, timestamp,
-        );
-    }
-
-    /// [`Self::encode`] with group 1 bound (`peel`, for [`RasterKind::SurfacePeel`]).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode_with(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        kind: RasterKind,
-        camera: &Camera,
-        uniforms: &wgpu::BindGroup,
-        peel: Option<&wgpu::BindGroup>,
-        meshes: &[&GpuMesh],
-        targets: &[&wgpu::TextureView],
-        depth: &wgpu::TextureView,
-        timestamp: Option<wgpu::RenderPassTimestampWrites<'_>>,
-    ) {
+        let RasterPass {
+            kind,
+            camera,
+            uniforms,
+            peel,
+            meshes,
+            targets,
+            depth,
+        } = *pass;
         debug_assert_eq!(targets.len(), kind.targets());
         let color_attachments: Vec<_> = targets
             .iter()
@@ -405,12 +408,15 @@ impl SurfaceTargets {
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
         raster.encode(
             encoder,
-            RasterKind::Surface,
-            camera,
-            &self.group,
-            meshes,
-            &[&self.views[0], &self.views[1], &self.views[2]],
-            &self.depth,
+            &RasterPass {
+                kind: RasterKind::Surface,
+                camera,
+                uniforms: &self.group,
+                peel: None,
+                meshes,
+                targets: &[&self.views[0], &self.views[1], &self.views[2]],
+                depth: &self.depth,
+            },
             None,
         );
     }

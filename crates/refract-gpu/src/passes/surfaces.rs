@@ -10,7 +10,9 @@ use refract_scene::SurfaceTexel;
 use crate::bindings::bind_group;
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
-use crate::passes::raster::{DEPTH_FORMAT, RasterKind, RasterPipelines, TARGET_FORMAT, target};
+use crate::passes::raster::{
+    DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, TARGET_FORMAT, target,
+};
 use crate::scene_buffers::{GpuMesh, GpuScene};
 
 /// Texture rows are copied to buffers in multiples of this many bytes.
@@ -72,12 +74,15 @@ pub(crate) fn rasterize_surface(
         });
         raster.encode(
             &mut encoder,
-            RasterKind::Surface,
-            camera,
-            &group,
-            &[mesh],
-            &[&views[0], &views[1], &views[2]],
-            &depth,
+            &RasterPass {
+                kind: RasterKind::Surface,
+                camera,
+                uniforms: &group,
+                peel: None,
+                meshes: &[mesh],
+                targets: &[&views[0], &views[1], &views[2]],
+                depth: &depth,
+            },
             None,
         );
         for (texture, buffer) in textures.iter().zip(&buffers) {
