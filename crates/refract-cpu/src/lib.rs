@@ -18,12 +18,9 @@
 //! its uv and object id.
 
 pub mod buffers;
-pub mod distance_map;
+pub mod families;
 pub mod family;
-pub mod image_space;
-pub mod nearby_geometry;
 mod pixel_group;
-pub mod pvrr;
 pub mod raster;
 pub mod renderer;
 pub mod scene_meshes;
@@ -31,6 +28,7 @@ mod shade;
 pub mod surfaces;
 
 pub use buffers::{BackFaces, front_faces, front_faces_into};
+pub use families::{distance_map, image_space, nearby_geometry, pvrr};
 pub use family::{CpuFamily, FrameCx};
 pub use image_space::{
     FrameBuffers, ImageSpacePasses, render_buffers, render_buffers_into, shade_into,

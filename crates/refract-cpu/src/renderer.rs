@@ -1,6 +1,6 @@
-//! The CPU backend as a [`Renderer`]: one value of every method family ([`crate::family`]) and
-//! one exhaustive `match` from [`MethodParams`] to the family that renders it, so a new
-//! parameter set does not compile until it is handled or declined.
+//! The CPU backend as a [`Renderer`]: the scene and every family's passes
+//! ([`crate::families::Families`], which holds the backend's one exhaustive `match` from
+//! [`MethodParams`] to a family), timed by the wall clock.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,10 +11,8 @@ use refract_scene::{
     Scene, TimingSource,
 };
 
-use crate::distance_map::DistancePasses;
-use crate::family::{CpuFamily, FrameCx};
-use crate::image_space::ImageSpacePasses;
-use crate::nearby_geometry::NearbyPasses;
+use crate::families::Families;
+use crate::family::FrameCx;
 use crate::pvrr::PvrrPasses;
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
@@ -22,10 +20,7 @@ use crate::pvrr::PvrrPasses;
 #[derive(Default)]
 pub struct CpuRenderer {
     scene: Option<Arc<Scene>>,
-    image_space: ImageSpacePasses,
-    nearby: NearbyPasses,
-    distance_map: DistancePasses,
-    pvrr: PvrrPasses,
+    families: Families,
 }
 
 impl CpuRenderer {
@@ -37,7 +32,7 @@ impl CpuRenderer {
     /// The `pvrr` passes: the last frame's plan and maps (for measurements such as the
     /// per-vertex exactness and the occlusion inconsistency of Kakimoto et al.).
     pub fn pvrr_passes(&self) -> &PvrrPasses {
-        &self.pvrr
+        &self.families.pvrr
     }
 }
 
@@ -53,10 +48,7 @@ impl Renderer for CpuRenderer {
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         // The mesh, its BVH and d_N come built with the scene; buffers are sized per frame.
-        self.image_space.prepare(scene);
-        self.nearby.prepare(scene);
-        self.distance_map.prepare(scene);
-        self.pvrr.prepare(scene);
+        self.families.prepare(scene);
         self.scene = Some(Arc::clone(scene));
         Ok(())
     }
@@ -81,16 +73,7 @@ impl Renderer for CpuRenderer {
             outputs,
         };
         let start = Instant::now();
-        match method {
-            MethodParams::Reference(_) => Err(RenderError::Unsupported {
-                backend: BackendId::Cpu,
-                method: id,
-            }),
-            MethodParams::ImageSpace(p) => self.image_space.render(&cx, p, frame),
-            MethodParams::NearbyGeometry(p) => self.nearby.render(&cx, p, frame),
-            MethodParams::DistanceMap(p) => self.distance_map.render(&cx, p, frame),
-            MethodParams::Pvrr(p) => self.pvrr.render(&cx, p, frame),
-        }?;
+        self.families.render(&cx, method, frame)?;
         Ok(FrameTiming {
             ms: start.elapsed().as_secs_f64() * 1e3,
             source: TimingSource::Wall,

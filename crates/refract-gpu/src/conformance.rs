@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 
 use crate::bindings::storage_entry;
 use crate::context::{GpuContext, GpuError};
-use crate::shaders::module_source;
+use crate::shaders::CONFORMANCE_MODULE;
 
 /// The entry points of the conformance module.
 pub const ENTRY_POINTS: [&str; 15] = [
@@ -39,7 +39,7 @@ pub fn evaluate(
     let (pipeline, layout_group) = context.checked(|| {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("conformance.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(module_source("conformance").into()),
+            source: wgpu::ShaderSource::Wgsl(CONFORMANCE_MODULE.source().into()),
         });
         // An explicit layout: an automatic one would drop the bindings an entry point ignores.
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

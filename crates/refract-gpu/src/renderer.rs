@@ -1,8 +1,7 @@
-//! The GPU backend as a [`Renderer`]: one [`FamilySlot`] per method family
-//! ([`crate::family`]) and one exhaustive `match` from [`MethodParams`] to the family that renders
-//! it, so a new parameter set does not compile until it is handled or declined. The frame
-//! routine (reuse or allocate, encode, submit, read back, time) is [`FamilySlot::run_frame`],
-//! written once.
+//! The GPU backend as a [`Renderer`]: the device, the shared raster pipelines, the uploaded
+//! scene and every family ([`crate::methods::Families`], which holds the backend's one
+//! exhaustive `match` from [`MethodParams`] to a family). The frame routine (reuse or allocate,
+//! encode, submit, read back, time) is [`crate::family::FamilySlot::run_frame`], written once.
 
 use std::sync::Arc;
 
@@ -13,11 +12,8 @@ use refract_scene::{
 };
 
 use crate::context::{GpuContext, GpuError};
-use crate::family::{FamilySlot, GpuFrameCx};
-use crate::methods::distance_map::DistanceMapPipelines;
-use crate::methods::image_space::ImageSpacePipelines;
-use crate::methods::nearby_geometry::NearbyPipelines;
-use crate::methods::pvrr::PvrrFamily;
+use crate::family::GpuFrameCx;
+use crate::methods::Families;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
@@ -36,10 +32,7 @@ pub struct GpuRenderer {
     raster: RasterPipelines,
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
-    image_space: FamilySlot<ImageSpacePipelines>,
-    nearby: FamilySlot<NearbyPipelines>,
-    distance_map: FamilySlot<DistanceMapPipelines>,
-    pvrr: FamilySlot<PvrrFamily>,
+    families: Families,
 }
 
 impl GpuRenderer {
@@ -50,17 +43,10 @@ impl GpuRenderer {
 
     /// Compiles the pipelines on `context`.
     pub fn with_context(context: GpuContext) -> Result<Self, GpuError> {
-        let (raster, image_space, nearby, distance_map, pvrr) = context.checked(|| {
-            let device = &context.device;
-            let raster = RasterPipelines::new(device);
-            let pvrr = PvrrFamily::new(device, &raster);
-            (
-                raster,
-                ImageSpacePipelines::new(device),
-                NearbyPipelines::new(device),
-                DistanceMapPipelines::new(device),
-                pvrr,
-            )
+        let (raster, families) = context.checked(|| {
+            let raster = RasterPipelines::new(&context.device);
+            let families = Families::new(&context.device, &raster);
+            (raster, families)
         })?;
         let timestamps = Timestamps::new(&context);
         Ok(Self {
@@ -68,10 +54,7 @@ impl GpuRenderer {
             raster,
             timestamps,
             scene: None,
-            image_space: FamilySlot::new(image_space),
-            nearby: FamilySlot::new(nearby),
-            distance_map: FamilySlot::new(distance_map),
-            pvrr: FamilySlot::new(pvrr),
+            families,
         })
     }
 
@@ -131,10 +114,7 @@ impl Renderer for GpuRenderer {
         let uploaded = self
             .context
             .checked(|| GpuScene::new(&self.context.device, scene))?;
-        self.image_space.prepare(scene);
-        self.nearby.prepare(scene);
-        self.distance_map.prepare(scene);
-        self.pvrr.prepare(scene);
+        self.families.prepare(scene);
         self.scene = Some((Arc::clone(scene), uploaded));
         Ok(())
     }
@@ -162,15 +142,6 @@ impl Renderer for GpuRenderer {
             outputs,
             timestamps: self.timestamps.as_ref(),
         };
-        match method {
-            MethodParams::Reference(_) => Err(RenderError::Unsupported {
-                backend: BackendId::Gpu,
-                method: id,
-            }),
-            MethodParams::ImageSpace(p) => self.image_space.run_frame(&cx, p, frame),
-            MethodParams::NearbyGeometry(p) => self.nearby.run_frame(&cx, p, frame),
-            MethodParams::DistanceMap(p) => self.distance_map.run_frame(&cx, p, frame),
-            MethodParams::Pvrr(p) => self.pvrr.run_frame(&cx, p, frame),
-        }
+        self.families.render(&cx, method, frame)
     }
 }

@@ -1,55 +1,100 @@
 //! The WGSL modules of the GPU backend, composed from the files in `shaders/` (WGSL has no
 //! includes) after the constant header generated from Rust ([`refract_core::gpu::wgsl_constants`]).
+//! The shared files and modules (the raster passes, the conformance harness) are here; each
+//! method family declares its own module (its file and the shared files it needs) beside its
+//! pipelines, so a new family edits nothing here.
 
 use refract_core::gpu::wgsl_constants;
 
-/// Every `.wgsl` file, by name: the core twin from `refract_core::wgsl`, the passes and
-/// methods from `shaders/`.
-pub const FILES: [(&str, &str); 13] = [
-    ("core.wgsl", refract_core::wgsl::CORE),
-    ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY),
-    ("frame.wgsl", include_str!("../../../shaders/frame.wgsl")),
-    (
-        "environment.wgsl",
-        include_str!("../../../shaders/environment.wgsl"),
-    ),
-    ("raster.wgsl", include_str!("../../../shaders/raster.wgsl")),
-    (
-        "pvrr_raster.wgsl",
-        include_str!("../../../shaders/pvrr_raster.wgsl"),
-    ),
-    (
-        "image_space.wgsl",
-        include_str!("../../../shaders/image_space.wgsl"),
-    ),
-    (
-        "materials.wgsl",
-        include_str!("../../../shaders/materials.wgsl"),
-    ),
-    (
-        "distance_search.wgsl",
-        include_str!("../../../shaders/distance_search.wgsl"),
-    ),
-    (
-        "distance_map.wgsl",
-        include_str!("../../../shaders/distance_map.wgsl"),
-    ),
-    (
-        "nearby_geometry.wgsl",
-        include_str!("../../../shaders/nearby_geometry.wgsl"),
-    ),
-    ("pvrr.wgsl", include_str!("../../../shaders/pvrr.wgsl")),
-    (
-        "conformance.wgsl",
-        include_str!("../../../shaders/conformance.wgsl"),
-    ),
-];
+/// A WGSL file: its name in `shaders/` (or `refract_core::wgsl`) and its text.
+pub type WgslFile = (&'static str, &'static str);
 
-fn file(name: &str) -> &'static str {
-    FILES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map_or("", |(_, s)| s)
+/// The core twin (`refract_core::wgsl`).
+pub const CORE: WgslFile = ("core.wgsl", refract_core::wgsl::CORE);
+/// The procedural sky (`refract_core::wgsl`).
+pub const PROCEDURAL_SKY: WgslFile = ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY);
+/// The frame uniforms, coverage codes, the unknown-code colour.
+pub const FRAME: WgslFile = ("frame.wgsl", include_str!("../../../shaders/frame.wgsl"));
+/// The environment lookup.
+pub const ENVIRONMENT: WgslFile = (
+    "environment.wgsl",
+    include_str!("../../../shaders/environment.wgsl"),
+);
+/// Diffuse materials and conductors.
+pub const MATERIALS: WgslFile = (
+    "materials.wgsl",
+    include_str!("../../../shaders/materials.wgsl"),
+);
+/// The raster passes (any mesh, any camera).
+pub const RASTER: WgslFile = ("raster.wgsl", include_str!("../../../shaders/raster.wgsl"));
+/// The raster passes of `pvrr`'s views.
+pub const PVRR_RASTER: WgslFile = (
+    "pvrr_raster.wgsl",
+    include_str!("../../../shaders/pvrr_raster.wgsl"),
+);
+/// The image-space kernels (Wyman 2005a), also the first part of the nearby-geometry kernel.
+pub const IMAGE_SPACE: WgslFile = (
+    "image_space.wgsl",
+    include_str!("../../../shaders/image_space.wgsl"),
+);
+/// The distance-map search (Umenhoffer et al. 2007), also run by the conformance harness.
+pub const DISTANCE_SEARCH: WgslFile = (
+    "distance_search.wgsl",
+    include_str!("../../../shaders/distance_search.wgsl"),
+);
+/// The conformance harness's entry points.
+pub const CONFORMANCE: WgslFile = (
+    "conformance.wgsl",
+    include_str!("../../../shaders/conformance.wgsl"),
+);
+
+/// A module the backend compiles: its name and the files it is made of, in order.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderModule {
+    /// Its name (the pipelines' labels).
+    pub name: &'static str,
+    /// Its files, after the generated constant header.
+    pub files: &'static [WgslFile],
+}
+
+impl ShaderModule {
+    /// The full source: the constant header, then every file.
+    pub fn source(&self) -> String {
+        let mut source = wgsl_constants();
+        source.push_str(&color_chart_constant());
+        for (name, text) in self.files {
+            source.push_str(&format!("\n// ---- {name} ----\n"));
+            source.push_str(text);
+        }
+        source
+    }
+}
+
+/// The raster passes.
+pub const RASTER_MODULE: ShaderModule = ShaderModule {
+    name: "raster",
+    files: &[CORE, FRAME, RASTER, PVRR_RASTER],
+};
+
+/// The conformance harness (`refract_gpu::conformance`).
+pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
+    name: "conformance",
+    files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
+};
+
+/// Every module the backend compiles: the shared ones, then each family's.
+pub fn modules() -> Vec<ShaderModule> {
+    let mut modules = vec![RASTER_MODULE, CONFORMANCE_MODULE];
+    modules.extend(crate::methods::SHADERS);
+    modules
+}
+
+/// The full source of the module called `name`, `None` for no such module.
+pub fn module_source(name: &str) -> Option<String> {
+    modules()
+        .into_iter()
+        .find(|m| m.name == name)
+        .map(|m| m.source())
 }
 
 /// `COLOR_CHART`, the 24 patches of [`refract_scene::Albedo::ColorChart`], as a WGSL constant.
@@ -62,85 +107,4 @@ fn color_chart_constant() -> String {
         "const COLOR_CHART = array<vec3<f32>, 24>({});\n",
         patches.join(", ")
     )
-}
-
-fn compose(parts: &[&str]) -> String {
-    let mut source = wgsl_constants();
-    source.push_str(&color_chart_constant());
-    for part in parts {
-        source.push_str(&format!("\n// ---- {part} ----\n"));
-        source.push_str(file(part));
-    }
-    source
-}
-
-/// The modules the backend compiles: `(name, files it is made of)`.
-pub const MODULES: [(&str, &[&str]); 6] = [
-    (
-        "raster",
-        &["core.wgsl", "frame.wgsl", "raster.wgsl", "pvrr_raster.wgsl"],
-    ),
-    (
-        "image_space",
-        &[
-            "core.wgsl",
-            "procedural_sky.wgsl",
-            "frame.wgsl",
-            "environment.wgsl",
-            "image_space.wgsl",
-        ],
-    ),
-    (
-        "nearby_geometry",
-        &[
-            "core.wgsl",
-            "procedural_sky.wgsl",
-            "frame.wgsl",
-            "environment.wgsl",
-            "image_space.wgsl",
-            "materials.wgsl",
-            "nearby_geometry.wgsl",
-        ],
-    ),
-    (
-        "distance_map",
-        &[
-            "core.wgsl",
-            "procedural_sky.wgsl",
-            "frame.wgsl",
-            "environment.wgsl",
-            "materials.wgsl",
-            "distance_search.wgsl",
-            "distance_map.wgsl",
-        ],
-    ),
-    (
-        "pvrr",
-        &[
-            "core.wgsl",
-            "procedural_sky.wgsl",
-            "frame.wgsl",
-            "environment.wgsl",
-            "materials.wgsl",
-            "pvrr.wgsl",
-        ],
-    ),
-    (
-        "conformance",
-        &[
-            "core.wgsl",
-            "procedural_sky.wgsl",
-            "distance_search.wgsl",
-            "conformance.wgsl",
-        ],
-    ),
-];
-
-/// The full source of a module of [`MODULES`].
-pub fn module_source(name: &str) -> String {
-    let parts = MODULES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map_or(&[][..], |(_, p)| p);
-    compose(parts)
 }

@@ -24,9 +24,28 @@ use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
 };
 use crate::scene_buffers::GpuScene;
-use crate::shaders::module_source;
+use crate::shaders::{
+    CORE, DISTANCE_SEARCH, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+};
 use crate::timestamps::Timestamps;
 use refract_core::gpu::FrameUniforms;
+
+/// The module of the distance-map passes and paths (Umenhoffer et al. 2007).
+pub(crate) const SHADER: ShaderModule = ShaderModule {
+    name: "distance_map",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        DISTANCE_SEARCH,
+        (
+            "distance_map.wgsl",
+            include_str!("../../../../shaders/distance_map.wgsl"),
+        ),
+    ],
+};
 
 /// Depth peeling keeps surfaces farther than the previous layer by this relative margin (the
 /// CPU backend's `PEEL_MARGIN`).
@@ -86,7 +105,7 @@ impl DistanceMapPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let methods = MethodPipelines::new(
             device,
-            "distance_map",
+            &SHADER,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -107,7 +126,7 @@ impl DistanceMapPipelines {
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("distance_map ranges"),
-            source: wgpu::ShaderSource::Wgsl(module_source("distance_map").into()),
+            source: wgpu::ShaderSource::Wgsl(SHADER.source().into()),
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("distance_map ranges"),

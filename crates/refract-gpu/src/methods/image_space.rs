@@ -23,7 +23,14 @@ use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, TARGET_FORMAT, target,
 };
 use crate::scene_buffers::GpuScene;
+use crate::shaders::{CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, PROCEDURAL_SKY, ShaderModule};
 use crate::timestamps::Timestamps;
+
+/// The module of the image-space kernels (Wyman 2005a).
+pub(crate) const SHADER: ShaderModule = ShaderModule {
+    name: "image_space",
+    files: &[CORE, PROCEDURAL_SKY, FRAME, ENVIRONMENT, IMAGE_SPACE],
+};
 
 impl GpuFamily for ImageSpacePipelines {
     type Params = ImageSpaceMethod;
@@ -80,7 +87,7 @@ impl ImageSpacePipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         Self(MethodPipelines::new(
             device,
-            "image_space",
+            &SHADER,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),

@@ -1,13 +1,79 @@
-//! One module per method family, the same names as the CPU backend's.
+//! One module per method family, the same names as the CPU backend's, each a
+//! [`GpuFamily`](crate::family::GpuFamily); and [`Families`]: one [`FamilySlot`] per family and
+//! the backend's one exhaustive `match` from [`MethodParams`] to the family that renders it. A
+//! new family is its module here, its slot and its arm.
 
 pub(crate) mod distance_map;
 pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
 pub(crate) mod pvrr;
 
+use std::sync::Arc;
+
+use refract_scene::{BackendId, Frame, FrameTiming, RenderError, Scene};
+
+use crate::family::{FamilySlot, GpuFrameCx};
+use crate::passes::raster::RasterPipelines;
+
+/// Every family with the targets of its last frame.
+pub(crate) struct Families {
+    image_space: FamilySlot<image_space::ImageSpacePipelines>,
+    nearby: FamilySlot<nearby_geometry::NearbyPipelines>,
+    distance_map: FamilySlot<distance_map::DistanceMapPipelines>,
+    pvrr: FamilySlot<pvrr::PvrrFamily>,
+}
+
+impl Families {
+    /// Compiles every family's pipelines.
+    pub(crate) fn new(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
+        Self {
+            image_space: FamilySlot::new(image_space::ImageSpacePipelines::new(device)),
+            nearby: FamilySlot::new(nearby_geometry::NearbyPipelines::new(device)),
+            distance_map: FamilySlot::new(distance_map::DistanceMapPipelines::new(device)),
+            pvrr: FamilySlot::new(pvrr::PvrrFamily::new(device, raster)),
+        }
+    }
+
+    /// Drops every family's targets (bound to the old scene) and prepares it for `scene`.
+    pub(crate) fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.image_space.prepare(scene);
+        self.nearby.prepare(scene);
+        self.distance_map.prepare(scene);
+        self.pvrr.prepare(scene);
+    }
+
+    /// One frame of `method` by its family ([`FamilySlot::run_frame`]); the reference is
+    /// declined.
+    pub(crate) fn render(
+        &mut self,
+        cx: &GpuFrameCx<'_>,
+        method: &MethodParams,
+        frame: &mut Frame,
+    ) -> Result<FrameTiming, RenderError> {
+        match method {
+            MethodParams::Reference(_) => Err(RenderError::Unsupported {
+                backend: BackendId::Gpu,
+                method: cx.method,
+            }),
+            MethodParams::ImageSpace(p) => self.image_space.run_frame(cx, p, frame),
+            MethodParams::NearbyGeometry(p) => self.nearby.run_frame(cx, p, frame),
+            MethodParams::DistanceMap(p) => self.distance_map.run_frame(cx, p, frame),
+            MethodParams::Pvrr(p) => self.pvrr.run_frame(cx, p, frame),
+        }
+    }
+}
+
 use refract_scene::{FrameOutputs, MethodId, MethodParams, REGISTRY};
 
-use crate::shaders::module_source;
+use crate::shaders::ShaderModule;
+
+/// Every family's shader module (validated by naga in `tests/shaders.rs` with the shared ones).
+pub(crate) const SHADERS: [ShaderModule; 4] = [
+    image_space::SHADER,
+    nearby_geometry::SHADER,
+    distance_map::SHADER,
+    pvrr::SHADER,
+];
 
 /// The compute pipelines of one method family: one per registry method of the family, each
 /// compiled with and without AOV stores (the `WRITE_AOVS` override), over one bind-group layout.
@@ -17,19 +83,20 @@ pub(crate) struct MethodPipelines {
 }
 
 impl MethodPipelines {
-    /// Compiles module `module` (`shaders.rs`) with `entries` as its layout, one pipeline per
+    /// Compiles `module` with `entries` as its layout, one pipeline per
     /// registry row whose parameters are a `P` (the family's parameter type); `entry` gives each
     /// method's entry point and its override constants besides `WRITE_AOVS`.
     pub(crate) fn new<P: TryFrom<MethodParams>>(
         device: &wgpu::Device,
-        module: &str,
+        module: &ShaderModule,
         entries: &[wgpu::BindGroupLayoutEntry],
         entry: impl Fn(&P) -> (&'static str, Vec<(&'static str, f64)>),
     ) -> Self {
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(module),
-            source: wgpu::ShaderSource::Wgsl(module_source(module).into()),
+            label: Some(module.name),
+            source: wgpu::ShaderSource::Wgsl(module.source().into()),
         });
+        let module = module.name;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(module),
             entries,

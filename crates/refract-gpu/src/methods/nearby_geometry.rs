@@ -23,7 +23,27 @@ use crate::methods::MethodPipelines;
 use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets, check_limits};
 use crate::passes::raster::{RasterPipelines, SurfaceTargets};
 use crate::scene_buffers::GpuScene;
+use crate::shaders::{
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+};
 use crate::timestamps::Timestamps;
+
+/// The module of the nearby-geometry kernel (Wyman 2005b): the image-space path, then the lookups.
+pub(crate) const SHADER: ShaderModule = ShaderModule {
+    name: "nearby_geometry",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        IMAGE_SPACE,
+        MATERIALS,
+        (
+            "nearby_geometry.wgsl",
+            include_str!("../../../../shaders/nearby_geometry.wgsl"),
+        ),
+    ],
+};
 
 /// The `shade_nearby` pipelines: one per nearby-geometry method (`LOOKUP` fixed per method).
 pub(crate) struct NearbyPipelines(MethodPipelines);
@@ -32,7 +52,7 @@ impl NearbyPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         Self(MethodPipelines::new(
             device,
-            "nearby_geometry",
+            &SHADER,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),

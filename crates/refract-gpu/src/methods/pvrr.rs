@@ -26,9 +26,22 @@ use crate::methods::MethodPipelines;
 use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::passes::raster::{DEPTH_FORMAT, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::{GpuMesh, GpuScene, Vertex};
-use crate::shaders::module_source;
+use crate::shaders::{CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule};
 use crate::timestamps::Timestamps;
 use refract_core::gpu::FrameUniforms;
+
+/// The module of the shading of `pvrr`'s views (Kakimoto et al. 2007).
+pub(crate) const SHADER: ShaderModule = ShaderModule {
+    name: "pvrr",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        ("pvrr.wgsl", include_str!("../../../../shaders/pvrr.wgsl")),
+    ],
+};
 
 /// `PvrrDraw` of `shaders/pvrr.wgsl`: one reflector drawn in one view.
 #[repr(C)]
@@ -70,7 +83,7 @@ impl PvrrPipelines {
     pub(crate) fn new(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
         let methods = MethodPipelines::new(
             device,
-            "pvrr",
+            &SHADER,
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 texture_entry(1),
@@ -88,7 +101,7 @@ impl PvrrPipelines {
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster.wgsl (pvrr)"),
-            source: wgpu::ShaderSource::Wgsl(module_source("raster").into()),
+            source: wgpu::ShaderSource::Wgsl(crate::shaders::RASTER_MODULE.source().into()),
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("pvrr raster"),

@@ -7,7 +7,7 @@ use refract_core::{BackSurface, Camera};
 
 use crate::bindings::uniform_entry;
 use crate::scene_buffers::{GpuMesh, Vertex};
-use crate::shaders::module_source;
+use crate::shaders::RASTER_MODULE;
 
 /// The format of every colour target: 32-bit float RGBA.
 pub(crate) const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -109,7 +109,7 @@ impl RasterPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(module_source("raster").into()),
+            source: wgpu::ShaderSource::Wgsl(RASTER_MODULE.source().into()),
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raster"),
