@@ -3,7 +3,8 @@
 //! Benches of real meshes read `../shared/data/meshes` (or `REFRACT_DATA_DIR`) and skip a
 //! mesh with a notice when the file is absent.
 
-use refract_geometry::{LoadOptions, Mesh, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::Mesh;
 
 /// The real meshes the geometry benches run on: `(label, file in meshes/)`.
 pub const BENCH_MESHES: [(&str, &str); 3] = [

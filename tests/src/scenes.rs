@@ -4,7 +4,8 @@
 use std::sync::Arc;
 
 use refract_core::{Camera, CameraDesc};
-use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::{Mesh, builtin};
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
 };

@@ -10,7 +10,7 @@ use refract_eval::FrameFiles;
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
-use refract_geometry::{LoadOptions, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
 
 /// One edit of a file: replace, insert or delete a byte at a position (taken modulo the
 /// length), or cut the file there.

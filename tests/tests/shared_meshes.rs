@@ -1,8 +1,9 @@
 //! The real meshes of `../shared/data/meshes`: they load with their quirks fixed, and the d_N
 //! precompute reports its miss rate (Wyman 2005a §3.1).
 
-use refract_geometry::load::NormalSource;
-use refract_geometry::{LoadOptions, MeshBvh, load_mesh, normal_distances};
+use refract_eval::mesh_files::NormalSource;
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::{MeshBvh, normal_distances};
 use refract_tests::shared_data;
 
 struct Expected {

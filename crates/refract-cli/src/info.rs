@@ -4,7 +4,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use refract_geometry::{LoadOptions, MeshBvh, builtin, load_mesh, normal_distances};
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::{MeshBvh, builtin, normal_distances};
 
 /// Arguments of `refract info`.
 #[derive(Debug, Args)]

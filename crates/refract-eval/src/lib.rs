@@ -3,6 +3,7 @@
 //! Everything around the renderer API of refract-scene that touches files or judges a frame,
 //! so that the renderers link none of it:
 //!
+//! * [`mesh_files`]: meshes from OBJ (tobj) and glTF 2.0 (gltf) files, cleaned up.
 //! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
 //! * [`environment_files`]: lat-long `.exr`/`.hdr` maps (negatives clamped and counted).
 //! * [`frame_files`]: a [`refract_scene::Frame`] as an EXR (colour and every AOV layer) or a PNG.
@@ -15,9 +16,11 @@ pub mod atomic_write;
 pub mod environment_files;
 pub mod frame_files;
 pub mod images;
+pub mod mesh_files;
 pub mod metrics;
 pub mod scene_file;
 
 pub use environment_files::load_latlong;
 pub use frame_files::FrameFiles;
+pub use mesh_files::{LoadOptions, LoadReport, LoadedMesh, load_mesh};
 pub use scene_file::{BUILTIN_SCENES, LoadedScene, load_scene, load_scene_str};

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use refract_core::CameraDesc;
-use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
+use refract_geometry::{Mesh, builtin};
+
+use crate::mesh_files::{LoadOptions, load_mesh};
 use serde::Deserialize;
 
 use refract_scene::Environment;

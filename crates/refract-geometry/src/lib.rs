@@ -17,7 +17,6 @@ pub mod bvh;
 pub mod distance_along_normal;
 pub mod error;
 pub mod lens;
-pub mod load;
 pub mod mesh;
 pub mod shapes;
 
@@ -25,5 +24,4 @@ pub use bvh::{Hit, MeshBvh};
 pub use distance_along_normal::{NormalDistances, normal_distances};
 pub use error::GeometryError;
 pub use lens::LensDesc;
-pub use load::{LoadOptions, LoadReport, LoadedMesh, load_mesh};
 pub use mesh::{BoundingSphere, Mesh, MeshFacts};

@@ -12,7 +12,8 @@ use crate::error::Context;
 use refract_core::Camera;
 use refract_core::exit::TirPolicy;
 use refract_eval::atomic_write::write_text_atomically;
-use refract_geometry::{LoadOptions, Mesh, builtin, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::{Mesh, builtin};
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
     TraceSettings,

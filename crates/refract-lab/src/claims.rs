@@ -11,7 +11,7 @@ use refract_cpu::CpuRenderer;
 use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::load_scene;
 use refract_eval::metrics::{MetricsRecord, evaluate};
-use refract_geometry::{LoadOptions, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
 use refract_scene::{
     Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene, TraceMode,
 };

@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use refract_core::{Camera, CameraDesc};
 use refract_eval::load_latlong;
-use refract_geometry::{LoadOptions, builtin, load_mesh};
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::builtin;
 use refract_scene::{Environment, Refractor, Scene, TraceSettings};
 use refract_trace::render;
 

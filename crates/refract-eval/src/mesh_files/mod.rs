@@ -8,8 +8,8 @@ use std::path::Path;
 
 use glam::Affine3A;
 
-use crate::error::GeometryError;
-use crate::mesh::Mesh;
+use refract_geometry::GeometryError;
+use refract_geometry::Mesh;
 
 pub use gltf_file::GlassMaterial;
 

@@ -3,8 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use refract_geometry::load::NormalSource;
-use refract_geometry::{GeometryError, LoadOptions, load_mesh};
+use refract_eval::mesh_files::NormalSource;
+use refract_eval::{LoadOptions, load_mesh};
+use refract_geometry::GeometryError;
 
 fn write(dir: &Path, name: &str, content: &[u8]) -> PathBuf {
     let path = dir.join(name);

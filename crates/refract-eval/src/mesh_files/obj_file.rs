@@ -6,8 +6,8 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::RawMesh;
-use crate::error::GeometryError;
-use crate::mesh::Mesh;
+use refract_geometry::GeometryError;
+use refract_geometry::Mesh;
 
 pub(super) fn read(path: &Path) -> Result<RawMesh, GeometryError> {
     let options = tobj::LoadOptions {

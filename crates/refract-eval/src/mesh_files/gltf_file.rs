@@ -8,8 +8,8 @@ use glam::{Affine3A, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
 use super::RawMesh;
-use crate::error::GeometryError;
-use crate::mesh::Mesh;
+use refract_geometry::GeometryError;
+use refract_geometry::Mesh;
 
 /// Glass parameters of a glTF material (`KHR_materials_ior`, `KHR_materials_transmission`,
 /// `KHR_materials_volume`); absent extensions are `None`.
