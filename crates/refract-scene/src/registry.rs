@@ -380,6 +380,31 @@ pub enum MethodParams {
     Pvrr(PvrrParams),
 }
 
+/// `TryFrom<MethodParams>` for each family's parameter type: its parameters, or the
+/// parameters of another family back (the GPU builds one pipeline per row that converts).
+macro_rules! family_params_from_method_params {
+    ($($variant:ident($params:ty)),* $(,)?) => {$(
+        impl TryFrom<MethodParams> for $params {
+            type Error = MethodParams;
+
+            fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
+                match params {
+                    MethodParams::$variant(p) => Ok(p),
+                    other => Err(other),
+                }
+            }
+        }
+    )*};
+}
+
+family_params_from_method_params!(
+    Reference(TraceSettings),
+    ImageSpace(ImageSpaceMethod),
+    NearbyGeometry(NearbyParams),
+    DistanceMap(DistanceMapParams),
+    Pvrr(PvrrParams),
+);
+
 impl MethodParams {
     /// The family's parameter type behind these parameters: the registry's one list of
     /// families besides the variants above.

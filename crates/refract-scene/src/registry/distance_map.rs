@@ -200,15 +200,3 @@ impl FamilyParams for DistanceMapParams {
         })
     }
 }
-
-impl TryFrom<MethodParams> for DistanceMapParams {
-    type Error = MethodParams;
-
-    /// The family's parameters, or the parameters of another family back.
-    fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-        match params {
-            MethodParams::DistanceMap(p) => Ok(p),
-            other => Err(other),
-        }
-    }
-}

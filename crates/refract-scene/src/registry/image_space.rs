@@ -207,15 +207,3 @@ impl FamilyParams for ImageSpaceMethod {
         }
     }
 }
-
-impl TryFrom<MethodParams> for ImageSpaceMethod {
-    type Error = MethodParams;
-
-    /// The family's parameters, or the parameters of another family back.
-    fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-        match params {
-            MethodParams::ImageSpace(p) => Ok(p),
-            other => Err(other),
-        }
-    }
-}

@@ -239,15 +239,3 @@ impl FamilyParams for NearbyParams {
         }
     }
 }
-
-impl TryFrom<MethodParams> for NearbyParams {
-    type Error = MethodParams;
-
-    /// The family's parameters, or the parameters of another family back.
-    fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-        match params {
-            MethodParams::NearbyGeometry(p) => Ok(p),
-            other => Err(other),
-        }
-    }
-}

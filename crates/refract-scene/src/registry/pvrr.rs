@@ -135,15 +135,3 @@ impl FamilyParams for PvrrParams {
         })
     }
 }
-
-impl TryFrom<MethodParams> for PvrrParams {
-    type Error = MethodParams;
-
-    /// The family's parameters, or the parameters of another family back.
-    fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-        match params {
-            MethodParams::Pvrr(p) => Ok(p),
-            other => Err(other),
-        }
-    }
-}

@@ -170,15 +170,3 @@ impl FamilyParams for TraceSettings {
         }
     }
 }
-
-impl TryFrom<MethodParams> for TraceSettings {
-    type Error = MethodParams;
-
-    /// The family's parameters, or the parameters of another family back.
-    fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-        match params {
-            MethodParams::Reference(p) => Ok(p),
-            other => Err(other),
-        }
-    }
-}
