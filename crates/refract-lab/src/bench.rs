@@ -15,8 +15,8 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::{LoadOptions, load_mesh};
 use refract_geometry::{Mesh, builtin};
 use refract_scene::{
-    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
-    TraceSettings,
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Refractor, Renderer,
+    Scene, TraceSettings,
 };
 use serde::Serialize;
 
@@ -356,9 +356,8 @@ fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> 
         for (k, v) in settings {
             method.set(k, v, "bench")?;
         }
-        let MethodParams::Pvrr(p) = method else {
-            unreachable!("pvrr parameters")
-        };
+        let p = PvrrParams::try_from(method)
+            .map_err(|other| crate::LabError::invalid(format_args!("not pvrr: {}", other.id())))?;
         let mut planner = refract_scene::pvrr::PvrrPlanner::default();
         planner.prepare(&scene);
         let plan = planner.plan(&scene, &camera, &p)?;

@@ -6,6 +6,7 @@
 //! recipes; `refract report DIR...` merges shards (`sweep_report.rs`).
 
 use refract_eval::FrameFiles;
+use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -508,72 +509,73 @@ fn run_job(
         spp: sweep.spp,
         ..TraceSettings::default()
     });
-    if !prepared.contains_key(&key) {
-        let mut scene = load_scene(&scene_spec(sweep, &job.scene))?.scene;
-        if let Some(ior) = job.ior {
-            scene.refractor.set_ior(ior)?;
-        }
-        let scene = Arc::new(scene);
-        let camera = scene.camera(job.res, job.res)?;
-        let text = reference_key(sweep, job, &settings)?;
-        let stem = format!(
-            "ref-{}-{:016x}",
-            safe(&scene_label(&job.scene)),
-            fnv1a(&text)
-        );
-        let cached = args.cache.as_ref().map(|c| c.join(format!("{stem}.exr")));
-        let truth = match cached.as_ref().filter(|p| p.is_file()) {
-            Some(path) => Frame::read_exr(path)?,
-            None => {
-                let mut reference = ReferenceRenderer::new();
-                reference.prepare(&scene)?;
-                let mut truth = Frame::default();
-                reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
-                if let Some(path) = &cached {
-                    truth.write_exr(path)?;
-                }
-                truth
+    let p = match prepared.entry(key.clone()) {
+        Entry::Occupied(entry) => entry.into_mut(),
+        Entry::Vacant(slot) => {
+            let mut scene = load_scene(&scene_spec(sweep, &job.scene))?.scene;
+            if let Some(ior) = job.ior {
+                scene.refractor.set_ior(ior)?;
             }
-        };
-        let reference_images = (
-            format!("images/{stem}.png"),
-            format!("images/{stem}.hdr.js"),
-        );
-        if sweep.images {
-            write_color(
-                &args.out.join(&reference_images.0),
-                job.res,
-                job.res,
-                &truth.color,
-            )?;
-            write_hdr_script(
-                &args.out.join(&reference_images.1),
-                &reference_images.1,
-                job.res,
-                job.res,
-                &truth.color,
-            )?;
-        }
-        prepared.insert(
-            key.clone(),
-            Prepared {
+            let scene = Arc::new(scene);
+            let camera = scene.camera(job.res, job.res)?;
+            let text = reference_key(sweep, job, &settings)?;
+            let stem = format!(
+                "ref-{}-{:016x}",
+                safe(&scene_label(&job.scene)),
+                fnv1a(&text)
+            );
+            let cached = args.cache.as_ref().map(|c| c.join(format!("{stem}.exr")));
+            let truth = match cached.as_ref().filter(|p| p.is_file()) {
+                Some(path) => Frame::read_exr(path)?,
+                None => {
+                    let mut reference = ReferenceRenderer::new();
+                    reference.prepare(&scene)?;
+                    let mut truth = Frame::default();
+                    reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
+                    if let Some(path) = &cached {
+                        truth.write_exr(path)?;
+                    }
+                    truth
+                }
+            };
+            let reference_images = (
+                format!("images/{stem}.png"),
+                format!("images/{stem}.hdr.js"),
+            );
+            if sweep.images {
+                write_color(
+                    &args.out.join(&reference_images.0),
+                    job.res,
+                    job.res,
+                    &truth.color,
+                )?;
+                write_hdr_script(
+                    &args.out.join(&reference_images.1),
+                    &reference_images.1,
+                    job.res,
+                    job.res,
+                    &truth.color,
+                )?;
+            }
+            slot.insert(Prepared {
                 scene,
                 camera,
                 truth,
                 reference_images,
-            },
-        );
-    }
-    let Some(p) = prepared.get(&key) else {
-        unreachable!("inserted above")
+            })
+        }
     };
+
     let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
-    if !renderers.contains_key(&job.backend) {
-        let mut opened = backends::open(&[backend], GpuPolicy::Required, progress)?;
-        renderers.insert(job.backend.clone(), opened.remove(0));
-    }
-    let Some(renderer) = renderers.get_mut(&job.backend) else {
-        unreachable!("opened above")
+    let renderer = match renderers.entry(job.backend.clone()) {
+        Entry::Occupied(entry) => entry.into_mut(),
+        Entry::Vacant(slot) => {
+            let opened = backends::open(&[backend], GpuPolicy::Required, progress)?;
+            let renderer = opened.into_iter().next().ok_or_else(|| {
+                crate::LabError::invalid(format_args!("no {backend} renderer opened"))
+            })?;
+            slot.insert(renderer)
+        }
     };
     if prepared_for.get(&job.backend) != Some(&key) {
         renderer.prepare(&p.scene)?;
