@@ -1,0 +1,73 @@
+//! The experiments from Rust, without the CLI: a comparison with typed options returns its
+//! records and writes its files, reports through a `Progress` (nothing printed), and a skipped
+//! (method, scene) pair is a note, not a line on stderr.
+
+use refract_core::TirPolicy;
+use refract_lab::backends::GpuPolicy;
+use refract_lab::compare::{self, method_params};
+use refract_lab::jobs::CompareOptions;
+use refract_lab::progress::{Note, Notes};
+use refract_scene::{BackendId, MethodId};
+
+#[test]
+fn a_comparison_runs_as_a_library_call() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let methods = method_params(
+        &[MethodId::Single, MethodId::Wyman],
+        TirPolicy::ClampToCritical,
+        &[("back", "second")],
+        "test",
+    )
+    .expect("methods");
+    assert_eq!(methods[1].get("back").as_deref(), Some("second"));
+    let options = CompareOptions {
+        backends: vec![BackendId::Cpu],
+        gpu_policy: GpuPolicy::IfAvailable,
+        scenes: vec!["sphere".into(), "mirror-room".into()],
+        methods,
+        res: 16,
+        spp: 1,
+        frames: 1,
+        out: dir.path().join("out"),
+    };
+    let notes = Notes::default();
+    let records = compare::run(&options, &notes).expect("compare");
+    // Per scene the reference's row, then the methods that render it: the image-space methods
+    // refract through glass only, so the mirror room has the reference's row alone.
+    let rows: Vec<(&str, &str)> = records
+        .iter()
+        .map(|r| (r.scene.as_str(), r.method.as_str()))
+        .collect();
+    assert_eq!(
+        rows,
+        [
+            ("sphere", "reference"),
+            ("sphere", "single"),
+            ("sphere", "wyman"),
+            ("mirror-room", "reference"),
+        ]
+    );
+    let notes = notes.0.into_inner().expect("notes");
+    let skipped = notes
+        .iter()
+        .filter(|n| matches!(n, Note::Skipped(text) if text.contains("mirror-room")))
+        .count();
+    assert_eq!(skipped, 2, "{notes:?}");
+    for file in [
+        "metrics.json",
+        "index.html",
+        "report.md",
+        "sphere/reference.png",
+    ] {
+        assert!(options.out.join(file).is_file(), "{file}");
+    }
+    // A parameter none of the methods has is an error naming it.
+    let err = method_params(
+        &[MethodId::Single],
+        TirPolicy::ClampToCritical,
+        &[("seeds", "3")],
+        "--param",
+    )
+    .expect_err("single has no seeds");
+    assert!(err.to_string().contains("seeds"), "{err}");
+}
