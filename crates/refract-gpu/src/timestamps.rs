@@ -44,13 +44,23 @@ impl Timestamps {
         }
     }
 
-    /// The write at the end of the frame's last (compute) pass.
-    pub(crate) fn end_compute(&self) -> wgpu::ComputePassTimestampWrites<'_> {
+    /// The writes of a compute pass: the frame's start when it is the frame's first pass, its
+    /// end when it is the last (a frame that is one compute pass is both).
+    pub(crate) fn compute(
+        &self,
+        first_pass: bool,
+        last_pass: bool,
+    ) -> wgpu::ComputePassTimestampWrites<'_> {
         wgpu::ComputePassTimestampWrites {
             query_set: &self.set,
-            beginning_of_pass_write_index: None,
-            end_of_pass_write_index: Some(1),
+            beginning_of_pass_write_index: first_pass.then_some(0),
+            end_of_pass_write_index: last_pass.then_some(1),
         }
+    }
+
+    /// The write at the end of the frame's last pass, a compute pass.
+    pub(crate) fn end_compute(&self) -> wgpu::ComputePassTimestampWrites<'_> {
+        self.compute(false, true)
     }
 
     /// Resolves the queries into the readback buffer (after the last pass).
