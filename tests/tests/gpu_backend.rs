@@ -205,7 +205,8 @@ fn gpu_errors_are_reported() {
     let err = gpu
         .render(&huge, &method(MethodId::Wyman), all, &mut frame)
         .expect_err("too large");
-    assert!(err.to_string().contains("100000x4"), "{err}");
+    let message = refract_scene::full_message(&err);
+    assert!(message.contains("100000x4"), "{message}");
     // The renderer still works after an error.
     gpu.render(&camera(16), &method(MethodId::Wyman), all, &mut frame)
         .expect("after an error");

@@ -603,3 +603,48 @@ fn failed_or_interrupted_runs_leave_nothing_half_made() {
         "left behind: {left:?}"
     );
 }
+
+/// An error and the errors behind it are printed once each (issue: a mesh error reached
+/// through a scene file printed its message twice; a directory that cannot be created printed
+/// the OS error twice).
+#[test]
+fn errors_name_each_file_once() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("scene.toml"),
+        "[refractor]\nmesh = \"missing.obj\"\n",
+    )
+    .expect("write");
+    let out = refract(
+        &["render", "scene.toml", "--res", "8", "--out", "a.png"],
+        dir.path(),
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert_eq!(err.matches("missing.obj").count(), 1, "{err}");
+    assert_eq!(err.matches("scene.toml").count(), 1, "{err}");
+    assert_eq!(err.matches("cannot read the file").count(), 1, "{err}");
+    // The output directory's parent is a file: the OS error once.
+    std::fs::write(dir.path().join("file"), "x").expect("write");
+    let out = refract(
+        &[
+            "compare",
+            "sphere",
+            "--res",
+            "8",
+            "--backends",
+            "cpu",
+            "--methods",
+            "single",
+            "--frames",
+            "1",
+            "--out",
+            "file/out",
+        ],
+        dir.path(),
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert_eq!(err.matches("file/out").count(), 1, "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}

@@ -906,13 +906,13 @@ mod tests {
         let err = load_scene(&wrong).expect_err("wrong type").to_string();
         assert!(err.contains("wrong.toml") && err.contains("ior"), "{err}");
         let missing = write("missing.toml", "[refractor]\nmesh = \"nowhere.obj\"\n");
-        let err = format!("{:#}", load_scene(&missing).expect_err("missing mesh"));
+        let err = refract_scene::full_message(&load_scene(&missing).expect_err("missing mesh"));
         assert!(err.contains("nowhere.obj"), "{err}");
         let bad_ior = write(
             "bad_ior.toml",
             "[refractor]\nmesh = \"builtin:sphere\"\nior = -1.0\n",
         );
-        let err = format!("{:#}", load_scene(&bad_ior).expect_err("bad ior"));
+        let err = refract_scene::full_message(&load_scene(&bad_ior).expect_err("bad ior"));
         assert!(err.contains("bad_ior.toml") && err.contains("ior"), "{err}");
         let err = load_scene("teapot-in-space")
             .expect_err("unknown")
@@ -1066,9 +1066,8 @@ mod tests {
                 format!("{section}\nmesh = \"huge.obj\"\nnormalize = false\n"),
             )
             .expect("write");
-            let err = format!(
-                "{:#}",
-                load_scene(&path.display().to_string()).expect_err("huge")
+            let err = refract_scene::full_message(
+                &load_scene(&path.display().to_string()).expect_err("huge"),
             );
             assert!(err.contains("huge.obj") && err.contains("1e18"), "{err}");
         }
@@ -1143,7 +1142,7 @@ mod tests {
                 "objects[0] eta/k",
             ),
         ] {
-            let err = format!("{:#}", load(text).expect_err(needle));
+            let err = refract_scene::full_message(&load(text).expect_err(needle));
             assert!(err.contains("m.toml") && err.contains(needle), "{err}");
         }
     }

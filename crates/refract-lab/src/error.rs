@@ -23,7 +23,7 @@ pub enum LabError {
     #[error(transparent)]
     Gpu(#[from] GpuError),
     /// A file could not be read or written.
-    #[error("{}: {action}: {source}", path.display())]
+    #[error("{}: {action}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -38,7 +38,7 @@ pub enum LabError {
     #[error("{0}")]
     Invalid(String),
     /// An error with what was being done when it happened.
-    #[error("{context}: {source}")]
+    #[error("{context}")]
     Context {
         /// What was being done.
         context: String,

@@ -419,7 +419,7 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
             }
             Ok(Err(err)) => {
                 failed += 1;
-                record_failure(job, format!("{err:#}"))
+                record_failure(job, refract_scene::full_message(&err))
             }
             Err(panic) => {
                 failed += 1;
@@ -710,7 +710,7 @@ mod tests {
                 "frame",
             ),
         ] {
-            let err = format!("{:#}", sweep(text).err().expect(expected));
+            let err = refract_scene::full_message(&sweep(text).err().expect(expected));
             assert!(err.contains("s.toml") && err.contains(expected), "{err}");
         }
         assert_eq!(parse_shard("2/3"), Ok(Shard { index: 2, count: 3 }));

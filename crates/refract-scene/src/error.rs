@@ -56,7 +56,7 @@ pub enum SceneError {
         builtins: String,
     },
     /// A mesh could not be loaded or built.
-    #[error("{origin}: {source}")]
+    #[error("{origin}")]
     Geometry {
         /// The scene file or built-in scene.
         origin: String,
@@ -64,6 +64,20 @@ pub enum SceneError {
         #[source]
         source: GeometryError,
     },
+}
+
+/// An error and every error behind it (its `source()` chain), `": "`-separated: the whole
+/// message, as the CLI prints it. By the rule every error type here follows, a wrapper's own
+/// message does not repeat its source's, so each part appears once.
+pub fn full_message(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut message = error.to_string();
+    let mut source = error.source();
+    while let Some(inner) = source {
+        message.push_str(": ");
+        message.push_str(&inner.to_string());
+        source = inner.source();
+    }
+    message
 }
 
 impl SceneError {

@@ -27,7 +27,7 @@ pub mod scene;
 pub mod tonemap;
 
 pub use environment::{Environment, EnvironmentReport, LatLongMap};
-pub use error::SceneError;
+pub use error::{SceneError, full_message};
 pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, PixelLayers};
 pub use registry::{
     BackendId, DistanceMapParams, Family, FamilyParams, ImageSpaceMethod, InterfaceRule, MethodId,

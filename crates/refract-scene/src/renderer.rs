@@ -70,7 +70,7 @@ pub enum RenderError {
     #[error("{0}")]
     Parameter(String),
     /// The backend failed (GPU device errors, limits, readback).
-    #[error("{backend} backend: {source}")]
+    #[error("{backend} backend")]
     Backend {
         /// The backend.
         backend: BackendId,
