@@ -69,9 +69,19 @@ pub fn write_atomically<E: Display>(
     let stem = path
         .file_name()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let mut temporary = tempfile::Builder::new()
-        .prefix(&format!(".{stem}."))
-        .suffix(".partial")
+    let prefix = format!(".{stem}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".partial");
+    // The mode of the file written: an overwritten file keeps its own; a new one gets what the
+    // umask gives (the OS applies it to 0666 at creation, as for any file a program creates),
+    // not tempfile's private 0600.
+    let existing = std::fs::metadata(path).ok().filter(|m| m.is_file());
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut temporary = builder
         .tempfile_in(dir)
         .map_err(|source| SceneError::Io {
             path: path.to_owned(),
@@ -89,6 +99,15 @@ pub fn write_atomically<E: Display>(
         writer
             .flush()
             .map_err(|err| format(format!("cannot write {what}: {err}")))?;
+    }
+    if let Some(existing) = existing {
+        std::fs::set_permissions(temporary.path(), existing.permissions()).map_err(|source| {
+            SceneError::Io {
+                path: path.to_owned(),
+                action: "cannot give the new file the mode of the one it replaces",
+                source,
+            }
+        })?;
     }
     temporary.persist(path).map_err(|err| SceneError::Io {
         path: path.to_owned(),
@@ -164,5 +183,25 @@ mod tests {
         std::fs::create_dir(&target).expect("mkdir");
         assert!(write_text_atomically(&target, "x").is_err());
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+
+    /// A new file gets the mode the umask gives (that of a file `File::create` makes beside
+    /// it), not 0600; an overwritten file keeps its mode (issue 34, item 2).
+    #[cfg(unix)]
+    #[test]
+    fn files_get_the_umask_mode_and_keep_theirs() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mode = |p: &Path| std::fs::metadata(p).expect("stat").permissions().mode() & 0o777;
+        let plain = dir.path().join("plain.txt");
+        std::fs::File::create(&plain).expect("create");
+        let ours = dir.path().join("ours.txt");
+        write_text_atomically(&ours, "x").expect("write");
+        assert_eq!(mode(&ours), mode(&plain));
+        assert_ne!(mode(&ours), 0o600, "not tempfile's private mode (umask 077 aside)");
+        std::fs::set_permissions(&ours, std::fs::Permissions::from_mode(0o640)).expect("chmod");
+        write_text_atomically(&ours, "y").expect("overwrite");
+        assert_eq!(mode(&ours), 0o640);
+        assert_eq!(std::fs::read_to_string(&ours).expect("read"), "y");
     }
 }
