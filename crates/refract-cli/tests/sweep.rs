@@ -250,3 +250,24 @@ fn the_report_works_in_headless_chromium() {
         "no table"
     );
 }
+
+/// A cache path that is a regular file fails the sweep and leaves no output directory behind
+/// (issue 34, item 7).
+#[test]
+fn a_cache_that_is_a_file_leaves_nothing_behind() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("small.toml"),
+        "scenes = [\"sphere\"]\nmethods = [\"single\"]\nres = [16]\nframes = 1\n",
+    )
+    .expect("write");
+    std::fs::write(dir.path().join("cachefile"), "not a directory").expect("write");
+    let out = refract(
+        &["sweep", "small.toml", "--cache", "cachefile", "--out", "o"],
+        dir.path(),
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("cachefile"), "{err}");
+    assert!(!dir.path().join("o").exists(), "left behind: o/");
+}

@@ -369,13 +369,16 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
     let mine = sweep.shard(args.shard);
     let jobs_dir = args.out.join("jobs");
     let images_dir = args.out.join("images");
-    for dir in [&jobs_dir, &images_dir] {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
-    }
+    // The cache first: a cache that cannot be made leaves no output directories behind. The
+    // output directories are not removed on a later failure or an interrupt (unlike the other
+    // experiments' `output_dirs`): the jobs finished so far are what a rerun resumes from.
     if let Some(cache) = &args.cache {
         std::fs::create_dir_all(cache)
             .with_context(|| format!("{}: cannot create the cache directory", cache.display()))?;
+    }
+    for dir in [&jobs_dir, &images_dir] {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
     }
     let todo: Vec<&Job> = mine
         .iter()
