@@ -81,13 +81,11 @@ pub fn write_atomically<E: Display>(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut temporary = builder
-        .tempfile_in(dir)
-        .map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            action: "cannot create a temporary file beside it",
-            source,
-        })?;
+    let mut temporary = builder.tempfile_in(dir).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        action: "cannot create a temporary file beside it",
+        source,
+    })?;
     let format = |message: String| SceneError::Format {
         path: path.to_owned(),
         message,
@@ -198,7 +196,11 @@ mod tests {
         let ours = dir.path().join("ours.txt");
         write_text_atomically(&ours, "x").expect("write");
         assert_eq!(mode(&ours), mode(&plain));
-        assert_ne!(mode(&ours), 0o600, "not tempfile's private mode (umask 077 aside)");
+        assert_ne!(
+            mode(&ours),
+            0o600,
+            "not tempfile's private mode (umask 077 aside)"
+        );
         std::fs::set_permissions(&ours, std::fs::Permissions::from_mode(0o640)).expect("chmod");
         write_text_atomically(&ours, "y").expect("overwrite");
         assert_eq!(mode(&ours), 0o640);

@@ -235,6 +235,18 @@ fn broken_gltf_files_give_errors_naming_the_file() {
         assert!(matches!(err, GeometryError::Gltf { .. }), "{name}: {err:?}");
         assert!(err.to_string().contains(name), "{name}: {err}");
     }
+    // glTF 1.0 is another format: refused by name (issue 34, item 9).
+    let old = write(
+        dir.path(),
+        "old.gltf",
+        br#"{"asset":{"version":"1.0"},"meshes":[]}"#,
+    );
+    let err = load_mesh(&old, &raw()).expect_err("glTF 1.0");
+    assert!(matches!(err, GeometryError::Gltf { .. }), "{err:?}");
+    assert!(
+        err.to_string().contains("old.gltf") && err.to_string().contains("glTF 1.0"),
+        "{err}"
+    );
     let no_mesh = write(
         dir.path(),
         "no_mesh.gltf",

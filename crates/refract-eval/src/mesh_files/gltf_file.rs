@@ -38,6 +38,14 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|err| error(err.to_string()))?;
     let json = document.into_json();
+    // glTF 1.0 is another format (materials as techniques, no accessor-based meshes as 2.0
+    // reads them): refused by name rather than read as if it were 2.0.
+    if !json.asset.version.starts_with("2.") {
+        return Err(error(format!(
+            "glTF {} (asset.version); expected a glTF 2.0 file",
+            json.asset.version
+        )));
+    }
     check_accessor_indices(&json).map_err(error)?;
     let document = gltf::Document::from_json(json).map_err(|err| error(err.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
