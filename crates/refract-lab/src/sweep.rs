@@ -217,6 +217,30 @@ impl Sweep {
         } else {
             file.ior.iter().copied().map(Some).collect()
         };
+        // The product of the axes, counted before any job is built (exclusions only remove).
+        let per_method: u128 = methods
+            .iter()
+            .map(|method| {
+                file.params
+                    .iter()
+                    .filter(|(name, _)| method.info().params.iter().any(|p| p.name == *name))
+                    .fold(1u128, |n, (_, values)| {
+                        n.saturating_mul(values.len() as u128)
+                    })
+            })
+            .fold(0u128, u128::saturating_add);
+        let count = [
+            file.scenes.len(),
+            iors.len(),
+            file.res.len(),
+            file.backends.len(),
+        ]
+        .iter()
+        .fold(per_method, |n, &axis| n.saturating_mul(axis as u128));
+        crate::ensure!(
+            count <= MAX_JOBS as u128,
+            "{origin}: the axes make {count} jobs (before exclusions); at most {MAX_JOBS} are run from one sweep file: split it, or sweep fewer values"
+        );
         let mut jobs = Vec::new();
         for scene in &file.scenes {
             for &ior in &iors {
@@ -335,6 +359,10 @@ struct Prepared {
     /// The reference's PNG and HDR script.
     reference_images: (String, String),
 }
+
+/// The most jobs one sweep file may make (about 200 bytes each in memory: 200 MB), checked by
+/// counting the product of its axes before any job is built.
+pub const MAX_JOBS: usize = 1_000_000;
 
 /// The jobs of `args.shard` of the sweep file (what `refract sweep --list` prints).
 pub fn shard_jobs(args: &SweepArgs) -> crate::Result<Vec<Job>> {
@@ -654,6 +682,32 @@ mod tests {
         let path = dir.path().join("s.toml");
         std::fs::write(&path, text).expect("write");
         Sweep::load(&path)
+    }
+
+    /// A small file whose axes multiply to millions of jobs is refused with the count and the
+    /// limit, from the count of the product, before any job is built (issue 34, item 4: 32.8
+    /// million jobs took 6 GiB in 18 s).
+    #[test]
+    fn sweeps_beyond_the_job_limit_are_refused_before_expansion() {
+        let values = |n: usize| {
+            (1..=n)
+                .map(|k| k.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let text = format!(
+            "scenes = [\"sphere\", \"chart\"]\nmethods = [\"iterative-seeded\"]\nres = [{}]\n\
+             [params]\nseeds = [{}]\niterations = [{}]\nguard = [{}]\n",
+            values(64),
+            values(16),
+            values(16),
+            values(100),
+        );
+        let err = sweep(&text).err().expect("too many jobs").to_string();
+        assert!(
+            err.contains("3276800 jobs") && err.contains("1000000"),
+            "{err}"
+        );
     }
 
     #[test]
