@@ -45,6 +45,18 @@ pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), Scen
             });
         }
     };
+    if let Some(v) = rgb
+        .iter()
+        .find(|v| v.is_finite() && **v > MAX_ENVIRONMENT_RADIANCE)
+    {
+        return Err(format_error(
+            path,
+            format!(
+                "a texel holds {v:e}; expected radiance from 0 to {MAX_ENVIRONMENT_RADIANCE:e} \
+                 (larger values overflow f32 when a renderer sums them)"
+            ),
+        ));
+    }
     let mut report = EnvironmentReport::default();
     for v in &mut rgb {
         if !v.is_finite() {
@@ -65,6 +77,11 @@ pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), Scen
         report,
     ))
 }
+
+/// The largest radiance an environment texel may hold: a renderer sums texels (bilinear taps,
+/// samples, Fresnel branches, the scene's `intensity` up to 10⁶), and 10²⁰ leaves those sums
+/// 10¹⁸ below `f32::MAX`; a real sky's sun is below 10¹⁰.
+pub const MAX_ENVIRONMENT_RADIANCE: f32 = 1e20;
 
 /// The largest width or height of an environment map.
 pub const MAX_ENVIRONMENT_DIMENSION: u32 = 16384;
@@ -198,5 +215,37 @@ mod tests {
             .expect("write");
         let err = load_latlong(&empty).expect_err("empty");
         assert!(err.to_string().contains("empty.hdr"), "{err}");
+    }
+
+    /// A map whose texels hold 3e38 (they overflow to inf when a renderer sums them) is an
+    /// error naming the file and the range, and a frame with a non-finite colour is never
+    /// written (issue 34, item 6).
+    #[test]
+    fn huge_texels_are_refused_and_non_finite_frames_are_not_written() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let map = dir.path().join("bright.exr");
+        let mut frame = refract_scene::Frame::new(4, 2);
+        frame.color[3] = Vec3::splat(3e38);
+        frame.write_exr(&map).expect("a finite frame is written");
+        let err = load_latlong(&map).expect_err("3e38").to_string();
+        assert!(err.contains("bright.exr") && err.contains("1e20"), "{err}");
+
+        frame.color[5] = Vec3::new(f32::INFINITY, 0.0, 0.0);
+        frame.color[6] = Vec3::NAN;
+        for name in ["inf.exr", "inf.png"] {
+            let path = dir.path().join(name);
+            let err = if name.ends_with("exr") {
+                frame.write_exr(&path)
+            } else {
+                frame.write_png(&path)
+            }
+            .expect_err("non-finite")
+            .to_string();
+            assert!(
+                err.contains(name) && err.contains("2 pixels") && err.contains("x = 1, y = 1"),
+                "{err}"
+            );
+            assert!(!path.exists(), "{name} written");
+        }
     }
 }

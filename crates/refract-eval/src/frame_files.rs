@@ -7,6 +7,7 @@ use glam::Vec3;
 use refract_scene::{Aov, AovKind, Frame, SceneError};
 
 use crate::atomic_write::{write_atomically, write_png_rgb8};
+use crate::images::check_finite;
 
 const AXES: [&str; 3] = ["X", "Y", "Z"];
 
@@ -15,7 +16,9 @@ const AXES: [&str; 3] = ["X", "Y", "Z"];
 pub trait FrameFiles: Sized {
     /// Writes one EXR with channels `R G B` and every layer present: vectors as `NAME.X`,
     /// `NAME.Y`, `NAME.Z` (e.g. `T2.X`), counts and flags as one channel (`interfaces`, `tir`),
-    /// all 32-bit float. Written atomically (no partial file on failure).
+    /// all 32-bit float. Written atomically (no partial file on failure). A frame with a
+    /// non-finite colour is an error naming the count and the first pixel (layers may hold NaN:
+    /// "no value here").
     fn write_exr(&self, path: &Path) -> Result<(), SceneError>;
     /// Writes the colour as an 8-bit sRGB PNG after [`refract_scene::tonemap::to_srgb8`],
     /// atomically.
@@ -28,6 +31,7 @@ pub trait FrameFiles: Sized {
 impl FrameFiles for Frame {
     fn write_exr(&self, path: &Path) -> Result<(), SceneError> {
         use exr::prelude::*;
+        check_finite(path, self.width, &self.color)?;
         let mut channels = Vec::new();
         for (k, name) in ["R", "G", "B"].iter().enumerate() {
             let samples = self.color.iter().map(|c| c[k]).collect();
@@ -72,6 +76,7 @@ impl FrameFiles for Frame {
     }
 
     fn write_png(&self, path: &Path) -> Result<(), SceneError> {
+        check_finite(path, self.width, &self.color)?;
         let pixels: Vec<u8> = self
             .color
             .iter()

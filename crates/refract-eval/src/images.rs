@@ -14,8 +14,29 @@ pub const T2_SCALE_DEG: f32 = 20.0;
 /// The top of the colour bar of |P~2 − P2| maps, fraction of the bounding-sphere diameter.
 pub const P2_SCALE: f32 = 0.2;
 
+/// Refuses a colour image with a non-finite value (a writer never writes inf or NaN as if it
+/// were radiance): the error names the file, the count and the first pixel.
+pub fn check_finite(path: &Path, width: u32, color: &[Vec3]) -> Result<(), SceneError> {
+    let bad = |c: &&Vec3| !c.is_finite();
+    let Some(first) = color.iter().position(|c| bad(&c)) else {
+        return Ok(());
+    };
+    let count = color.iter().filter(bad).count();
+    let width = width.max(1) as usize;
+    Err(SceneError::Format {
+        path: path.to_owned(),
+        message: format!(
+            "{count} pixels have a non-finite colour (the first at x = {}, y = {}: {}); nothing was written",
+            first % width,
+            first / width,
+            color[first]
+        ),
+    })
+}
+
 /// Linear radiance, tonemapped to sRGB.
 pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> Result<(), SceneError> {
+    check_finite(path, width, color)?;
     let pixels: Vec<u8> = color.iter().flat_map(|&c| to_srgb8(c)).collect();
     write_png_rgb8(path, width, height, &pixels)
 }
@@ -33,6 +54,7 @@ pub fn write_hdr_script(
     height: u32,
     color: &[Vec3],
 ) -> Result<(), SceneError> {
+    check_finite(path, width, color)?;
     let w = width as usize;
     let mut pixels = vec![0u8; 2 * w * height as usize * 3];
     for (i, &c) in color.iter().enumerate() {
