@@ -217,6 +217,15 @@ fn main() -> ExitCode {
         Some(Command::Sweep(args)) => run_sweep(&args),
         Some(Command::Report(args)) => sweep_report::run(&args)
             .map(|r| {
+                if !r.missing.is_empty() {
+                    let shown: Vec<&str> = r.missing.iter().take(4).map(String::as_str).collect();
+                    eprintln!(
+                        "warning: {} images the results name are missing ({}{}); the page marks them",
+                        r.missing.len(),
+                        shown.join(", "),
+                        if r.missing.len() > shown.len() { ", ..." } else { "" }
+                    );
+                }
                 println!(
                     "{} jobs ({} failed) -> {}/index.html, report.md, results.json, {} plots",
                     r.jobs,

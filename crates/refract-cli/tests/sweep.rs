@@ -271,3 +271,28 @@ fn a_cache_that_is_a_file_leaves_nothing_behind() {
     assert!(err.contains("cachefile"), "{err}");
     assert!(!dir.path().join("o").exists(), "left behind: o/");
 }
+
+/// A sweep directory whose images were deleted: `refract report` says how many are missing and
+/// the page marks them (issue 34, item 8: it exited 0 without a word, linking missing images).
+#[test]
+fn the_report_names_missing_images() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("small.toml"),
+        "scenes = [\"sphere\"]\nmethods = [\"single\", \"wyman\"]\nres = [16]\nframes = 1\n",
+    )
+    .expect("write");
+    ok(&refract(&["sweep", "small.toml", "--out", "s"], dir.path()));
+    std::fs::remove_dir_all(dir.path().join("s/images")).expect("delete the images");
+    let out = refract(&["report", "s", "--out", "r"], dir.path());
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("images the results name are missing"), "{err}");
+    let page = std::fs::read_to_string(dir.path().join("r/index.html")).expect("page");
+    assert!(page.contains("id=\"missing\""), "no missing-images banner");
+    assert_eq!(
+        page.matches("missing: images/").count(),
+        2,
+        "two thumbnails marked"
+    );
+}

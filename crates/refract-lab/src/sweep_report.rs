@@ -74,6 +74,8 @@ pub struct ReportSummary {
     pub plots: usize,
     /// The output directory (`index.html`, `report.md`, `results.json`).
     pub out: PathBuf,
+    /// Images the results name that none of the directories has (marked on the page).
+    pub missing: Vec<String>,
 }
 
 /// Gathers the job results under `args.dirs` (shards) into `args.out`: their images,
@@ -111,26 +113,52 @@ pub fn run(args: &ReportArgs) -> crate::Result<ReportSummary> {
         &args.out.join("results.json"),
         &serde_json::to_string_pretty(&results).context("serialising results")?,
     )?;
-    let plots = write_html(&args.out, &results)?;
+    let Page { plots, missing } = write_html(&args.out, &results)?;
     write_text_atomically(&args.out.join("report.md"), &markdown(&results, &plots))?;
     Ok(ReportSummary {
         jobs: results.len(),
         failed: results.iter().filter(|r| r.status != "ok").count(),
         plots: plots.len(),
         out: args.out.clone(),
+        missing,
     })
 }
 
 /// Writes the plots, the scripts and the interactive `index.html` of `results` into `out`
 /// (whose `images/` or scene directories hold the images the results name); returns the plots
-/// as `(file, title)`.
-pub fn write_html(out: &Path, results: &[JobResult]) -> crate::Result<Vec<(String, String)>> {
+/// and the images that are missing.
+pub fn write_html(out: &Path, results: &[JobResult]) -> crate::Result<Page> {
     let plots = write_plots(out, results)?;
     write_text_atomically(&out.join("img-comparison-slider.js"), SLIDER_JS)?;
     write_text_atomically(&out.join("report.js"), REPORT_JS)?;
     let all_images = out.join("all-images.html").is_file();
-    write_text_atomically(&out.join("index.html"), &html(results, &plots, all_images)?)?;
-    Ok(plots)
+    let missing = missing_images(out, results);
+    write_text_atomically(
+        &out.join("index.html"),
+        &html(results, &plots, all_images, &missing)?,
+    )?;
+    Ok(Page { plots, missing })
+}
+
+/// What `write_html` wrote: the plots as `(file, title)`, and the images the results name that
+/// are not under the output directory (the page says so and marks their thumbnails).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Page {
+    /// The plots, `(file, title)`.
+    pub plots: Vec<(String, String)>,
+    /// The images named by the results but missing, relative to the output directory.
+    pub missing: Vec<String>,
+}
+
+/// The images `results` name that are not files under `out`, in the results' order.
+fn missing_images(out: &Path, results: &[JobResult]) -> Vec<String> {
+    results
+        .iter()
+        .filter_map(|r| r.images.as_ref())
+        .flat_map(|i| i.files())
+        .filter(|file| !out.join(file).is_file())
+        .map(str::to_owned)
+        .collect()
 }
 
 fn cell(v: Option<f64>, digits: usize) -> String {
@@ -487,6 +515,7 @@ fn html(
     results: &[JobResult],
     plots: &[(String, String)],
     all_images: bool,
+    missing: &[String],
 ) -> crate::Result<String> {
     let cols = columns();
     let mut h = String::new();
@@ -513,6 +542,21 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
             ""
         }
     );
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(8).map(|f| escape(f)).collect();
+        let _ = write!(
+            h,
+            "<p class=\"failed\" id=\"missing\">{} images the results name are missing from this \
+             directory: {}{}. Their thumbnails are marked <em>missing</em>.</p>",
+            missing.len(),
+            shown.join(", "),
+            if missing.len() > shown.len() {
+                ", …"
+            } else {
+                ""
+            }
+        );
+    }
     h.push_str("<table id=\"metrics\"><thead><tr>");
     for (name, _) in &cols {
         let _ = write!(h, "<th>{}</th>", escape(name));
@@ -599,6 +643,15 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
                 .map(|(k, v)| format!("{k}={v}"))
                 .collect();
             let caption = format!("{} {} {}", r.job.method, r.job.backend, params.join(" "));
+            if missing.contains(&imgs.color) {
+                let _ = write!(
+                    h,
+                    "<figure class=\"failed\"><figcaption>missing: {}<br>{}</figcaption></figure>",
+                    escape(&imgs.color),
+                    escape(&caption)
+                );
+                continue;
+            }
             let _ = write!(
                 h,
                 "<figure class=\"thumb\" data-image=\"{}\" data-flip=\"{}\" data-t2=\"{}\" data-reference=\"{}\" data-miss=\"{miss}\" \
