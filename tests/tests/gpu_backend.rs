@@ -469,3 +469,40 @@ fn gpu_pvrr_agrees_with_cpu_pvrr() {
         );
     }
 }
+
+/// An allocation the device cannot make is an error naming the method, its parameters and the
+/// frame, never a panic, and the renderer renders again after it (issue 34, item 1: exit 101
+/// with "wgpu error: Out of Memory" on lavapipe, which cannot hold three 6 × 8 layers of 2048²
+/// float faces; a GPU that can holds them and renders).
+#[test]
+fn gpu_out_of_memory_is_an_error_not_a_panic() {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
+        return;
+    };
+    let room = Arc::new(load_scene("glass-room").expect("scene").scene);
+    gpu.prepare(&room).expect("prepare");
+    let mut huge = method(MethodId::DistanceMap);
+    for (name, value) in [("res", "2048"), ("layers", "8")] {
+        huge.set(name, value, "test").expect(name);
+    }
+    let mut frame = Frame::default();
+    let cam = camera(16);
+    if let Err(err) = gpu.render(&cam, &huge, FrameOutputs::Color, &mut frame) {
+        let message = refract_scene::full_message(&err);
+        assert!(
+            message.contains("distance-map")
+                && message.contains("res=2048")
+                && message.contains("16x16")
+                && message.contains("out of memory"),
+            "{message}"
+        );
+    }
+    gpu.render(
+        &cam,
+        &method(MethodId::DistanceMap),
+        FrameOutputs::Color,
+        &mut frame,
+    )
+    .expect("a frame after the error");
+    assert_eq!(frame.pixel_count(), 256);
+}

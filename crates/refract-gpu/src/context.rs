@@ -1,6 +1,7 @@
 //! Finding an adapter and a device, headless, with clear errors.
 
 use std::fmt;
+use std::sync::{Arc, Mutex};
 
 /// Why the GPU backend could not run.
 #[derive(Debug, thiserror::Error)]
@@ -30,6 +31,9 @@ pub enum GpuError {
         /// Which limit.
         limit: String,
     },
+    /// The device could not allocate a resource.
+    #[error("the GPU is out of memory")]
+    OutOfMemory,
     /// A wgpu validation or device error while rendering.
     #[error("GPU error: {0}")]
     Wgpu(String),
@@ -51,6 +55,9 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether GPU timestamps are available (TIMESTAMP_QUERY).
     pub timestamps: bool,
+    /// The first error no scope caught (wgpu's default handler panics; ours keeps it for the
+    /// next [`GpuContext::checked`] or [`GpuContext::wait`] to return).
+    uncaught: Arc<Mutex<Option<String>>>,
 }
 
 impl fmt::Debug for GpuContext {
@@ -133,11 +140,19 @@ impl GpuContext {
                 adapter: info.name.clone(),
                 message: err.to_string(),
             })?;
+        let uncaught = Arc::new(Mutex::new(None));
+        let keep = Arc::clone(&uncaught);
+        device.on_uncaptured_error(Arc::new(move |err: wgpu::Error| {
+            if let Ok(mut slot) = keep.lock() {
+                slot.get_or_insert_with(|| err.to_string());
+            }
+        }));
         Ok(Self {
             device,
             queue,
             info,
             timestamps,
+            uncaught,
         })
     }
 
@@ -155,12 +170,21 @@ impl GpuContext {
         }
     }
 
-    /// Waits for all submitted work.
+    /// Waits for all submitted work; an error no scope caught since is returned here.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|err| GpuError::Readback(err.to_string()))
+            .map_err(|err| GpuError::Readback(err.to_string()))?;
+        self.take_uncaught()
+    }
+
+    fn take_uncaught(&self) -> Result<(), GpuError> {
+        let error = match self.uncaught.lock() {
+            Ok(mut slot) => slot.take(),
+            Err(poisoned) => poisoned.into_inner().take(),
+        };
+        error.map_or(Ok(()), |message| Err(GpuError::Wgpu(message)))
     }
 
     /// Copies a `MAP_READ` buffer's content out.
@@ -183,13 +207,24 @@ impl GpuContext {
         Ok(data)
     }
 
-    /// Runs `work` inside a validation error scope and reports the first error.
+    /// Runs `work` inside validation, out-of-memory and internal error scopes and reports the
+    /// first error (an allocation the device cannot make is [`GpuError::OutOfMemory`], never a
+    /// panic).
     pub fn checked<T>(&self, work: impl FnOnce() -> T) -> Result<T, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let value = work();
-        match pollster::block_on(scope.pop()) {
-            Some(err) => Err(GpuError::Wgpu(err.to_string())),
-            None => Ok(value),
+        let internal = pollster::block_on(internal.pop());
+        let memory = pollster::block_on(memory.pop());
+        let validation = pollster::block_on(validation.pop());
+        if memory.is_some() {
+            return Err(GpuError::OutOfMemory);
         }
+        if let Some(err) = validation.or(internal) {
+            return Err(GpuError::Wgpu(err.to_string()));
+        }
+        self.take_uncaught()?;
+        Ok(value)
     }
 }

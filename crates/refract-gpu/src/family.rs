@@ -9,7 +9,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use refract_core::Camera;
-use refract_scene::{Frame, FrameOutputs, FrameTiming, MethodId, RenderError, Scene, TimingSource};
+use refract_scene::{
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Scene,
+    TimingSource,
+};
 
 use crate::context::{GpuContext, GpuError};
 use crate::passes::raster::RasterPipelines;
@@ -27,6 +30,8 @@ pub(crate) struct GpuFrameCx<'a> {
     pub camera: &'a Camera,
     /// The method rendered: its pipeline, and its registry row's AOV layers.
     pub method: MethodId,
+    /// All of its parameters (for messages).
+    pub params: &'a MethodParams,
     pub outputs: FrameOutputs,
     /// Timestamp queries around the frame's passes, where the adapter has them.
     pub timestamps: Option<&'a Timestamps>,
@@ -87,6 +92,18 @@ pub(crate) trait GpuFamily {
     ) -> Result<(), RenderError>;
 }
 
+/// A family's targets could not be allocated (out of memory, a limit of the adapter).
+#[derive(Debug, thiserror::Error)]
+#[error("{method} ({params}): cannot allocate its GPU targets for a {width}x{height} frame")]
+struct AllocationError {
+    method: MethodId,
+    params: String,
+    width: u32,
+    height: u32,
+    #[source]
+    source: GpuError,
+}
+
 /// A family and the targets of its last frame.
 pub(crate) struct FamilySlot<F: GpuFamily> {
     pub family: F,
@@ -121,7 +138,20 @@ impl<F: GpuFamily> FamilySlot<F> {
             Some(targets) if self.family.fits(&targets, cx, params) => self.targets.insert(targets),
             stale => {
                 drop(stale);
-                self.targets.insert(self.family.allocate(cx, params)?)
+                let targets = self.family.allocate(cx, params).map_err(|source| {
+                    let (width, height) = cx.size();
+                    RenderError::backend(
+                        BackendId::Gpu,
+                        AllocationError {
+                            method: cx.method,
+                            params: cx.params.describe(),
+                            width,
+                            height,
+                            source,
+                        },
+                    )
+                })?;
+                self.targets.insert(targets)
             }
         };
         let start = Instant::now();

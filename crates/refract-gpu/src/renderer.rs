@@ -139,6 +139,7 @@ impl Renderer for GpuRenderer {
             gpu_scene,
             camera,
             method: id,
+            params: method,
             outputs,
             timestamps: self.timestamps.as_ref(),
         };
