@@ -1,6 +1,6 @@
 //! Mutation fuzzing of every loader on stable Rust, through the library APIs: real files
 //! (suzanne.obj, a glTF written here, apartment.exr and city.hdr of `../shared/data`, a scene
-//! file) with bytes replaced, inserted, deleted and the tail cut, must load or fail with an
+//! file, a sweep file) with bytes replaced, inserted, deleted and the tail cut, must load or fail with an
 //! error, never panic, hang or allocate without bound.
 //!
 //! `cargo test` runs a small budget (32 cases per loader); a long run:
@@ -189,6 +189,20 @@ proptest! {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "s.toml", &mutate(seed, &edits));
         let _ = refract_eval::load_scene(&path.display().to_string());
+    }
+
+    /// Sweep files: any edit loads or is an error; digits inserted into the axes can make the
+    /// product of the axes enormous, which is refused from the count, never built.
+    #[test]
+    fn sweep_file_loader_never_panics(edits in prop::collection::vec(edit(), 1..8)) {
+        let seed = b"scenes = [\"sphere\", \"chart\"]\nmethods = [\"wyman\", \"iterative-seeded\"]\n\
+backends = [\"cpu\"]\nior = [1.2, 1.5]\nres = [32, 64]\nframes = 1\n\n[params]\nseeds = [3, 7]\n\
+guard = [0, 20]\n\n[[exclude]]\nscene = \"sphere\"\nmethod = \"iterative-seeded\"\n";
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = write_case(dir.path(), "sweep.toml", &mutate(seed, &edits));
+        if let Ok(sweep) = refract_lab::sweep::Sweep::load(&path) {
+            prop_assert!(sweep.jobs.len() <= refract_lab::sweep::MAX_JOBS);
+        }
     }
 }
 
