@@ -116,25 +116,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let (width, height) = parse_res(&args.res)?;
     let method = method_params(args)?;
     let exr = extension.as_deref() == Some("exr");
-    let (per_pixel, backends) = match (method.id() == MethodId::Reference, exr) {
-        (true, true) => (
-            refract_lab::memory::RENDER_REFERENCE_EXR_BYTES_PER_PIXEL,
-            vec![BackendId::Trace],
-        ),
-        (true, false) => (
-            refract_lab::memory::RENDER_REFERENCE_PNG_BYTES_PER_PIXEL,
-            vec![BackendId::Trace],
-        ),
-        (false, true) => (
-            refract_lab::memory::RENDER_METHOD_EXR_BYTES_PER_PIXEL,
-            vec![backend],
-        ),
-        (false, false) => (
-            refract_lab::memory::RENDER_METHOD_PNG_BYTES_PER_PIXEL,
-            vec![backend],
-        ),
+    let backends = if method.id() == MethodId::Reference {
+        vec![BackendId::Trace]
+    } else {
+        vec![backend]
     };
-    refract_lab::memory::check("this render", width, height, per_pixel, &backends)?;
+    refract_lab::memory::check_method("this render", &method, width, height, exr, &backends)?;
     let loaded = load_scene(&args.scene)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");

@@ -86,6 +86,16 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         crate::memory::COMPARE_BYTES_PER_PIXEL,
         &options.backends,
     )?;
+    for method in &options.methods {
+        crate::memory::check_method(
+            "this comparison",
+            method,
+            options.res,
+            options.res,
+            true,
+            &options.backends,
+        )?;
+    }
     crate::output_dirs::create_dir(&options.out).with_context(|| {
         format!(
             "{}: cannot create the output directory",

@@ -1,19 +1,12 @@
 //! Refusing jobs that cannot fit in memory before they start: the bytes a job needs, from the
-//! bytes per pixel measured for each kind of run (`docs/performance.md`), against the memory
-//! the system says is available (`MemAvailable` of `/proc/meminfo`; no check where it cannot
-//! be read).
+//! method's measured model (its registry row's `memory`: bytes per pixel with and without
+//! layers, bytes per texel of the textures its parameters size) or the bytes per pixel measured
+//! for a comparison (`docs/performance.md`), against the memory the system says is available
+//! (`MemAvailable` of `/proc/meminfo`; no check where it cannot be read).
 
-use refract_scene::BackendId;
+use refract_scene::{BackendId, MethodParams};
 
 /// Measured peak resident bytes per pixel (`/usr/bin/time -f %M`, 1024² vs 2048², release):
-/// `refract render` of an image-space method on the CPU to a PNG (colour-only frames).
-pub const RENDER_METHOD_PNG_BYTES_PER_PIXEL: u64 = 46;
-/// `refract render` of an image-space method to an EXR (colour and AOV layers).
-pub const RENDER_METHOD_EXR_BYTES_PER_PIXEL: u64 = 182;
-/// `refract render --method reference` to a PNG.
-pub const RENDER_REFERENCE_PNG_BYTES_PER_PIXEL: u64 = 120;
-/// `refract render --method reference` to an EXR.
-pub const RENDER_REFERENCE_EXR_BYTES_PER_PIXEL: u64 = 234;
 /// `refract compare` on the CPU (the reference, every method's frame and error maps).
 pub const COMPARE_BYTES_PER_PIXEL: u64 = 330;
 /// What the GPU backend adds (targets, output and readback buffers: host memory on lavapipe).
@@ -41,6 +34,59 @@ fn available() -> Option<u64> {
 
 fn gib(bytes: u64) -> f64 {
     bytes as f64 / f64::from(1u32 << 30)
+}
+
+/// The bytes a frame of `method` at `width × height` needs (with its AOV layers when
+/// `layers`): its row's memory model, plus the GPU's share when it runs there (its per-pixel
+/// targets and its own copy of the textures; host memory on lavapipe).
+pub fn method_estimate(
+    method: &MethodParams,
+    width: u32,
+    height: u32,
+    layers: bool,
+    backends: &[BackendId],
+) -> u64 {
+    let model = method.id().info().memory;
+    let frame = model.bytes(method, width, height, layers);
+    let gpu = if backends.contains(&BackendId::Gpu) {
+        let textures = model.bytes(method, width, height, false)
+            - u64::from(width) * u64::from(height) * u64::from(model.color_bytes_per_pixel);
+        u64::from(width) * u64::from(height) * GPU_BYTES_PER_PIXEL + textures
+    } else {
+        0
+    };
+    BASE_BYTES + frame + gpu
+}
+
+/// Fails, with the estimate and the limit, when a frame of `method` would not fit
+/// ([`method_estimate`]).
+pub fn check_method(
+    what: &str,
+    method: &MethodParams,
+    width: u32,
+    height: u32,
+    layers: bool,
+    backends: &[BackendId],
+) -> crate::Result<()> {
+    let needed = method_estimate(method, width, height, layers, backends);
+    if let Some(limit) = available() {
+        crate::ensure!(
+            needed <= limit,
+            "{what} of {} ({}) at {width}x{height} needs about {:.1} GiB (measured for this method \
+             and its parameters{}), but {:.1} GiB are available; choose a smaller --res or smaller \
+             textures",
+            method.id(),
+            method.describe(),
+            gib(needed),
+            if backends.contains(&BackendId::Gpu) {
+                ", with the GPU's share"
+            } else {
+                ""
+            },
+            gib(limit)
+        );
+    }
+    Ok(())
 }
 
 /// Fails, with the estimate and the limit, when a job of `width × height` would not fit.
@@ -73,6 +119,30 @@ pub fn check(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use refract_scene::MethodId;
+
+    /// The estimate follows the method and its parameters (issue 34, item 5: it assumed 182
+    /// bytes a pixel for every method; `iterative-seeded` with `guard=100` needs about 640, so
+    /// its 8192² EXR, about 40 GiB, was accepted on a 24 GiB machine).
+    #[test]
+    fn estimates_follow_the_method_and_its_parameters() {
+        let gib_of = |m: &MethodParams, r: u32, layers| {
+            gib(method_estimate(m, r, r, layers, &[BackendId::Cpu]))
+        };
+        let wyman = MethodParams::defaults(MethodId::Wyman);
+        let mut seeded = MethodParams::defaults(MethodId::IterativeSeeded);
+        let narrow = gib_of(&seeded, 8192, true);
+        seeded.set("guard", "100", "test").expect("guard");
+        let wide = gib_of(&seeded, 8192, true);
+        assert!((10.0..14.0).contains(&gib_of(&wyman, 8192, true)), "wyman");
+        assert!((18.0..23.0).contains(&narrow), "seeded: {narrow}");
+        assert!((38.0..44.0).contains(&wide), "seeded, guard 100: {wide}");
+        // Textures sized by parameters, whatever the frame: 6 x 8 distance-map layers of 2048².
+        let mut maps = MethodParams::defaults(MethodId::DistanceMap);
+        maps.set("res", "2048", "test").expect("res");
+        maps.set("layers", "8", "test").expect("layers");
+        assert!(gib_of(&maps, 16, false) > 2.0);
+    }
 
     #[test]
     fn estimates_grow_with_pixels_and_the_gpu() {
@@ -85,11 +155,8 @@ mod tests {
         assert_eq!(cpu, BASE_BYTES + (1 << 20) * 330);
         assert_eq!(both - cpu, (1 << 20) * GPU_BYTES_PER_PIXEL);
         // 16384² of `wyman` to an EXR is about 46 GiB.
-        let huge = estimate(
-            16384 * 16384,
-            RENDER_METHOD_EXR_BYTES_PER_PIXEL,
-            &[BackendId::Cpu],
-        );
+        let wyman = MethodParams::defaults(MethodId::Wyman);
+        let huge = method_estimate(&wyman, 16384, 16384, true, &[BackendId::Cpu]);
         assert!(gib(huge) > 40.0);
     }
 }

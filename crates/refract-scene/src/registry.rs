@@ -152,8 +152,51 @@ pub struct MethodInfo {
     /// Whether it renders conductors (mirrors, metals) as the specular object or among the
     /// other objects; methods that do not refract through glass among diffuse objects only.
     pub renders_conductors: bool,
+    /// What a frame of it holds in host memory (for refusing jobs that cannot fit).
+    pub memory: MemoryModel,
     /// The backends that run it.
     pub backends: &'static [BackendId],
+}
+
+/// What a frame of a method holds in host memory, measured (peak resident memory, the slope
+/// between two resolutions and two parameter values; `docs/performance.md`): bytes per pixel
+/// of the frame, plus bytes per texel of the textures its parameters size (the NG texture,
+/// distance maps, PVRR maps).
+#[derive(Clone, Copy, Debug)]
+pub struct MemoryModel {
+    /// Bytes per pixel of a colour-only frame.
+    pub color_bytes_per_pixel: u32,
+    /// Bytes per pixel of a frame with its AOV layers.
+    pub layers_bytes_per_pixel: u32,
+    /// Texels of the textures `params` size for a `width × height` frame.
+    pub texels: fn(&MethodParams, u32, u32) -> u64,
+    /// Bytes per such texel.
+    pub bytes_per_texel: u32,
+}
+
+impl MemoryModel {
+    /// No textures beyond the frame's buffers.
+    pub(crate) const fn per_pixel(color: u32, layers: u32) -> Self {
+        Self {
+            color_bytes_per_pixel: color,
+            layers_bytes_per_pixel: layers,
+            texels: |_, _, _| 0,
+            bytes_per_texel: 0,
+        }
+    }
+
+    /// The bytes of a `width × height` frame of `params`, with or without its layers.
+    pub fn bytes(&self, params: &MethodParams, width: u32, height: u32, layers: bool) -> u64 {
+        let per_pixel = if layers {
+            self.layers_bytes_per_pixel
+        } else {
+            self.color_bytes_per_pixel
+        };
+        let pixels = u64::from(width) * u64::from(height);
+        pixels.saturating_mul(u64::from(per_pixel)).saturating_add(
+            (self.texels)(params, width, height).saturating_mul(u64::from(self.bytes_per_texel)),
+        )
+    }
 }
 
 /// A parameter's value, checked against its [`ParamSpec`].

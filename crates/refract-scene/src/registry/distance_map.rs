@@ -3,8 +3,8 @@
 use refract_core::distance_map::{DielectricFresnel, MAX_LAYERS, PathParams, SearchParams};
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MethodId, MethodInfo, MethodParams, ParamKind, ParamSpec,
-    ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
+    ParamSpec, ParamValue, choice_names, lookup, name_of,
 };
 use crate::frame::Aov;
 
@@ -153,6 +153,17 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     aovs: DISTANCE_MAP_AOVS,
     defaults: || MethodParams::DistanceMap(DistanceMapParams::DEFAULT),
     renders_conductors: true,
+    memory: MemoryModel {
+        color_bytes_per_pixel: 23,
+        layers_bytes_per_pixel: 99,
+        texels: |params, _, _| match params {
+            MethodParams::DistanceMap(p) => {
+                6 * u64::from(p.layers) * u64::from(p.resolution).pow(2)
+            }
+            _ => 0,
+        },
+        bytes_per_texel: 13,
+    },
     backends: CPU_AND_GPU,
 }];
 

@@ -5,8 +5,8 @@ use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, DistanceMode, TirPolicy};
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MethodId, MethodInfo, MethodParams, ParamKind, ParamSpec,
-    ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
+    ParamSpec, ParamValue, choice_names, lookup, name_of,
 };
 use crate::frame::Aov;
 use crate::renderer::RenderError;
@@ -116,6 +116,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: &[Aov::Covered, Aov::T2, Aov::Tir],
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::Single),
         renders_conductors: false,
+        memory: MemoryModel::per_pixel(47, 186),
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -129,6 +130,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::Interpolated)),
         renders_conductors: false,
+        memory: MemoryModel::per_pixel(47, 186),
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -142,6 +144,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::ViewOnly)),
         renders_conductors: false,
+        memory: MemoryModel::per_pixel(47, 186),
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -155,6 +158,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::NormalOnly)),
         renders_conductors: false,
+        memory: MemoryModel::per_pixel(47, 186),
         backends: CPU_AND_GPU,
     },
 ];

@@ -2,8 +2,8 @@
 //! `pvrr`.
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MethodId, MethodInfo, MethodParams, ParamKind, ParamSpec,
-    ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
+    ParamSpec, ParamValue, choice_names, lookup, name_of,
 };
 use crate::frame::Aov;
 
@@ -102,6 +102,17 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     aovs: PVRR_AOVS,
     defaults: || MethodParams::Pvrr(PvrrParams::DEFAULT),
     renders_conductors: true,
+    memory: MemoryModel {
+        color_bytes_per_pixel: 23,
+        layers_bytes_per_pixel: 44,
+        // One map per level of the stack and one more (scenes with several reflectors have
+        // several per level: mirror-stack measured 3.4 maps at depth 3).
+        texels: |params, _, _| match params {
+            MethodParams::Pvrr(p) => u64::from(p.depth + 1) * u64::from(p.resolution).pow(2),
+            _ => 0,
+        },
+        bytes_per_texel: 18,
+    },
     backends: CPU_AND_GPU,
 }];
 

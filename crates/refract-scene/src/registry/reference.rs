@@ -1,8 +1,8 @@
 //! The reference's row and parameters: the exact ray tracer (`docs/reference.md`).
 
 use super::{
-    BackendId, Family, FamilyParams, MethodId, MethodInfo, MethodParams, ParamKind, ParamSpec,
-    ParamValue, choice_names, lookup, name_of,
+    BackendId, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
+    ParamSpec, ParamValue, choice_names, lookup, name_of,
 };
 use crate::frame::Aov;
 
@@ -129,6 +129,7 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     ],
     defaults: || MethodParams::Reference(TraceSettings::DEFAULT),
     renders_conductors: true,
+    memory: MemoryModel::per_pixel(118, 239),
     backends: &[BackendId::Trace],
 }];
 
