@@ -4,8 +4,9 @@
 //!
 //! * [`mesh`]: indexed triangle meshes, validation, angle-weighted normals, welding,
 //!   normalisation into the unit bounding sphere, mesh facts (watertight, signed volume).
-//! * [`load`]: OBJ (tobj) and glTF 2.0 (gltf, with `KHR_materials_ior/transmission/volume`)
-//!   loading with the cleanup real files need (inside-out meshes, non-unit normals, degenerates).
+//!   The cleanup real files need (inside-out meshes, non-unit normals, degenerates) is here;
+//!   reading OBJ and glTF files is in refract-eval (`refract_eval::mesh_files`), so that the
+//!   renderers link no file format.
 //! * [`bvh`]: the workspace's BVH (obvhs CwBvh) with closest-hit, occlusion and all-hits queries.
 //! * [`distance_along_normal`]: Wyman 2005a §3.1 per-vertex `d_N`.
 //! * [`shapes`], [`lens`], [`builtin`]: procedural shapes and spectacle lenses (spade).

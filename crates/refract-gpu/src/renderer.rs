@@ -1,7 +1,7 @@
 //! The GPU backend as a [`Renderer`]: the device, the shared raster pipelines, the uploaded
-//! scene and every family ([`crate::methods::Families`], which holds the backend's one
+//! scene and every family (`methods::Families`, which holds the backend's one
 //! exhaustive `match` from [`MethodParams`] to a family). The frame routine (reuse or allocate,
-//! encode, submit, read back, time) is [`crate::family::FamilySlot::run_frame`], written once.
+//! encode, submit, read back, time) is `family::FamilySlot::run_frame`, written once.
 
 use std::sync::Arc;
 

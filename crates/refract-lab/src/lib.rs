@@ -9,7 +9,7 @@
 //!   cache; [`sweep_report`] gathers shards into tables and plots.
 //! * [`claims`]: the papers' testable claims, measured, with computed verdicts
 //!   (`docs/claims.md`).
-//! * [`bench`]: the papers' timing tables on this machine.
+//! * [`bench`](mod@bench): the papers' timing tables on this machine.
 //! * [`backends`], [`memory`], [`timing`], [`data_scenes`], [`output_dirs`]: what they share.
 //!
 //! Progress and notes go through [`Progress`] ([`Quiet`] ignores them); errors are
