@@ -110,9 +110,11 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     let mean =
         d_n.values.iter().map(|&d| f64::from(d)).sum::<f64>() / d_n.values.len().max(1) as f64;
     println!(
-        "d_N              min {min:.4} mean {mean:.4} max {max:.4}; {} misses ({:.2}%) used fallback {:.4}",
+        "d_N              min {min:.4} mean {mean:.4} max {max:.4}; {} misses ({:.2}%) and {} rays over the budget of {} triangles used fallback {:.4}",
         d_n.misses,
         100.0 * d_n.miss_rate(),
+        d_n.over_budget,
+        refract_geometry::distance_along_normal::RAY_BUDGET,
         d_n.fallback
     );
     println!("time             load {load_ms:.1} ms, BVH build {bvh_ms:.1} ms, d_N {d_n_ms:.1} ms");

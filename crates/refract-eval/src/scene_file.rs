@@ -730,6 +730,16 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
             d_n.fallback
         ));
     }
+    if d_n.over_budget > 0 {
+        warnings.push(format!(
+            "d_N: {} of {} vertices' rays crossed more than {} triangles (near-coincident \
+             triangles); they use {:.4}",
+            d_n.over_budget,
+            d_n.values.len(),
+            refract_geometry::distance_along_normal::RAY_BUDGET,
+            d_n.fallback
+        ));
+    }
 
     let mut environment_file = None;
     let environment = match &file.environment.file {

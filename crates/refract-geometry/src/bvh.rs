@@ -14,6 +14,17 @@ use refract_core::Ray;
 use crate::error::GeometryError;
 use crate::mesh::Mesh;
 
+/// What a closest-hit query with a work budget found ([`MeshBvh::closest_hit_within`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BudgetedHit {
+    /// The closest hit, found within the budget.
+    Hit(Hit),
+    /// Nothing is hit.
+    Miss,
+    /// The budget of triangle tests ran out first.
+    OverBudget,
+}
+
 /// A ray-triangle hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -109,6 +120,38 @@ impl MeshBvh {
         self.bvh
             .ray_traverse(query, &mut hit, |r, id| intersect(&self.triangles[id], r))
             .then(|| self.hit_details(ray, hit.t, hit.primitive_id as usize))
+    }
+
+    /// [`MeshBvh::closest_hit`] testing at most `budget` triangles. Where many triangles
+    /// overlap (a fan of near-coincident triangles: their boxes cannot be separated) a ray tests
+    /// them all, and a query per vertex becomes quadratic in the triangle count; past the budget
+    /// the traversal is cut short (a hit before the ray's start culls every node left) and the
+    /// query says so.
+    pub fn closest_hit_within(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        budget: u32,
+    ) -> BudgetedHit {
+        let query = to_obvhs(ray, t_min, t_max);
+        let mut hit = RayHit::none();
+        let mut tests = 0u32;
+        let found = self.bvh.ray_traverse(query, &mut hit, |r, id| {
+            if tests >= budget {
+                tests = budget.saturating_add(1);
+                return f32::NEG_INFINITY;
+            }
+            tests += 1;
+            intersect(&self.triangles[id], r)
+        });
+        if tests > budget {
+            BudgetedHit::OverBudget
+        } else if found {
+            BudgetedHit::Hit(self.hit_details(ray, hit.t, hit.primitive_id as usize))
+        } else {
+            BudgetedHit::Miss
+        }
     }
 
     /// True when anything is hit with `t ∈ [t_min, t_max]` (stops at the first hit found).

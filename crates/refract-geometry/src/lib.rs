@@ -21,7 +21,7 @@ pub mod lens;
 pub mod mesh;
 pub mod shapes;
 
-pub use bvh::{Hit, MeshBvh};
+pub use bvh::{BudgetedHit, Hit, MeshBvh};
 pub use distance_along_normal::{NormalDistances, normal_distances};
 pub use error::GeometryError;
 pub use lens::LensDesc;

@@ -155,3 +155,57 @@ fn normal_distances_are_deterministic_across_thread_counts() {
     // Torus: from the outer equator, −N crosses the tube: d_N = 2 · minor radius.
     assert!(single.values.iter().any(|d| (d - 0.6).abs() < 1e-3));
 }
+
+/// A fan of near-coincident triangles (one corner region within 1e-5, random orientations),
+/// which made every `-N` ray test all of them and d_N quadratic (issue 34, item 3: 64k of them
+/// took 34 s): each ray stops at the budget and the vertex gets the fallback, counted; a real
+/// mesh never reaches the budget. The budgeted query agrees with the plain one within it.
+#[test]
+fn fans_of_near_coincident_triangles_stay_within_the_ray_budget() {
+    use refract_geometry::distance_along_normal::RAY_BUDGET;
+    use refract_geometry::{BudgetedHit, Mesh};
+    let n = 2 * RAY_BUDGET as usize;
+    let mut state = 12345u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    };
+    let mut positions = Vec::new();
+    for _ in 0..n {
+        let o = glam::Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2e-5;
+        let (a, b) = (
+            next() * std::f32::consts::TAU,
+            next() * std::f32::consts::PI,
+        );
+        let d = glam::Vec3::new(a.cos() * b.sin(), b.cos(), a.sin() * b.sin());
+        positions.extend([o, o + glam::Vec3::X, o + d]);
+    }
+    let triangles = (0..n as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    let mesh = Mesh::new("fan", positions, None, Vec::new(), triangles).expect("mesh");
+    let bvh = MeshBvh::build(&mesh);
+    let d_n = normal_distances(&mesh, &bvh);
+    assert!(d_n.over_budget > 0, "{d_n:?}");
+    assert_eq!(d_n.values.len(), mesh.positions.len());
+    assert!(d_n.values.iter().all(|v| v.is_finite()));
+
+    let sphere = shapes::uv_sphere(32, 16, 1.0).expect("sphere");
+    let sphere_bvh = MeshBvh::build(&sphere);
+    let sphere_d_n = normal_distances(&sphere, &sphere_bvh);
+    assert_eq!(sphere_d_n.over_budget, 0);
+    for (p, n) in sphere.positions.iter().zip(&sphere.normals) {
+        let ray = refract_core::Ray {
+            origin: *p,
+            dir: -*n,
+        };
+        let plain = sphere_bvh.closest_hit(&ray, 1e-4, f32::INFINITY);
+        let budgeted = sphere_bvh.closest_hit_within(&ray, 1e-4, f32::INFINITY, RAY_BUDGET);
+        assert_eq!(
+            plain.map(BudgetedHit::Hit).unwrap_or(BudgetedHit::Miss),
+            budgeted
+        );
+    }
+}
