@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use refract_core::Camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
-    Scene, TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodParams, RenderError, Renderer, Scene,
+    TimingSource,
 };
 
 use crate::families::Families;
@@ -39,11 +39,6 @@ impl CpuRenderer {
 impl Renderer for CpuRenderer {
     fn backend(&self) -> BackendId {
         BackendId::Cpu
-    }
-
-    /// The registry row's word; `render` declines every other method (tested for every row).
-    fn supports(&self, method: MethodId) -> bool {
-        method.info().backends.contains(&BackendId::Cpu)
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {

@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use refract_core::Camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
-    Scene, SceneMesh, SurfaceTexel,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodParams, RenderError, Renderer, Scene,
+    SceneMesh, SurfaceTexel,
 };
 
 use crate::context::{GpuContext, GpuError};
@@ -103,11 +103,6 @@ impl GpuRenderer {
 impl Renderer for GpuRenderer {
     fn backend(&self) -> BackendId {
         BackendId::Gpu
-    }
-
-    /// The registry row's word; `render` declines every other method (tested for every row).
-    fn supports(&self, method: MethodId) -> bool {
-        method.info().backends.contains(&BackendId::Gpu)
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {

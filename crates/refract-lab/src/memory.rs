@@ -49,9 +49,8 @@ pub fn method_estimate(
     let model = method.id().info().memory;
     let frame = model.bytes(method, width, height, layers);
     let gpu = if backends.contains(&BackendId::Gpu) {
-        let textures = model.bytes(method, width, height, false)
-            - u64::from(width) * u64::from(height) * u64::from(model.color_bytes_per_pixel);
-        u64::from(width) * u64::from(height) * GPU_BYTES_PER_PIXEL + textures
+        u64::from(width) * u64::from(height) * GPU_BYTES_PER_PIXEL
+            + model.texture_bytes(method, width, height)
     } else {
         0
     };

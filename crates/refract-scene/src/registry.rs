@@ -185,6 +185,11 @@ impl MemoryModel {
         }
     }
 
+    /// The bytes of the textures `params` size for a `width × height` frame.
+    pub fn texture_bytes(&self, params: &MethodParams, width: u32, height: u32) -> u64 {
+        (self.texels)(params, width, height).saturating_mul(u64::from(self.bytes_per_texel))
+    }
+
     /// The bytes of a `width × height` frame of `params`, with or without its layers.
     pub fn bytes(&self, params: &MethodParams, width: u32, height: u32, layers: bool) -> u64 {
         let per_pixel = if layers {
@@ -193,9 +198,9 @@ impl MemoryModel {
             self.color_bytes_per_pixel
         };
         let pixels = u64::from(width) * u64::from(height);
-        pixels.saturating_mul(u64::from(per_pixel)).saturating_add(
-            (self.texels)(params, width, height).saturating_mul(u64::from(self.bytes_per_texel)),
-        )
+        pixels
+            .saturating_mul(u64::from(per_pixel))
+            .saturating_add(self.texture_bytes(params, width, height))
     }
 }
 

@@ -95,9 +95,11 @@ pub trait Renderer {
     /// Which backend this is.
     fn backend(&self) -> BackendId;
 
-    /// Whether [`Renderer::render`] runs `method` (the registry row's `backends` says the same;
-    /// a test holds every backend to it).
-    fn supports(&self, method: MethodId) -> bool;
+    /// Whether [`Renderer::render`] runs `method`: the registry row's `backends` (a test renders
+    /// every row on every backend and holds `render` to it).
+    fn supports(&self, method: MethodId) -> bool {
+        method.info().backends.contains(&self.backend())
+    }
 
     /// Prepares `scene` once: uploads, per-scene buffers. Frames of any camera and method then
     /// render without preparing again.

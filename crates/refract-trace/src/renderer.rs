@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use refract_core::Camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Renderer,
-    Scene, TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodParams, RenderError, Renderer, Scene,
+    TimingSource,
 };
 
 use crate::tracer::render_into;
@@ -28,10 +28,6 @@ impl ReferenceRenderer {
 impl Renderer for ReferenceRenderer {
     fn backend(&self) -> BackendId {
         BackendId::Trace
-    }
-
-    fn supports(&self, method: MethodId) -> bool {
-        matches!(MethodParams::defaults(method), MethodParams::Reference(_))
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
