@@ -427,10 +427,10 @@ pub fn evaluate_method(
         let (desc, _) = guard_band_camera(camera.desc(), integer("guard").unwrap_or(0));
         // The NG camera differs from a valid camera only by its field of view and size.
         if let Ok(ng_camera) = Camera::new(desc) {
-            let spacing = match method.get("spacing").as_deref() {
-                Some("world") => SeedSpacing::World,
-                _ => SeedSpacing::Screen,
-            };
+            let spacing = method
+                .get("spacing")
+                .and_then(|name| refract_scene::registry::seed_spacing(&name))
+                .unwrap_or(SeedSpacing::Screen);
             let seeds = integer("seeds").map(|k| (k, spacing));
             evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
         }

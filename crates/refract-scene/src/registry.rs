@@ -24,7 +24,7 @@ pub use distance_map::{
     DISTANCE_MAP_RESOLUTION, DistanceMapParams, MAX_LINEAR_STEPS, MAX_PATH_DEPTH, MAX_SECANT_STEPS,
 };
 pub use image_space::{ImageSpaceMethod, TwoInterfaceParams};
-pub use nearby_geometry::{MAX_GUARD_BAND_PERCENT, NearbyParams};
+pub use nearby_geometry::{MAX_GUARD_BAND_PERCENT, NearbyParams, seed_spacing};
 pub use pvrr::{MAX_PVRR_DEPTH, MAX_PVRR_DISPERSION, PVRR_RESOLUTION, PvrrParams};
 pub use reference::{InterfaceRule, TraceMode, TraceSettings};
 

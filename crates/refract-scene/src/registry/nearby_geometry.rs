@@ -44,6 +44,11 @@ const SPACING_TABLE: [(&str, SeedSpacing); 2] = [
 ];
 const SPACING_CHOICES: [&str; 2] = choice_names(&SPACING_TABLE);
 
+/// The seed spacing a `spacing` parameter value names (`screen`, `world`).
+pub fn seed_spacing(name: &str) -> Option<SeedSpacing> {
+    lookup(&SPACING_TABLE, name)
+}
+
 const GUARD_PARAM: ParamSpec = ParamSpec {
     name: "guard",
     doc: "NG guard band: percent of the image width/height added on each side of the NG texture (same texel size, wider view; 0 = the screen, as in the paper)",
