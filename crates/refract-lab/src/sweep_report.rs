@@ -532,7 +532,8 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
 #viewer.open{{display:flex;flex-direction:column}}#bar{{padding:8px 12px;font-size:14px}}#bar kbd{{background:#444;border-radius:3px;padding:0 4px}}\
 #stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
 #stage img,#stage canvas{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
-.plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed{{color:#b00}}</style></head><body>\
+.plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed,.failed figcaption{{color:#b00}}\
+.grid figure.failed{{width:160px;min-height:160px;border:1px dashed #b00;box-sizing:border-box;padding:4px;cursor:default}}</style></head><body>\
 <h1>refract report</h1><p>{} jobs{}. Click a column to sort; click a thumbnail to compare it with the reference \
 (keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
         results.len(),
