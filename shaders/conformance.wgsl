@@ -195,3 +195,51 @@ fn test_dm_path(@builtin(global_invocation_id) id: vec3<u32>) {
     let path = dm_trace_path(x, in_b[i].xyz, normalize(x), vec3<f32>(0.9), -1.0, 0, search, u32(in_a[i].w), DM_FRESNEL_IGNORE);
     out_v[i] = vec4<f32>(path.radiance, f32(path.bounces));
 }
+
+// engine.rs: a = (N, ior), b = (I, d), P = 0 -> exit point of the model ENGINE_* in
+// out_v[i].w's slot: (P1 of the sphere, |R2 - refract of the sphere| unused) as two entries.
+// a = (N, ior), b = (I, d) -> (sphere P1, sphere R2.x)
+@compute @workgroup_size(64)
+fn test_proxy_sphere_point(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let e = proxy_sphere_exit(vec3<f32>(0.0), in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w);
+    out_v[i] = vec4<f32>(e.p, 0.0);
+}
+
+// a = (N, ior), b = (I, d) -> (sphere R2, _)
+@compute @workgroup_size(64)
+fn test_proxy_sphere_dir(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let e = proxy_sphere_exit(vec3<f32>(0.0), in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w);
+    out_v[i] = vec4<f32>(e.dir, 0.0);
+}
+
+// a = (N, ior), b = (I, d) -> (box P1, _)
+@compute @workgroup_size(64)
+fn test_proxy_box(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let e = proxy_box_exit(vec3<f32>(0.0), in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w);
+    out_v[i] = vec4<f32>(e.p, 0.0);
+}
+
+// a = (N, ior), b = (I, d) -> (volume X, _)
+@compute @workgroup_size(64)
+fn test_volume_exit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let e = volume_exit(vec3<f32>(0.0), in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w);
+    out_v[i] = vec4<f32>(e.p, 0.0);
+}
+
+// a = (n_view, scale), b = (u, v, x, _) with (u, v) in [0, 1]² -> (screen_offset_px for a
+// 640 x 480 frame, hdrp_edge_fade(u, v), smoothstep01(x))
+@compute @workgroup_size(64)
+fn test_engine_screen(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let o = screen_offset_px(in_a[i].xyz, in_a[i].w, vec2<f32>(640.0, 480.0));
+    out_v[i] = vec4<f32>(o, hdrp_edge_fade(in_b[i].xy), smoothstep01(in_b[i].z));
+}

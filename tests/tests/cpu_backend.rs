@@ -141,8 +141,12 @@ fn index_one_sees_straight_through() {
     };
     let scene = with_mesh(shapes::torus(0.7, 0.3, 48, 24).expect("torus"), 1.0, smooth);
     let cam = camera(96);
-    // The families with a T2 (the distance-map paths are checked in distance_map.rs).
-    for id in MethodId::approximations().filter(|id| id.info().aovs.contains(&Aov::T2)) {
+    // The families with a T2 (the distance-map paths are checked in distance_map.rs), but
+    // Godot's screen offset, which does not depend on the IOR (engine-methods.md §3): it shifts
+    // the sample at IOR 1 too, which the assertion after the loop holds it to.
+    let straight = MethodId::approximations()
+        .filter(|id| id.info().aovs.contains(&Aov::T2) && *id != MethodId::ScreenOffset);
+    for id in straight {
         let frame = cpu_frame(&scene, &cam, &method(id));
         let covered_layer = frame.flag(Aov::Covered).expect("covered");
         let t2 = frame.vec3(Aov::T2).expect("T2");
@@ -171,6 +175,20 @@ fn index_one_sees_straight_through() {
         assert_eq!(same_color, covered, "{id}");
         assert!(covered > 1000);
     }
+    let offset = cpu_frame(&scene, &cam, &method(MethodId::ScreenOffset));
+    let covered = offset.flag(Aov::Covered).expect("covered");
+    let shifted = (0..offset.pixel_count())
+        .filter(|&i| {
+            let view = cam
+                .pixel_ray(Camera::pixel_center(i as u32 % 96, i as u32 / 96))
+                .dir;
+            covered[i] && (offset.color[i] - scene.environment.radiance(view)).length() > 1e-3
+        })
+        .count();
+    assert!(
+        shifted > 100,
+        "Godot's offset ignores the IOR: {shifted} pixels moved"
+    );
 }
 
 /// A slab facing the camera: front and back faces are parallel, so `wyman` gives T2 = V.

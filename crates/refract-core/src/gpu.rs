@@ -273,6 +273,42 @@ pub fn wgsl_constants() -> String {
             "const SPACING_WORLD: u32 = {}u;",
             seed_spacing_code(SeedSpacing::World)
         ),
+        format!(
+            "const ENGINE_SCREEN_OFFSET: u32 = {}u;",
+            crate::engine::ENGINE_SCREEN_OFFSET
+        ),
+        format!(
+            "const ENGINE_VOLUME_THICKNESS: u32 = {}u;",
+            crate::engine::ENGINE_VOLUME_THICKNESS
+        ),
+        format!(
+            "const ENGINE_PROXY_SPHERE: u32 = {}u;",
+            crate::engine::ENGINE_PROXY_SPHERE
+        ),
+        format!(
+            "const ENGINE_PROXY_BOX: u32 = {}u;",
+            crate::engine::ENGINE_PROXY_BOX
+        ),
+        format!(
+            "const ENGINE_PROXY_THIN: u32 = {}u;",
+            crate::engine::ENGINE_PROXY_THIN
+        ),
+        format!(
+            "const THIN_THICKNESS: f32 = {};",
+            f(crate::engine::THIN_THICKNESS)
+        ),
+        format!(
+            "const HDRP_SKY_DISTANCE: f32 = {};",
+            f(crate::engine::HDRP_SKY_DISTANCE)
+        ),
+        format!(
+            "const HDRP_EDGE_FADE: f32 = {};",
+            f(crate::engine::HDRP_EDGE_FADE)
+        ),
+        format!(
+            "const HDRP_MIN_COS: f32 = {};",
+            f(crate::engine::HDRP_MIN_COS)
+        ),
     ]
     .join("\n")
         + "\n"

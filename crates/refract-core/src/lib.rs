@@ -11,6 +11,7 @@
 //! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
+//! * [`engine`]: the refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament): exit models and screen lookups.
 //! * [`pvrr`]: Kakimoto et al. 2007, per-vertex reflection and refraction (virtual viewpoint, view volume, texture coordinates, map lookup).
 //! * [`back_surface`]: which back surface the back-face pass keeps (Wyman 2005a §3.2).
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
@@ -47,6 +48,7 @@ pub mod arctangent;
 pub mod back_surface;
 pub mod camera;
 pub mod distance_map;
+pub mod engine;
 pub mod environment;
 pub mod exit;
 pub mod fresnel;

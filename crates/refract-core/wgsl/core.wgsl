@@ -215,3 +215,62 @@ fn screen_fraction_to_segment(s: f32, w0: f32, w1: f32) -> f32 {
     let denom = (1.0 - s) * w1 + s * w0;
     return select(s, s * w0 / denom, denom > 0.0);
 }
+
+// engine.rs: the exit models of today's engines (Godot, three.js, Bevy, Unity HDRP, Filament).
+struct EngineExit {
+    p: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// glam's normalize_or_zero.
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let n = try_normalize(v);
+    return select(vec3<f32>(0.0), n.xyz, n.w > 0.5);
+}
+
+// engine.rs: proxy_sphere_exit (HDRP RefractionModelSphere, Filament refractionSolidSphere).
+fn proxy_sphere_exit(p: vec3<f32>, n: vec3<f32>, incident: vec3<f32>, ior: f32, d: f32) -> EngineExit {
+    let t = refract_dir(incident, n, 1.0 / ior);
+    let cos_t = -dot(n, t);
+    let p1 = p + t * (d * cos_t);
+    let center = p - n * (0.5 * d);
+    let n1 = normalize_or_zero(center - p1);
+    let r2 = refract_dir(t, n1, ior);
+    return EngineExit(p1, select(r2, t, all(r2 == vec3<f32>(0.0))));
+}
+
+// engine.rs: proxy_box_exit (HDRP RefractionModelBox; thin with d = THIN_THICKNESS).
+fn proxy_box_exit(p: vec3<f32>, n: vec3<f32>, incident: vec3<f32>, ior: f32, d: f32) -> EngineExit {
+    let t = refract_dir(incident, n, 1.0 / ior);
+    let cos_t = -dot(n, t);
+    return EngineExit(p + t * (d / max(cos_t, HDRP_MIN_COS)), incident);
+}
+
+// engine.rs: volume_exit (three.js, Bevy): X = P + T d.
+fn volume_exit(p: vec3<f32>, n: vec3<f32>, incident: vec3<f32>, ior: f32, d: f32) -> EngineExit {
+    let t = refract_dir(incident, n, 1.0 / ior);
+    return EngineExit(p + t * d, t);
+}
+
+// engine.rs: bevy_fallback_dir.
+fn bevy_fallback_dir(incident: vec3<f32>, t: vec3<f32>, d: f32) -> vec3<f32> {
+    return normalize_or_zero(incident + t * d);
+}
+
+// engine.rs: screen_offset_px (Godot: -n_view.xy * scale of SCREEN_UV, in y-down pixels).
+fn screen_offset_px(n_view: vec3<f32>, scale: f32, size: vec2<f32>) -> vec2<f32> {
+    return -vec2<f32>(n_view.x, n_view.y) * scale * size;
+}
+
+// engine.rs: smoothstep01.
+fn smoothstep01(x_in: f32) -> f32 {
+    let x = clamp(x_in, 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+// engine.rs: hdrp_edge_fade.
+fn hdrp_edge_fade(uv: vec2<f32>) -> f32 {
+    let fx = smoothstep01(clamp((1.0 - abs(2.0 * uv.x - 1.0)) / HDRP_EDGE_FADE, 0.0, 1.0));
+    let fy = smoothstep01(clamp((1.0 - abs(2.0 * uv.y - 1.0)) / HDRP_EDGE_FADE, 0.0, 1.0));
+    return fx * fy;
+}

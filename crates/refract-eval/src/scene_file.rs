@@ -126,7 +126,7 @@ translate = [0.6, -0.75, 2.6]
 }
 
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 11] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 12] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -146,6 +146,11 @@ pub const BUILTIN_SCENES: [(&str, &str, &str); 11] = [
         "chart",
         "Wyman 2005b Fig. 5: a glass sphere, IOR 1.5, before a colour chart, on a wood floor",
         CHART_SCENE,
+    ),
+    (
+        "engine-failures",
+        "the engines' known failures side by side: a glass torus (IOR 1.5: glass behind glass, TIR in its thick parts) behind an opaque grey ball (foreground leak), a red box just off screen on the left, a colour chart and a wood floor",
+        ENGINE_FAILURES_SCENE,
     ),
     (
         "mirror-room",
@@ -286,6 +291,51 @@ translate = [0.5, -0.9, -1.0]
 "#,
     ),
 ];
+
+/// The `engine-failures` scene (issue 28): what the engines' screen-space refraction cannot
+/// show, each where a pixel count can find it. The torus (tilted 60°, left of centre) has glass
+/// behind glass where its ring overlaps itself and TIR in its thick parts; the grey ball in
+/// front of its lower ring is an opaque foreground object (what three.js's lookup leaks into
+/// the glass); the red box at `x = −3` is just outside the frame on the left, where the
+/// torus's left side refracts toward it; the chart and the floor are what is behind.
+const ENGINE_FAILURES_SCENE: &str = r#"[camera]
+eye = [0.0, 0.6, 4.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+near = 0.05
+far = 12.0
+
+[refractor]
+mesh = "builtin:torus"
+ior = 1.5
+rotate_deg = [60.0, 0.0, 0.0]
+translate = [-0.45, 0.0, 0.0]
+
+[[objects]]
+mesh = "builtin:icosphere"
+color = [0.55, 0.55, 0.6]
+scale = 0.22
+translate = [-0.2, -0.5, 1.0]
+
+[[objects]]
+mesh = "builtin:box"
+color = [0.85, 0.1, 0.08]
+scale = 0.6
+translate = [-3.0, 0.0, -1.0]
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "color-chart"
+scale = 4.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.9, -3.2]
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "wood"
+scale = 6.0
+translate = [0.0, -1.0, 0.6]
+"#;
 
 /// The `chart` scene (Wyman 2005b Fig. 5): a glass sphere of radius 0.8 resting on a wood floor
 /// (`y = −0.8`), a colour chart (5.7 wide) 3.2 behind its centre facing the camera; the far
@@ -695,7 +745,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         }
     }
     let mut warnings = Vec::new();
-    let (mesh, glass_ior) = load_mesh_spec(
+    let (mesh, glass) = load_mesh_spec(
         &file.refractor.mesh,
         file.refractor.normalize,
         base,
@@ -705,6 +755,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     let mut mesh = mesh;
     mesh.transform(&affine(r.translate, r.scale, r.rotate_deg));
     let ior = file.refractor.ior;
+    let (glass_ior, glass_thickness) = glass.map_or((None, None), |g| (g.ior, g.thickness));
     if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
         warnings.push(format!(
             "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
@@ -720,6 +771,8 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     )?;
     let mut refractor = Refractor::new(mesh, ior)?;
     refractor.set_conductor(conductor);
+    // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
+    refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
     let d_n = refractor.normal_distances();
     // d_N serves refraction only: a conductor (an open mirror) has no use for it.
     if d_n.misses > 0 && refractor.is_dielectric() {
@@ -818,13 +871,20 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     Ok(LoadedScene { scene, warnings })
 }
 
+/// What a glTF material says about the glass: its IOR and its volume thickness in the
+/// normalised mesh's units (before the section's own `scale`).
+struct GlassFacts {
+    ior: Option<f32>,
+    thickness: Option<f32>,
+}
+
 fn load_mesh_spec(
     spec: &str,
     normalize: bool,
     base: &Path,
     origin: &str,
     warnings: &mut Vec<String>,
-) -> Result<(Mesh, Option<f32>), SceneError> {
+) -> Result<(Mesh, Option<GlassFacts>), SceneError> {
     let geometry = |source| SceneError::Geometry {
         origin: origin.to_owned(),
         source,
@@ -852,7 +912,18 @@ fn load_mesh_spec(
             .iter()
             .map(|w| format!("{}: {w}", path.display())),
     );
-    Ok((loaded.mesh, loaded.material.and_then(|m| m.ior)))
+    let scale = loaded
+        .report
+        .normalization
+        .matrix3
+        .determinant()
+        .abs()
+        .cbrt();
+    let glass = loaded.material.map(|m| GlassFacts {
+        ior: m.ior,
+        thickness: m.thickness.map(|d| d * scale),
+    });
+    Ok((loaded.mesh, glass))
 }
 
 /// `x' = T · R_xyz · S · x`: scale, then XYZ Euler rotation, then translation.

@@ -199,7 +199,8 @@ fn glb_with_node_transform_and_glass_material() {
     let material = loaded.material.expect("glass material");
     assert_eq!(material.ior, Some(1.45));
     assert_eq!(material.transmission, Some(1.0));
-    assert_eq!(material.thickness, Some(0.2));
+    // thicknessFactor 0.2 in mesh units under a node scaled by 0.5: 0.1 in the file's world.
+    assert_eq!(material.thickness, Some(0.1));
     let facts = loaded.mesh.facts();
     assert_eq!(facts.triangles, 4);
     assert!(facts.watertight);
@@ -409,5 +410,44 @@ fn gltf_accessor_overruns_name_the_accessor_and_view() {
         err.contains("short.glb")
             && err.contains("accessor 0 needs 108 bytes of buffer view 0, which has 48"),
         "{err}"
+    );
+}
+
+/// `KHR_materials_volume`'s thickness becomes the refractor's default engine thickness, scaled
+/// by the node (0.5), the normalisation into the unit sphere (1/(0.5·√3)) and the scene's
+/// `scale` (2), as the engines scale it with the object; the engine methods use it.
+#[test]
+fn gltf_volume_thickness_follows_the_object_into_the_scene() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    write(dir.path(), "tetra.glb", &tetrahedron_glb(None));
+    let scene_path = write(
+        dir.path(),
+        "scene.toml",
+        b"[refractor]\nmesh = \"tetra.glb\"\nior = 1.45\nscale = 2.0\n",
+    );
+    let scene = refract_eval::load_scene(scene_path.to_str().expect("utf-8"))
+        .expect("scene")
+        .scene;
+    let expected = 0.2 * 0.5 / (0.5 * 3f32.sqrt()) * 2.0;
+    let thickness = scene
+        .refractor
+        .volume_thickness()
+        .expect("a volume thickness");
+    assert!(
+        (thickness - expected).abs() < 1e-5,
+        "{thickness} vs {expected}"
+    );
+    let params =
+        refract_scene::registry::EngineParams::try_from((refract_scene::MethodId::VolumeThickness
+            .info()
+            .defaults)());
+    let params = params.expect("engine parameters");
+    assert_eq!(params.thickness_for(&scene.refractor), thickness);
+    // Without a glTF thickness the default is the mean d_N.
+    let sphere = refract_eval::load_scene("sphere").expect("sphere").scene;
+    assert_eq!(sphere.refractor.volume_thickness(), None);
+    assert_eq!(
+        params.thickness_for(&sphere.refractor),
+        sphere.refractor.mean_d_n()
     );
 }

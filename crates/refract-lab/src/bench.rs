@@ -87,6 +87,8 @@ pub enum Table {
     /// Kakimoto et al. 2007 §5: reflection, multiple reflection, the lens (every frame, fixed
     /// to the eye, with chromatic aberration) at 1024².
     Pvrr,
+    /// The engine methods beside `wyman` on the sphere and the cow at 1024², both backends.
+    Engine,
 }
 
 /// One row of `bench.json`.
@@ -403,6 +405,87 @@ fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> 
     Ok(md)
 }
 
+/// The engine methods (which skip the back-face pass) beside `wyman` on the sphere and the cow
+/// at 1024² (`--quick`: 128², 3 frames), each backend, colour only; the ratio to `wyman` on the
+/// same backend and scene.
+fn run_engine(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
+    let (res, frames) = if args.quick {
+        (128, 3)
+    } else {
+        (1024, args.frames)
+    };
+    crate::output_dirs::create_dir(&args.out)
+        .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
+    let backend_ids = backends::parse_backends(&args.backends)?;
+    let mut renderers = backends::open(&backend_ids, GpuPolicy::IfAvailable, progress)?;
+    let methods = [
+        MethodId::Wyman,
+        MethodId::ScreenOffset,
+        MethodId::VolumeThickness,
+        MethodId::ProxySphere,
+        MethodId::ProxyBox,
+        MethodId::ProxyThin,
+    ];
+    let mut records: Vec<BenchRecord> = Vec::new();
+    let mut frame = Frame::default();
+    for name in ["sphere", "cow"] {
+        let Some((mesh, ior)) = load_model(name, &args.data, progress)? else {
+            continue;
+        };
+        let triangles = mesh.triangles.len();
+        let scene = Arc::new(Scene::new(
+            name,
+            Refractor::new(mesh, ior)?,
+            Environment::Procedural,
+        ));
+        let camera = scene.camera(res, res)?;
+        for renderer in &mut renderers {
+            renderer.prepare(&scene)?;
+            for id in methods {
+                let method = MethodParams::defaults(id);
+                let record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
+                    .record(name, triangles);
+                progress.note(Note::Row(format!(
+                    "{name:<8} {:<18} {:<4} {:>9.2} ms {:>8.1} fps",
+                    record.method, record.backend, record.ms_median, record.fps
+                )));
+                records.push(record);
+            }
+        }
+    }
+    let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
+    write(&args.out.join("bench-engine.json"), &json)?;
+    let mut md = format!(
+        "# Engine methods beside `wyman`\n\n{res}², median of {frames} frames after 3 warm-up \
+         frames, colour only; the engine methods render the opaque objects' screen texture and \
+         the front faces, no back faces (these scenes have no opaque objects: the screen pass is \
+         empty). Ratio: `wyman`'s time over the method's on the same scene and backend (> 1: \
+         faster than `wyman`).\n\n\
+         | scene | triangles | method | backend | ms | fps | `wyman` ms / ms | faster than `wyman` |\n\
+         |---|---|---|---|---|---|---|---|\n"
+    );
+    for r in &records {
+        let wyman = records
+            .iter()
+            .find(|w| w.scene == r.scene && w.backend == r.backend && w.method == "wyman")
+            .map(|w| w.ms_median);
+        let (ratio, faster) = match wyman {
+            Some(w) if r.method != "wyman" => (
+                format!("{:.2}×", w / r.ms_median),
+                if r.ms_median < w { "yes" } else { "no" },
+            ),
+            _ => ("–".to_owned(), "–"),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | `{}` | {} | {:.2} | {:.1} | {ratio} | {faster} |",
+            r.scene, r.triangles, r.method, r.backend, r.ms_median, r.fps
+        );
+    }
+    write(&args.out.join("bench-engine.md"), &md)?;
+    Ok(md)
+}
+
 /// Wyman 2005b Table 1's layout with our figures, the paper's and the ratios.
 fn nearby_table(
     records: &[BenchRecord],
@@ -533,6 +616,9 @@ pub fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     }
     if args.table == Table::Pvrr {
         return run_pvrr(args, progress);
+    }
+    if args.table == Table::Engine {
+        return run_engine(args, progress);
     }
     let (res, frames) = if args.quick {
         (128, 3)

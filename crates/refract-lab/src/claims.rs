@@ -21,6 +21,7 @@ use crate::progress::Progress;
 use crate::timing::time_frames;
 
 mod distance_map;
+mod engine;
 mod nearby;
 mod pvrr;
 
@@ -150,6 +151,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     md.push_str(&nearby::section(args, progress)?);
     md.push_str(&distance_map::section(args, progress)?);
     md.push_str(&pvrr::section(args)?);
+    md.push_str(&engine::section(args, progress)?);
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         crate::output_dirs::create_dir(dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;

@@ -64,6 +64,9 @@ pub enum Aov {
     /// 2007 §4.2, left out as in the paper), is trapped in the lens, or lies past the last
     /// level of the reflection stack.
     Zoom,
+    /// An engine method's lookup position fell outside the frame (or behind the eye): the
+    /// engine reads the edge texel (clamped) or, Unity HDRP, fades to the environment.
+    OffScreen,
 }
 
 /// One pixel's value of one AOV layer.
@@ -97,7 +100,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 22] = [
+    pub const ALL: [Aov; 23] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -120,6 +123,7 @@ impl Aov {
         Aov::Bounces,
         Aov::Miss,
         Aov::Zoom,
+        Aov::OffScreen,
     ];
 
     /// The layer name (EXR channel or channel prefix).
@@ -147,6 +151,7 @@ impl Aov {
             Aov::Bounces => "bounces",
             Aov::Miss => "miss",
             Aov::Zoom => "zoom",
+            Aov::OffScreen => "off_screen",
         }
     }
 
@@ -174,7 +179,8 @@ impl Aov {
             | Aov::TirFirstExit
             | Aov::Converged
             | Aov::Miss
-            | Aov::Zoom => AovKind::Flag,
+            | Aov::Zoom
+            | Aov::OffScreen => AovKind::Flag,
         }
     }
 }

@@ -30,9 +30,9 @@ pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::{SceneError, full_message};
 pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, PixelLayers};
 pub use registry::{
-    BackendId, DistanceMapParams, Family, FamilyParams, ImageSpaceMethod, InterfaceRule, MethodId,
-    MethodInfo, MethodParams, NearbyParams, ParamValue, PvrrParams, REGISTRY, TraceMode,
-    TraceSettings, TwoInterfaceParams, scene_support,
+    BackendId, DistanceMapParams, EngineParams, Family, FamilyParams, ImageSpaceMethod,
+    InterfaceRule, MethodId, MethodInfo, MethodParams, NearbyParams, ParamValue, PvrrParams,
+    REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

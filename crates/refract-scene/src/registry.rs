@@ -15,6 +15,7 @@ use crate::error::SceneError;
 use crate::frame::Aov;
 
 mod distance_map;
+mod engine;
 mod image_space;
 mod nearby_geometry;
 mod pvrr;
@@ -22,6 +23,9 @@ mod reference;
 
 pub use distance_map::{
     DISTANCE_MAP_RESOLUTION, DistanceMapParams, MAX_LINEAR_STEPS, MAX_PATH_DEPTH, MAX_SECANT_STEPS,
+};
+pub use engine::{
+    EngineMethod, EngineParams, MAX_SCALE_MILLI, MAX_THICKNESS_MILLI, ThicknessSource,
 };
 pub use image_space::{ImageSpaceMethod, TwoInterfaceParams};
 pub use nearby_geometry::{MAX_GUARD_BAND_PERCENT, NearbyParams, seed_spacing};
@@ -53,6 +57,16 @@ pub enum MethodId {
     DistanceMap,
     /// `pvrr`: Kakimoto et al. 2007, per-vertex exact rays warping one map per reflector.
     Pvrr,
+    /// `screen-offset`: Godot 4's refraction, the screen UV shifted by the view-space normal.
+    ScreenOffset,
+    /// `volume-thickness`: three.js / Bevy, `P + d T` projected into the screen texture.
+    VolumeThickness,
+    /// `proxy-sphere`: Unity HDRP's sphere model (Filament's `solid`).
+    ProxySphere,
+    /// `proxy-box`: Unity HDRP's box model.
+    ProxyBox,
+    /// `proxy-thin`: Unity HDRP's thin model (a 5 mm slab).
+    ProxyThin,
 }
 
 /// A family of methods: the methods of one family share their passes.
@@ -71,6 +85,9 @@ pub enum Family {
     /// Kakimoto et al. 2007: per-vertex exact rays (BVH), one map per reflector rendered from
     /// its virtual viewpoint, texture coordinates per vertex (mirrors, lenses, stacks).
     Pvrr,
+    /// Today's engines (Godot, three.js, Bevy, Unity HDRP, Filament): one interface or a
+    /// proxy shape, then a lookup in the screen texture of the opaque objects.
+    Engine,
 }
 
 /// A renderer implementation.
@@ -322,6 +339,7 @@ const FAMILY_ROWS: &[&[MethodInfo]] = &[
     nearby_geometry::ROWS,
     distance_map::ROWS,
     pvrr::ROWS,
+    engine::ROWS,
 ];
 
 const fn row_count(parts: &[&[MethodInfo]]) -> usize {
@@ -426,6 +444,8 @@ pub enum MethodParams {
     DistanceMap(DistanceMapParams),
     /// `pvrr`.
     Pvrr(PvrrParams),
+    /// `screen-offset`, `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`.
+    Engine(EngineParams),
 }
 
 /// `TryFrom<MethodParams>` for each family's parameter type: its parameters, or the
@@ -451,6 +471,7 @@ family_params_from_method_params!(
     NearbyGeometry(NearbyParams),
     DistanceMap(DistanceMapParams),
     Pvrr(PvrrParams),
+    Engine(EngineParams),
 );
 
 impl MethodParams {
@@ -463,6 +484,7 @@ impl MethodParams {
             MethodParams::NearbyGeometry(p) => p,
             MethodParams::DistanceMap(p) => p,
             MethodParams::Pvrr(p) => p,
+            MethodParams::Engine(p) => p,
         }
     }
 
@@ -473,6 +495,7 @@ impl MethodParams {
             MethodParams::NearbyGeometry(p) => p,
             MethodParams::DistanceMap(p) => p,
             MethodParams::Pvrr(p) => p,
+            MethodParams::Engine(p) => p,
         }
     }
 

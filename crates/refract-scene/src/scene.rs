@@ -22,6 +22,7 @@ pub struct Refractor {
     normal_distances: NormalDistances,
     ior: f32,
     conductor: Option<Conductor>,
+    volume_thickness: Option<f32>,
 }
 
 /// The largest index of refraction accepted (beyond any material; the kernels stay finite up
@@ -44,6 +45,7 @@ impl Refractor {
             normal_distances,
             ior,
             conductor: None,
+            volume_thickness: None,
         })
     }
 
@@ -78,7 +80,31 @@ impl Refractor {
             normal_distances,
             ior,
             conductor: None,
+            volume_thickness: None,
         })
+    }
+
+    /// The thickness its glTF material gives (`KHR_materials_volume`'s `thicknessFactor` in
+    /// world units: scaled by the node's and the scene's transforms), the default thickness of
+    /// the engine methods; `None` when the file gave none.
+    pub fn volume_thickness(&self) -> Option<f32> {
+        self.volume_thickness
+    }
+
+    /// Sets [`Self::volume_thickness`] (finite and ≥ 0, or `None`; other values are dropped).
+    pub fn set_volume_thickness(&mut self, thickness: Option<f32>) {
+        self.volume_thickness = thickness.filter(|d| d.is_finite() && *d >= 0.0);
+    }
+
+    /// The mean of `d_N` over the vertices (0 for no vertex): the scene-derived default
+    /// thickness of the engine methods.
+    pub fn mean_d_n(&self) -> f32 {
+        let values = &self.normal_distances.values;
+        if values.is_empty() {
+            return 0.0;
+        }
+        let sum: f64 = values.iter().map(|&d| f64::from(d)).sum();
+        (sum / values.len() as f64) as f32
     }
 
     /// Its mesh (outward winding and normals).

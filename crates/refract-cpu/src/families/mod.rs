@@ -3,6 +3,7 @@
 //! renders it. A new family is its module here, its field in [`Families`] and its arm.
 
 pub mod distance_map;
+pub mod engine;
 pub mod image_space;
 pub mod nearby_geometry;
 pub mod pvrr;
@@ -24,6 +25,8 @@ pub struct Families {
     pub distance_map: distance_map::DistancePasses,
     /// Kakimoto et al. 2007.
     pub pvrr: pvrr::PvrrPasses,
+    /// Today's engines (Godot, three.js, Bevy, Unity HDRP, Filament).
+    pub engine: engine::EnginePasses,
 }
 
 impl Families {
@@ -33,6 +36,7 @@ impl Families {
         self.nearby.prepare(scene);
         self.distance_map.prepare(scene);
         self.pvrr.prepare(scene);
+        self.engine.prepare(scene);
     }
 
     /// One frame of `method` by its family; the reference is declined.
@@ -51,6 +55,7 @@ impl Families {
             MethodParams::NearbyGeometry(p) => self.nearby.render(cx, p, frame),
             MethodParams::DistanceMap(p) => self.distance_map.render(cx, p, frame),
             MethodParams::Pvrr(p) => self.pvrr.render(cx, p, frame),
+            MethodParams::Engine(p) => self.engine.render(cx, p, frame),
         }
     }
 }

@@ -19,7 +19,11 @@ pub struct GlassMaterial {
     pub ior: Option<f32>,
     /// Transmission factor in `[0, 1]` (`KHR_materials_transmission`).
     pub transmission: Option<f32>,
-    /// Thickness factor in mesh units (`KHR_materials_volume`).
+    /// Thickness (`KHR_materials_volume`'s `thicknessFactor`, given in the mesh's units) times
+    /// the scale of the node that carries the material (`∛|det M|`: the node's uniform scale;
+    /// the extension says the node's transform applies to the thickness, which three.js
+    /// applies per axis and Bevy along the normal, both equal for a uniform scale), so in the
+    /// file's world units, before any normalisation.
     pub thickness: Option<f32>,
 }
 
@@ -305,7 +309,9 @@ impl Collector {
                 self.material = Some(GlassMaterial {
                     ior: material.ior(),
                     transmission: material.transmission().map(|t| t.transmission_factor()),
-                    thickness: material.volume().map(|v| v.thickness_factor()),
+                    thickness: material.volume().map(|v| {
+                        v.thickness_factor() * transform.matrix3.determinant().abs().cbrt()
+                    }),
                 });
             }
         }

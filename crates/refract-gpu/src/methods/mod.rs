@@ -4,6 +4,7 @@
 //! new family is its module here, its slot and its arm.
 
 pub(crate) mod distance_map;
+pub(crate) mod engine;
 pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
 pub(crate) mod pvrr;
@@ -21,6 +22,7 @@ pub(crate) struct Families {
     nearby: FamilySlot<nearby_geometry::NearbyPipelines>,
     distance_map: FamilySlot<distance_map::DistanceMapPipelines>,
     pvrr: FamilySlot<pvrr::PvrrFamily>,
+    engine: FamilySlot<engine::EnginePipelines>,
 }
 
 impl Families {
@@ -31,6 +33,7 @@ impl Families {
             nearby: FamilySlot::new(nearby_geometry::NearbyPipelines::new(device)),
             distance_map: FamilySlot::new(distance_map::DistanceMapPipelines::new(device)),
             pvrr: FamilySlot::new(pvrr::PvrrFamily::new(device, raster)),
+            engine: FamilySlot::new(engine::EnginePipelines::new(device)),
         }
     }
 
@@ -40,6 +43,7 @@ impl Families {
         self.nearby.prepare(scene);
         self.distance_map.prepare(scene);
         self.pvrr.prepare(scene);
+        self.engine.prepare(scene);
     }
 
     /// One frame of `method` by its family ([`FamilySlot::run_frame`]); the reference is
@@ -59,6 +63,7 @@ impl Families {
             MethodParams::NearbyGeometry(p) => self.nearby.run_frame(cx, p, frame),
             MethodParams::DistanceMap(p) => self.distance_map.run_frame(cx, p, frame),
             MethodParams::Pvrr(p) => self.pvrr.run_frame(cx, p, frame),
+            MethodParams::Engine(p) => self.engine.run_frame(cx, p, frame),
         }
     }
 }
@@ -68,11 +73,12 @@ use refract_scene::{FrameOutputs, MethodId, MethodParams, REGISTRY};
 use crate::shaders::ShaderModule;
 
 /// Every family's shader module (validated by naga in `tests/shaders.rs` with the shared ones).
-pub(crate) const SHADERS: [ShaderModule; 4] = [
+pub(crate) const SHADERS: [ShaderModule; 5] = [
     image_space::SHADER,
     nearby_geometry::SHADER,
     distance_map::SHADER,
     pvrr::SHADER,
+    engine::SHADER,
 ];
 
 /// The compute pipelines of one method family: one per registry method of the family, each

@@ -38,39 +38,48 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         ENVIRONMENT,
         IMAGE_SPACE,
         MATERIALS,
-        (
-            "nearby_geometry.wgsl",
-            include_str!("../../../../shaders/nearby_geometry.wgsl"),
-        ),
+        NEARBY_GEOMETRY_WGSL,
     ],
 };
 
+/// `shaders/nearby_geometry.wgsl`: the lookups and the NG texture's readers (`ng_surface`,
+/// `ng_color`), which the engine family's shader reads its screen texture with.
+pub(crate) const NEARBY_GEOMETRY_WGSL: crate::shaders::WgslFile = (
+    "nearby_geometry.wgsl",
+    include_str!("../../../../shaders/nearby_geometry.wgsl"),
+);
+
 /// The `shade_nearby` pipelines: one per nearby-geometry method (`LOOKUP` fixed per method).
 pub(crate) struct NearbyPipelines(MethodPipelines);
+
+/// The bindings of `shade_nearby` (and of the engine family's `shade_engine`, which adds its own).
+pub(crate) fn nearby_layout() -> Vec<wgpu::BindGroupLayoutEntry> {
+    vec![
+        uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+        texture_entry(1),
+        texture_entry(2),
+        texture_entry(3),
+        storage_entry(4, true),
+        storage_entry(5, false),
+        storage_entry(6, false),
+        storage_entry(7, false),
+        storage_entry(8, false),
+        storage_entry(9, false),
+        storage_entry(10, false),
+        storage_entry(11, true),
+        texture_entry(12),
+        texture_entry(13),
+        texture_entry(14),
+        uniform_entry(15, wgpu::ShaderStages::COMPUTE),
+    ]
+}
 
 impl NearbyPipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         Self(MethodPipelines::new(
             device,
             &SHADER,
-            &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                texture_entry(1),
-                texture_entry(2),
-                texture_entry(3),
-                storage_entry(4, true),
-                storage_entry(5, false),
-                storage_entry(6, false),
-                storage_entry(7, false),
-                storage_entry(8, false),
-                storage_entry(9, false),
-                storage_entry(10, false),
-                storage_entry(11, true),
-                texture_entry(12),
-                texture_entry(13),
-                texture_entry(14),
-                uniform_entry(15, wgpu::ShaderStages::COMPUTE),
-            ],
+            &nearby_layout(),
             |p: &NearbyParams| {
                 (
                     "shade_nearby",
@@ -367,7 +376,7 @@ impl PixelLayers for NearbyPixel {
 }
 
 /// The uniform block of the lookup.
-fn nearby_uniforms(nearby: &NearbyFrame<'_>) -> NearbyUniforms {
+pub(crate) fn nearby_uniforms(nearby: &NearbyFrame<'_>) -> NearbyUniforms {
     let camera = nearby.ng_camera;
     let mut planes = [[0.0; 4]; MAX_PLANES];
     for (slot, plane) in planes.iter_mut().zip(nearby.planes) {

@@ -1,0 +1,559 @@
+//! The refraction today's engines ship (`../shared/engine-methods.md` restates each engine's
+//! shader as formulas, with its public source files): one interface at most, an exit point or a
+//! screen offset from a constant thickness, then a lookup in the screen texture of the opaque
+//! objects (colour and depth of everything drawn before the glass, the environment where
+//! nothing was drawn).
+//!
+//! * [`EngineModel::ScreenOffset`]: Godot 4 `BaseMaterial3D` refraction (Unreal's IOR offset
+//!   mode has the same shape): `uv' = uv − n_view.xy · scale`, with Godot's depth guard.
+//! * [`EngineModel::VolumeThickness`]: three.js `MeshPhysicalMaterial` and Bevy specular
+//!   transmission (glTF `KHR_materials_volume`): `X = P + T d`, `uv' = proj(X)`; Bevy rejects
+//!   samples in front of the glass and falls back to the environment.
+//! * [`EngineModel::Proxy`]: Unity HDRP's refraction models (sphere, box, thin; Filament's
+//!   `solid` is the sphere): an exit point `P1` and direction `R2` from a proxy shape, then
+//!   HDRP's proxy ray to the sky (`P1 + 65504 R2`, edge fade, depth check, environment
+//!   fallback) or Filament's screen-space lookup `proj(P1)`.
+//!
+//! Per pixel, [`engine_path`] returns which screen texel is read, with which weight, and where
+//! the rest comes from ([`EnginePath`]); the backends read the texel's colour. Conventions:
+//! `I` the unit eye ray toward `P`, `N` the outward normal at `P`, `T = refract(I, N, 1/ior)`,
+//! `cos θt = −N·T`, pixel coordinates `uv_px` with `y` down (as [`Camera::world_to_pixel`]),
+//! depths along the look direction (`view_depth`, `+∞` where the screen shows the environment).
+
+use glam::{UVec2, Vec2, Vec3};
+
+use crate::camera::Camera;
+use crate::optics::refract;
+
+/// HDRP's thin refraction model: the slab thickness (5 mm), `REFRACTION_THIN_DISTANCE`.
+pub const THIN_THICKNESS: f32 = 0.005;
+/// HDRP's distance to the sky when no reflection probe's proxy is found (`65504`, the largest
+/// half float): the hit is the direction's vanishing point.
+pub const HDRP_SKY_DISTANCE: f32 = 65504.0;
+/// HDRP's edge-of-screen fade width in UV (`EdgeOfScreenFade`, default 0.1).
+pub const HDRP_EDGE_FADE: f32 = 0.1;
+/// HDRP's box model: `dist = d / max(cos θt, 1e-5)`.
+pub const HDRP_MIN_COS: f32 = 1e-5;
+
+/// The shape HDRP's refraction model assumes behind the entry point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ProxyShape {
+    /// `REFRACTION_MODEL_SPHERE` (and Filament's `solid`): a sphere of diameter `d` tangent at
+    /// `P`; the exit is the chord's end, the direction refracted there.
+    Sphere,
+    /// `REFRACTION_MODEL_BOX` (`_REFRACTION_PLANE`): a slab of thickness `d`; the exit is shifted
+    /// sideways, the direction unchanged (`R2 = I`).
+    Box,
+    /// `REFRACTION_MODEL_THIN`: the box with `d` = [`THIN_THICKNESS`].
+    Thin,
+}
+
+/// How a proxy model finds what is behind its exit point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ProxyLookup {
+    /// Unity HDRP (`EvaluateBSDF_ScreenspaceRefraction` without a probe): the ray `P1 + t R2`
+    /// to the sky at [`HDRP_SKY_DISTANCE`], projected; faded to the environment along `R2`
+    /// near the screen's edges; the fragment's own texel where the hit's depth is in front.
+    Hdrp,
+    /// Filament's `screenspace` refraction: `proj(P1)`, clamped to the screen, no depth test,
+    /// the exit direction unused.
+    Filament,
+}
+
+/// One engine's refraction, with its parameters in scene units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EngineModel {
+    /// Godot 4: `uv' = SCREEN_UV − n_view.xy · scale` (`SCREEN_UV` in `[0, 1]`, `y` down;
+    /// `n_view` the view-space normal, `y` up), and with `depth_guard` the 4.x guard
+    /// `uv = mix(SCREEN_UV, uv', smoothstep(0, 1, depth(uv') − depth(P)))`.
+    ScreenOffset {
+        /// `refraction_scale` (Godot's default 0.05).
+        scale: f32,
+        /// Godot 4.x's depth guard against foreground objects.
+        depth_guard: bool,
+    },
+    /// three.js / Bevy: `X = P + T d`, `uv' = proj(X)`, clamped to the screen.
+    VolumeThickness {
+        /// `d`, the material's thickness already scaled to world units.
+        thickness: f32,
+        /// Bevy's depth rejection: a sample nearer than the fragment is replaced by the
+        /// environment along `normalize(I + d T)` (three.js has none).
+        reject_nearer: bool,
+    },
+    /// Unity HDRP's models (Filament's `solid` is [`ProxyShape::Sphere`]).
+    Proxy {
+        /// Sphere, box or thin slab.
+        shape: ProxyShape,
+        /// `d`: the sphere's diameter or the slab's thickness (ignored by [`ProxyShape::Thin`]).
+        thickness: f32,
+        /// HDRP's or Filament's lookup.
+        lookup: ProxyLookup,
+    },
+}
+
+/// The screen texture of the opaque objects, as an engine's lookup reads it: the view depth of
+/// what texel `(x, y)` shows (`f32::INFINITY` where it shows the environment).
+pub trait OpaqueDepth {
+    /// View depth (along the look direction) of the nearest opaque surface at `texel`.
+    fn view_depth(&self, texel: UVec2) -> f32;
+}
+
+/// What an engine reads for one refractor pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnginePath {
+    /// The screen texel read (clamped to the frame).
+    pub texel: UVec2,
+    /// The share of the colour from that texel, in `[0, 1]`; the rest is the environment along
+    /// [`Self::environment_dir`] (HDRP's edge fade, Bevy's rejected samples).
+    pub screen_weight: f32,
+    /// The fallback direction (`NaN` where the model has none: its weight is then 1).
+    pub environment_dir: Vec3,
+    /// The model's exit point (`NaN` for the screen offset, which has none).
+    pub p2: Vec3,
+    /// The model's direction behind the glass: `R2` for the proxies, `T` for the volume
+    /// thickness (no refraction at the exit), `NaN` for the screen offset.
+    pub t2: Vec3,
+    /// The lookup position fell outside the frame (or behind the eye): clamped to the edge, or
+    /// faded to the environment (HDRP).
+    pub off_screen: bool,
+}
+
+/// `T = refract(I, N, 1/ior)` and `cos θt = −N·T` (never TIR when entering glass, `ior ≥ 1`).
+#[inline]
+fn entry(incident: Vec3, n1: Vec3, ior: f32) -> (Vec3, f32) {
+    let t = refract(incident, n1, 1.0 / ior);
+    (t, -n1.dot(t))
+}
+
+/// HDRP's sphere model (`RefractionModelSphere`; Filament's `refractionSolidSphere`): the
+/// tangent sphere of diameter `d` has its centre at `C = P − N d/2`; the chord along `T` has
+/// length `d cos θt`, so `P1 = P + T d cos θt`; `N1 = normalize(C − P1)` (inward) and
+/// `R2 = refract(T, N1, ior)`. The chord's symmetry makes the exit angle `θt`: no TIR (should
+/// rounding report one, `R2 = T`). Returns `(P1, R2)`.
+#[inline]
+pub fn proxy_sphere_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+    let (t, cos_t) = entry(incident, n, ior);
+    let p1 = p + t * (d * cos_t);
+    let center = p - n * (0.5 * d);
+    let n1 = (center - p1).normalize_or_zero();
+    let r2 = refract(t, n1, ior);
+    (p1, if r2 == Vec3::ZERO { t } else { r2 })
+}
+
+/// HDRP's box model (`RefractionModelBox`): a slab of thickness `d`, `P1 = P + T d / max(cos
+/// θt, 1e-5)` and `R2 = I` (exact for a parallel slab). Returns `(P1, R2)`.
+#[inline]
+pub fn proxy_box_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+    let (t, cos_t) = entry(incident, n, ior);
+    (p + t * (d / cos_t.max(HDRP_MIN_COS)), incident)
+}
+
+/// three.js / Bevy: `X = P + T d` (the exit at distance `d` along `T`, not `d / cos θt`).
+/// Returns `(X, T)`.
+#[inline]
+pub fn volume_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+    let (t, _) = entry(incident, n, ior);
+    (p + t * d, t)
+}
+
+/// Bevy's environment fallback direction `−normalize(V + d refract(V, −N, 1/ior))`, which is
+/// `normalize(I + d T)` (`refract(V, −N, η) = −refract(I, N, η)`).
+#[inline]
+pub fn bevy_fallback_dir(incident: Vec3, t: Vec3, d: f32) -> Vec3 {
+    (incident + t * d).normalize_or_zero()
+}
+
+/// Godot's offset in pixels: `−n_view.xy · scale` of `SCREEN_UV`, i.e.
+/// `(−n_x scale W, −n_y scale H)` in `y`-down pixels (`n_view` `y` up: Godot 4's `SCREEN_UV`
+/// is `y` down while `NORMAL` is `y` up, so the sample moves against the normal in `x` and
+/// with it in `y`, as the engine's formula does; the same scale on both axes, not
+/// aspect-corrected).
+#[inline]
+pub fn screen_offset_px(n_view: Vec3, scale: f32, size: Vec2) -> Vec2 {
+    -Vec2::new(n_view.x, n_view.y) * scale * size
+}
+
+/// `smoothstep(0, 1, x)`: `3x² − 2x³` of `x` clamped to `[0, 1]`.
+#[inline]
+pub fn smoothstep01(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// HDRP's `EdgeOfScreenFade` of a position `uv ∈ [0, 1]²`: per axis
+/// `smoothstep01(saturate((1 − |2 uv − 1|) / fade))`, the product of both (0 off screen).
+#[inline]
+pub fn hdrp_edge_fade(uv: Vec2) -> f32 {
+    let f = |u: f32| smoothstep01(((1.0 - (2.0 * u - 1.0).abs()) / HDRP_EDGE_FADE).clamp(0.0, 1.0));
+    f(uv.x) * f(uv.y)
+}
+
+/// The texel a position in pixels reads (nearest, clamped to the frame) and whether it was
+/// outside the frame.
+#[inline]
+pub fn clamp_to_screen(uv_px: Vec2, size: UVec2) -> (UVec2, bool) {
+    let (w, h) = (size.x as f32, size.y as f32);
+    let inside = uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h;
+    let x = uv_px.x.clamp(0.0, w - 1.0) as u32;
+    let y = uv_px.y.clamp(0.0, h - 1.0) as u32;
+    (UVec2::new(x, y), !inside)
+}
+
+/// The view depth of `p_ws` (distance along the look direction).
+#[inline]
+fn view_depth(camera: &Camera, p_ws: Vec3) -> f32 {
+    (p_ws - camera.eye()).dot(camera.look_dir())
+}
+
+/// What `model` reads for the refractor pixel at `uv_px` (its centre) whose nearest front
+/// surface is `(p1_ws, n1_ws)` (`n1_ws` unit, outward), from `screen`. `ior ≥ 1`.
+pub fn engine_path<S: OpaqueDepth>(
+    camera: &Camera,
+    screen: &S,
+    uv_px: Vec2,
+    p1_ws: Vec3,
+    n1_ws: Vec3,
+    ior: f32,
+    model: EngineModel,
+) -> EnginePath {
+    let size = UVec2::new(camera.width(), camera.height());
+    let size_f = size.as_vec2();
+    let incident = (p1_ws - camera.eye()).normalize_or_zero();
+    let fragment_depth = view_depth(camera, p1_ws);
+    let own_texel = clamp_to_screen(uv_px, size).0;
+    let projected = |p: Vec3| camera.world_to_pixel(p).map(|q| Vec2::new(q.x, q.y));
+    let screen_only = |texel: UVec2, off_screen: bool, p2: Vec3, t2: Vec3| EnginePath {
+        texel,
+        screen_weight: 1.0,
+        environment_dir: Vec3::NAN,
+        p2,
+        t2,
+        off_screen,
+    };
+    match model {
+        EngineModel::ScreenOffset { scale, depth_guard } => {
+            let n_view = camera.world_to_view().transform_vector3(n1_ws);
+            let offset = uv_px + screen_offset_px(n_view, scale, size_f);
+            let (texel, off_screen) = clamp_to_screen(offset, size);
+            let texel = if depth_guard {
+                let w = smoothstep01(screen.view_depth(texel) - fragment_depth);
+                clamp_to_screen(uv_px.lerp(offset, w), size).0
+            } else {
+                texel
+            };
+            screen_only(texel, off_screen, Vec3::NAN, Vec3::NAN)
+        }
+        EngineModel::VolumeThickness {
+            thickness,
+            reject_nearer,
+        } => {
+            let (x, t) = volume_exit(p1_ws, n1_ws, incident, ior, thickness);
+            let (texel, off_screen) = match projected(x) {
+                Some(q) => clamp_to_screen(q, size),
+                None => (own_texel, true),
+            };
+            if reject_nearer && screen.view_depth(texel) < fragment_depth {
+                return EnginePath {
+                    texel,
+                    screen_weight: 0.0,
+                    environment_dir: bevy_fallback_dir(incident, t, thickness),
+                    p2: x,
+                    t2: t,
+                    off_screen,
+                };
+            }
+            screen_only(texel, off_screen, x, t)
+        }
+        EngineModel::Proxy {
+            shape,
+            thickness,
+            lookup,
+        } => {
+            let (p1, r2) = match shape {
+                ProxyShape::Sphere => proxy_sphere_exit(p1_ws, n1_ws, incident, ior, thickness),
+                ProxyShape::Box => proxy_box_exit(p1_ws, n1_ws, incident, ior, thickness),
+                ProxyShape::Thin => proxy_box_exit(p1_ws, n1_ws, incident, ior, THIN_THICKNESS),
+            };
+            match lookup {
+                ProxyLookup::Filament => {
+                    let (texel, off_screen) = match projected(p1) {
+                        Some(q) => clamp_to_screen(q, size),
+                        None => (own_texel, true),
+                    };
+                    screen_only(texel, off_screen, p1, r2)
+                }
+                ProxyLookup::Hdrp => {
+                    let Some(hit) = projected(p1 + r2 * HDRP_SKY_DISTANCE) else {
+                        return EnginePath {
+                            texel: own_texel,
+                            screen_weight: 0.0,
+                            environment_dir: r2,
+                            p2: p1,
+                            t2: r2,
+                            off_screen: true,
+                        };
+                    };
+                    let weight = hdrp_edge_fade(hit / size_f);
+                    let (hit_texel, off_screen) = clamp_to_screen(hit, size);
+                    let texel = if screen.view_depth(hit_texel) > fragment_depth {
+                        hit_texel
+                    } else {
+                        own_texel
+                    };
+                    EnginePath {
+                        texel,
+                        screen_weight: weight,
+                        environment_dir: r2,
+                        p2: p1,
+                        t2: r2,
+                        off_screen,
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Model code of [`EngineModel::ScreenOffset`].
+pub const ENGINE_SCREEN_OFFSET: u32 = 0;
+/// Model code of [`EngineModel::VolumeThickness`].
+pub const ENGINE_VOLUME_THICKNESS: u32 = 1;
+/// Model code of [`ProxyShape::Sphere`].
+pub const ENGINE_PROXY_SPHERE: u32 = 2;
+/// Model code of [`ProxyShape::Box`].
+pub const ENGINE_PROXY_BOX: u32 = 3;
+/// Model code of [`ProxyShape::Thin`].
+pub const ENGINE_PROXY_THIN: u32 = 4;
+
+/// The per-frame parameters of the engine shader (`shaders/engine.wgsl`, `EngineUniforms`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct EngineUniforms {
+    /// `world_to_view` (column-major), for Godot's view-space normal.
+    pub world_to_view: [[f32; 4]; 4],
+    /// `d` in world units (the screen offset's `scale` for [`ENGINE_SCREEN_OFFSET`]).
+    pub amount: f32,
+    /// 1: Godot's depth guard or Bevy's depth rejection.
+    pub depth_test: u32,
+    /// 1: Filament's lookup, 0: HDRP's.
+    pub filament_lookup: u32,
+    /// Padding to 16 bytes.
+    pub _padding: u32,
+}
+
+impl EngineUniforms {
+    /// The uniforms of `model` seen by `camera`.
+    pub fn new(camera: &Camera, model: &EngineModel) -> Self {
+        let (amount, depth_test, filament_lookup) = match *model {
+            EngineModel::ScreenOffset { scale, depth_guard } => (scale, depth_guard, false),
+            EngineModel::VolumeThickness {
+                thickness,
+                reject_nearer,
+            } => (thickness, reject_nearer, false),
+            EngineModel::Proxy {
+                thickness, lookup, ..
+            } => (thickness, false, lookup == ProxyLookup::Filament),
+        };
+        Self {
+            world_to_view: camera.world_to_view().to_cols_array_2d(),
+            amount,
+            depth_test: u32::from(depth_test),
+            filament_lookup: u32::from(filament_lookup),
+            _padding: 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraDesc;
+
+    /// A screen with one depth everywhere.
+    struct Flat(f32);
+    impl OpaqueDepth for Flat {
+        fn view_depth(&self, _: UVec2) -> f32 {
+            self.0
+        }
+    }
+
+    fn camera() -> Camera {
+        Camera::new(CameraDesc {
+            width: 200,
+            height: 100,
+            ..CameraDesc::default()
+        })
+        .expect("a valid camera")
+    }
+
+    /// A sphere of radius r at the origin: the sphere model with d = 2r is exact, so its exit
+    /// point lies on the sphere and its direction is the exact two-refraction direction.
+    #[test]
+    fn sphere_model_is_exact_on_a_sphere() {
+        let r = 1.3;
+        let ior = 1.5;
+        for k in 0..50 {
+            let a = k as f32 * 0.03;
+            let n = Vec3::new(a.sin(), 0.2 * a.cos(), a.cos()).normalize();
+            let p = n * r;
+            let i = Vec3::new(0.1, -0.2, -1.0).normalize();
+            if i.dot(n) >= -0.05 {
+                continue;
+            }
+            let (p1, r2) = proxy_sphere_exit(p, n, i, ior, 2.0 * r);
+            assert!((p1.length() - r).abs() < 1e-4, "exit off the sphere: {p1}");
+            let t = refract(i, n, 1.0 / ior);
+            let exact = refract(t, -p1.normalize(), ior);
+            assert!(r2.angle_between(exact) < 1e-3, "{r2} vs {exact}");
+            // The exit angle equals the entry's refraction angle.
+            let cos_exit = r2.dot(p1.normalize());
+            let cos_entry = -n.dot(i);
+            assert!((cos_exit - cos_entry).abs() < 1e-3);
+        }
+    }
+
+    /// A slab of thickness d along z: the box model's exit lies on its back plane, the direction
+    /// is the incident one (exact for parallel faces).
+    #[test]
+    fn box_model_is_exact_on_a_slab() {
+        let d = 0.4;
+        let i = Vec3::new(0.5, 0.1, -1.0).normalize();
+        let (p1, r2) = proxy_box_exit(Vec3::ZERO, Vec3::Z, i, 1.5, d);
+        assert!((p1.z + d).abs() < 1e-5);
+        assert_eq!(r2, i);
+        // Lateral shift from Snell: tan θt · d.
+        let sin_t = (1.0 - i.z * i.z).sqrt() / 1.5;
+        let tan_t = sin_t / (1.0 - sin_t * sin_t).sqrt();
+        assert!((p1.truncate().length() - tan_t * d).abs() < 1e-5);
+    }
+
+    #[test]
+    fn volume_exit_walks_d_along_t_not_d_over_cos() {
+        let i = Vec3::new(0.6, 0.0, -0.8);
+        let (x, t) = volume_exit(Vec3::ZERO, Vec3::Z, i, 1.5, 2.0);
+        assert!((x.length() - 2.0).abs() < 1e-5);
+        assert!((t.length() - 1.0).abs() < 1e-5);
+        assert!((bevy_fallback_dir(i, t, 0.0) - i).length() < 1e-6);
+    }
+
+    #[test]
+    fn edge_fade_is_one_inside_and_zero_outside() {
+        assert_eq!(hdrp_edge_fade(Vec2::splat(0.5)), 1.0);
+        assert_eq!(hdrp_edge_fade(Vec2::new(1.2, 0.5)), 0.0);
+        assert_eq!(hdrp_edge_fade(Vec2::new(0.5, -0.01)), 0.0);
+        let near_edge = hdrp_edge_fade(Vec2::new(0.02, 0.5));
+        assert!(near_edge > 0.0 && near_edge < 1.0);
+    }
+
+    /// Zero thickness means no offset at all (three.js and Bevy's default): the pixel's own
+    /// texel; the screen offset with scale 0 too.
+    #[test]
+    fn zero_thickness_reads_the_pixel_behind() {
+        let camera = camera();
+        let uv = Camera::pixel_center(37, 61);
+        let p = camera.pixel_to_world(uv, 0.5);
+        let n = (camera.eye() - p).normalize() + Vec3::new(0.3, 0.2, 0.0);
+        for model in [
+            EngineModel::VolumeThickness {
+                thickness: 0.0,
+                reject_nearer: false,
+            },
+            EngineModel::ScreenOffset {
+                scale: 0.0,
+                depth_guard: true,
+            },
+        ] {
+            let path = engine_path(
+                &camera,
+                &Flat(f32::INFINITY),
+                uv,
+                p,
+                n.normalize(),
+                1.5,
+                model,
+            );
+            assert_eq!(path.texel, UVec2::new(37, 61), "{model:?}");
+            assert!(!path.off_screen);
+        }
+    }
+
+    /// Bevy rejects a sample in front of the glass; three.js reads it (the foreground leak).
+    #[test]
+    fn bevy_rejects_foreground_samples_three_js_leaks_them() {
+        let camera = camera();
+        let uv = Camera::pixel_center(100, 50);
+        let p = camera.pixel_to_world(uv, 0.9);
+        let n = (camera.eye() - p).normalize();
+        let depth = view_depth(&camera, p);
+        let near = Flat(0.5 * depth);
+        let model = |reject_nearer| EngineModel::VolumeThickness {
+            thickness: 0.3,
+            reject_nearer,
+        };
+        let bevy = engine_path(&camera, &near, uv, p, n, 1.5, model(true));
+        assert_eq!(bevy.screen_weight, 0.0);
+        assert!(bevy.environment_dir.is_finite());
+        let three = engine_path(&camera, &near, uv, p, n, 1.5, model(false));
+        assert_eq!(three.screen_weight, 1.0);
+    }
+
+    /// Godot's guard keeps the pixel's own texel when the offset sample is in front.
+    #[test]
+    fn godot_guard_falls_back_to_the_unshifted_texel() {
+        let camera = camera();
+        let uv = Camera::pixel_center(100, 50);
+        let p = camera.pixel_to_world(uv, 0.9);
+        let n = ((camera.eye() - p).normalize() + Vec3::X).normalize();
+        let depth = view_depth(&camera, p);
+        let model = |depth_guard| EngineModel::ScreenOffset {
+            scale: 0.05,
+            depth_guard,
+        };
+        let guarded = engine_path(&camera, &Flat(depth - 1.0), uv, p, n, 1.5, model(true));
+        assert_eq!(guarded.texel, UVec2::new(100, 50));
+        let shifted = engine_path(&camera, &Flat(depth - 1.0), uv, p, n, 1.5, model(false));
+        assert!(
+            shifted.texel.x < 100,
+            "the normal's +x moves the sample left"
+        );
+        let behind = engine_path(&camera, &Flat(depth + 2.0), uv, p, n, 1.5, model(true));
+        assert_eq!(behind.texel, shifted.texel);
+    }
+
+    /// HDRP with the exit direction straight ahead reads the vanishing point, faded near the
+    /// edges and the environment beyond them.
+    #[test]
+    fn hdrp_lookup_reads_the_vanishing_point_and_fades_off_screen() {
+        let camera = camera();
+        let uv = Camera::pixel_center(100, 50);
+        let p = camera.pixel_to_world(uv, 0.9);
+        let n = (camera.eye() - p).normalize();
+        let model = EngineModel::Proxy {
+            shape: ProxyShape::Box,
+            thickness: 0.1,
+            lookup: ProxyLookup::Hdrp,
+        };
+        let path = engine_path(&camera, &Flat(f32::INFINITY), uv, p, n, 1.5, model);
+        assert!(path.screen_weight > 0.99);
+        assert!(
+            path.texel
+                .as_ivec2()
+                .distance_squared(glam::IVec2::new(100, 50))
+                <= 2
+        );
+        // A grazing normal sends the exit direction (R2 = I for the box) off screen only when
+        // I itself leaves it: at the corner pixel the fade is partial.
+        let corner = Camera::pixel_center(1, 1);
+        let q = camera.pixel_to_world(corner, 0.9);
+        let path = engine_path(
+            &camera,
+            &Flat(f32::INFINITY),
+            corner,
+            q,
+            (camera.eye() - q).normalize(),
+            1.5,
+            model,
+        );
+        assert!(path.screen_weight < 0.2, "{}", path.screen_weight);
+    }
+}

@@ -1,0 +1,311 @@
+//! The refraction today's engines ship, on the GPU (methods `screen-offset`,
+//! `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`): the opaque objects' surface
+//! pass from the eye (the nearby-geometry family's NG targets without a guard band), the
+//! refractor's front faces (no back faces), then `shade_engine` of `shaders/engine.wgsl` as a
+//! compute pass, one pipeline per method (`ENGINE_MODEL` fixed per pipeline).
+
+use glam::{UVec2, Vec3};
+use refract_core::engine::EngineUniforms;
+use refract_core::nearby_geometry::NearbyLookup;
+use refract_scene::{
+    Aov, EngineParams, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, RenderError,
+};
+
+use crate::bindings::{bind_group, uniform_entry};
+use crate::context::{GpuContext, GpuError};
+use crate::family::{GpuFamily, GpuFrameCx};
+use crate::frame_uniforms::frame_uniforms;
+use crate::methods::MethodPipelines;
+use crate::methods::image_space::{OutputBuffers, RefractorTargets, check_limits};
+use crate::methods::nearby_geometry::{
+    NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_layout, nearby_uniforms,
+};
+use crate::passes::raster::SurfaceTargets;
+use crate::shaders::{
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+};
+use crate::timestamps::Timestamps;
+
+/// The module of the engine methods: the front faces and environment of the image-space
+/// shader, the screen texture readers of the nearby-geometry shader, then `shade_engine`.
+pub(crate) const SHADER: ShaderModule = ShaderModule {
+    name: "engine",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        IMAGE_SPACE,
+        MATERIALS,
+        NEARBY_GEOMETRY_WGSL,
+        (
+            "engine.wgsl",
+            include_str!("../../../../shaders/engine.wgsl"),
+        ),
+    ],
+};
+
+/// The `shade_engine` pipelines: one per engine method (`ENGINE_MODEL` fixed per method).
+pub(crate) struct EnginePipelines(MethodPipelines);
+
+impl EnginePipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let mut entries = nearby_layout();
+        entries.push(uniform_entry(16, wgpu::ShaderStages::COMPUTE));
+        Self(MethodPipelines::new(
+            device,
+            &SHADER,
+            &entries,
+            |p: &EngineParams| {
+                let code = f64::from(p.method.model_code());
+                ("shade_engine", vec![("ENGINE_MODEL", code)])
+            },
+        ))
+    }
+}
+
+impl GpuFamily for EnginePipelines {
+    type Params = EngineParams;
+    type Targets = EngineTargets;
+    const LABEL: &'static str = "engine frame";
+
+    fn fits(&self, targets: &EngineTargets, cx: &GpuFrameCx<'_>, _: &EngineParams) -> bool {
+        targets.size == cx.size()
+    }
+
+    fn allocate(&self, cx: &GpuFrameCx<'_>, _: &EngineParams) -> Result<EngineTargets, GpuError> {
+        EngineTargets::new(cx, self)
+    }
+
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &EngineParams,
+        targets: &mut EngineTargets,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
+        let model = params.model(&cx.scene.refractor);
+        targets.encode(cx, self, &EngineUniforms::new(cx.camera, &model), encoder);
+        Ok(())
+    }
+
+    fn read(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        targets: &EngineTargets,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        targets.read(cx.context, cx.method, cx.outputs, frame)
+    }
+}
+
+/// The targets of engine frames at one resolution.
+pub(crate) struct EngineTargets {
+    size: (u32, u32),
+    refractor: RefractorTargets,
+    screen: SurfaceTargets,
+    nearby_uniforms: wgpu::Buffer,
+    engine_uniforms: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    /// Colour, T2, P2, flags (off screen, screen weight), P_geom (w: hit), texel (x, y, object).
+    outputs: OutputBuffers,
+}
+
+impl EngineTargets {
+    fn new(cx: &GpuFrameCx<'_>, pipelines: &EnginePipelines) -> Result<Self, GpuError> {
+        let (width, height) = cx.size();
+        let context = cx.context;
+        check_limits(context, width, height)?;
+        let device = &context.device;
+        let scene = cx.gpu_scene;
+        context.checked(|| {
+            let refractor = RefractorTargets::allocate(device, cx.raster, width, height);
+            let screen = SurfaceTargets::new(device, cx.raster, "screen", width, height);
+            let uniform_buffer = |label, size: usize| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: size as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let nearby_uniforms = uniform_buffer(
+                "screen uniforms",
+                std::mem::size_of::<refract_core::gpu::NearbyUniforms>(),
+            );
+            let engine_uniforms =
+                uniform_buffer("engine uniforms", std::mem::size_of::<EngineUniforms>());
+            let outputs = OutputBuffers::new(
+                device,
+                &["colour", "T2", "P2", "flags", "P_geom", "texel"],
+                u64::from(width) * u64::from(height),
+            );
+            let group = bind_group(
+                device,
+                "engine",
+                &pipelines.0.layout,
+                &[
+                    refractor.uniforms.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&refractor.front_p1),
+                    wgpu::BindingResource::TextureView(&refractor.front_n1),
+                    wgpu::BindingResource::TextureView(&refractor.back),
+                    scene.environment_texels.as_entire_binding(),
+                    outputs.outputs[0].as_entire_binding(),
+                    outputs.outputs[1].as_entire_binding(),
+                    outputs.outputs[2].as_entire_binding(),
+                    outputs.outputs[3].as_entire_binding(),
+                    outputs.outputs[4].as_entire_binding(),
+                    outputs.outputs[5].as_entire_binding(),
+                    scene.materials.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&screen.views[0]),
+                    wgpu::BindingResource::TextureView(&screen.views[1]),
+                    wgpu::BindingResource::TextureView(&screen.views[2]),
+                    nearby_uniforms.as_entire_binding(),
+                    engine_uniforms.as_entire_binding(),
+                ],
+            );
+            Self {
+                size: (width, height),
+                refractor,
+                screen,
+                nearby_uniforms,
+                engine_uniforms,
+                group,
+                outputs,
+            }
+        })
+    }
+
+    /// Encodes the passes of one frame and the copies of its outputs.
+    fn encode(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        pipelines: &EnginePipelines,
+        engine: &EngineUniforms,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        let GpuFrameCx {
+            context,
+            raster,
+            gpu_scene: scene,
+            camera,
+            method,
+            outputs,
+            timestamps,
+            ..
+        } = *cx;
+        let ior = cx.scene.refractor.ior();
+        let uniforms = frame_uniforms(
+            camera,
+            &scene.environment,
+            ior,
+            refract_core::TirPolicy::default(),
+        );
+        let screen = NearbyFrame {
+            ng_camera: camera,
+            pad: UVec2::ZERO,
+            planes: &[],
+            lookup: NearbyLookup::KayGreenberg,
+            light: cx.scene.light,
+        };
+        context.queue.write_buffer(
+            &self.nearby_uniforms,
+            0,
+            bytemuck::bytes_of(&nearby_uniforms(&screen)),
+        );
+        context
+            .queue
+            .write_buffer(&self.engine_uniforms, 0, bytemuck::bytes_of(engine));
+        self.refractor.encode(cx, &uniforms, None, encoder);
+        let objects: Vec<_> = scene.objects.iter().collect();
+        self.screen
+            .encode(&context.queue, raster, encoder, camera, &uniforms, &objects);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("engine kernel"),
+                timestamp_writes: timestamps.map(Timestamps::end_compute),
+            });
+            pass.set_pipeline(pipelines.0.get(method, outputs));
+            pass.set_bind_group(0, &self.group, &[]);
+            let (width, height) = self.size;
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        if let Some(timestamps) = timestamps {
+            timestamps.resolve(encoder);
+        }
+        let copies = match outputs {
+            FrameOutputs::ColorAndAovs => 6,
+            FrameOutputs::Color => 1,
+        };
+        self.outputs.copy(encoder, copies);
+    }
+
+    /// Reads the last submitted frame into `frame` (the colour and the registry row's AOVs).
+    fn read(
+        &self,
+        context: &GpuContext,
+        method: MethodId,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        let (width, height) = self.size;
+        let color = self.outputs.read(context, 0)?;
+        frame.resize_for_overwrite(width, height);
+        for (out, c) in frame.color.iter_mut().zip(&color) {
+            *out = Vec3::new(c[0], c[1], c[2]);
+        }
+        if outputs == FrameOutputs::Color {
+            return Ok(());
+        }
+        let planes: Vec<Vec<[f32; 4]>> = (1..6)
+            .map(|i| self.outputs.read(context, i))
+            .collect::<Result<_, _>>()?;
+        let pixels: Vec<EnginePixel> = (0..frame.pixel_count())
+            .map(|i| EnginePixel {
+                covered: color[i][3].round() as u32 == refract_core::gpu::COVERAGE_PATH,
+                t2: planes[0][i],
+                p2: planes[1][i],
+                flags: planes[2][i],
+                p_geom: planes[3][i],
+                texel: planes[4][i],
+            })
+            .collect();
+        frame.write_row_layers(method, &pixels)?;
+        Ok(())
+    }
+}
+
+/// One pixel of the engine outputs as the shader stores them.
+struct EnginePixel {
+    covered: bool,
+    t2: [f32; 4],
+    p2: [f32; 4],
+    flags: [f32; 4],
+    p_geom: [f32; 4],
+    texel: [f32; 4],
+}
+
+impl PixelLayers for EnginePixel {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        let xyz = |v: [f32; 4], valid: bool| {
+            LayerValue::Vec3(if valid {
+                Vec3::new(v[0], v[1], v[2])
+            } else {
+                Vec3::NAN
+            })
+        };
+        let hit = self.covered && self.p_geom[3] > 0.5;
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::OffScreen => LayerValue::Flag(self.covered && self.flags[0] > 0.5),
+            Aov::T2 => xyz(self.t2, self.covered && self.t2[3] > 0.5),
+            Aov::P2 => xyz(self.p2, self.covered && self.p2[3] > 0.5),
+            Aov::PGeom => xyz(self.p_geom, hit),
+            Aov::NgTexel => xyz(
+                [self.texel[0], self.texel[1], self.texel[2].round(), 0.0],
+                hit,
+            ),
+            _ => return None,
+        })
+    }
+}
