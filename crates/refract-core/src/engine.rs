@@ -23,6 +23,8 @@
 use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::Camera;
+use crate::kernel_x8::{refract as refract_x8, world_to_pixel_xy};
+use crate::lanes::{F32x8, LANES, Vec3x8, mask_lanes};
 use crate::optics::refract;
 
 /// HDRP's thin refraction model: the slab thickness (5 mm), `REFRACTION_THIN_DISTANCE`.
@@ -199,10 +201,149 @@ pub fn clamp_to_screen(uv_px: Vec2, size: UVec2) -> (UVec2, bool) {
     (UVec2::new(x, y), !inside)
 }
 
-/// The view depth of `p_ws` (distance along the look direction).
+/// What [`engine_path`] computes before it reads the screen: per pixel ([`geometry`]) or eight
+/// pixels at a time ([`engine_path_x8`]), bit for bit the same.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Geometry {
+    incident: Vec3,
+    fragment_depth: f32,
+    p2: Vec3,
+    t2: Vec3,
+    /// The screen offset's shifted position; for the others the projected lookup point (the
+    /// exit, or HDRP's hit on the sky), `None` behind the eye.
+    projected: Option<Vec2>,
+}
+
+/// The per-pixel geometry of `model` at the front surface `(p1_ws, n1_ws)`.
 #[inline]
-fn view_depth(camera: &Camera, p_ws: Vec3) -> f32 {
-    (p_ws - camera.eye()).dot(camera.look_dir())
+fn geometry(
+    camera: &Camera,
+    uv_px: Vec2,
+    p1_ws: Vec3,
+    n1_ws: Vec3,
+    ior: f32,
+    model: EngineModel,
+) -> Geometry {
+    let incident = (p1_ws - camera.eye()).normalize_or_zero();
+    let fragment_depth = (p1_ws - camera.eye()).dot(camera.look_dir());
+    let projected = |p: Vec3| camera.world_to_pixel(p).map(|q| Vec2::new(q.x, q.y));
+    let (p2, t2, projected) = match model {
+        EngineModel::ScreenOffset { scale, .. } => {
+            let size = Vec2::new(camera.width() as f32, camera.height() as f32);
+            let n_view = camera.world_to_view().transform_vector3(n1_ws);
+            let offset = uv_px + screen_offset_px(n_view, scale, size);
+            (Vec3::NAN, Vec3::NAN, Some(offset))
+        }
+        EngineModel::VolumeThickness { thickness, .. } => {
+            let (x, t) = volume_exit(p1_ws, n1_ws, incident, ior, thickness);
+            (x, t, projected(x))
+        }
+        EngineModel::Proxy {
+            shape,
+            thickness,
+            lookup,
+        } => {
+            let (p1, r2) = match shape {
+                ProxyShape::Sphere => proxy_sphere_exit(p1_ws, n1_ws, incident, ior, thickness),
+                ProxyShape::Box => proxy_box_exit(p1_ws, n1_ws, incident, ior, thickness),
+                ProxyShape::Thin => proxy_box_exit(p1_ws, n1_ws, incident, ior, THIN_THICKNESS),
+            };
+            let point = match lookup {
+                ProxyLookup::Filament => p1,
+                ProxyLookup::Hdrp => p1 + r2 * HDRP_SKY_DISTANCE,
+            };
+            (p1, r2, projected(point))
+        }
+    };
+    Geometry {
+        incident,
+        fragment_depth,
+        p2,
+        t2,
+        projected,
+    }
+}
+
+/// The lookup of a pixel whose geometry is `g`: which texel, with which weight, what else.
+#[inline]
+fn finish<S: OpaqueDepth>(
+    size: UVec2,
+    screen: &S,
+    uv_px: Vec2,
+    g: &Geometry,
+    model: EngineModel,
+) -> EnginePath {
+    let own_texel = clamp_to_screen(uv_px, size).0;
+    let screen_only = |texel: UVec2, off_screen: bool| EnginePath {
+        texel,
+        screen_weight: 1.0,
+        environment_dir: Vec3::NAN,
+        p2: g.p2,
+        t2: g.t2,
+        off_screen,
+    };
+    let projected = |q: Option<Vec2>| match q {
+        Some(q) => clamp_to_screen(q, size),
+        None => (own_texel, true),
+    };
+    match model {
+        EngineModel::ScreenOffset { depth_guard, .. } => {
+            let offset = g.projected.unwrap_or(uv_px);
+            let (texel, off_screen) = clamp_to_screen(offset, size);
+            let texel = if depth_guard {
+                let w = smoothstep01(screen.view_depth(texel) - g.fragment_depth);
+                clamp_to_screen(uv_px.lerp(offset, w), size).0
+            } else {
+                texel
+            };
+            screen_only(texel, off_screen)
+        }
+        EngineModel::VolumeThickness {
+            thickness,
+            reject_nearer,
+        } => {
+            let (texel, off_screen) = projected(g.projected);
+            if reject_nearer && screen.view_depth(texel) < g.fragment_depth {
+                return EnginePath {
+                    screen_weight: 0.0,
+                    environment_dir: bevy_fallback_dir(g.incident, g.t2, thickness),
+                    ..screen_only(texel, off_screen)
+                };
+            }
+            screen_only(texel, off_screen)
+        }
+        EngineModel::Proxy {
+            lookup: ProxyLookup::Filament,
+            ..
+        } => {
+            let (texel, off_screen) = projected(g.projected);
+            screen_only(texel, off_screen)
+        }
+        EngineModel::Proxy {
+            lookup: ProxyLookup::Hdrp,
+            ..
+        } => {
+            let Some(hit) = g.projected else {
+                return EnginePath {
+                    screen_weight: 0.0,
+                    environment_dir: g.t2,
+                    ..screen_only(own_texel, true)
+                };
+            };
+            let weight = hdrp_edge_fade(hit / size.as_vec2());
+            let (hit_texel, off_screen) = clamp_to_screen(hit, size);
+            let texel = if screen.view_depth(hit_texel) > g.fragment_depth {
+                hit_texel
+            } else {
+                own_texel
+            };
+            EnginePath {
+                screen_weight: weight,
+                environment_dir: g.t2,
+                ..screen_only(texel, off_screen)
+            }
+        }
+    }
 }
 
 /// What `model` reads for the refractor pixel at `uv_px` (its centre) whose nearest front
@@ -216,102 +357,105 @@ pub fn engine_path<S: OpaqueDepth>(
     ior: f32,
     model: EngineModel,
 ) -> EnginePath {
+    let g = geometry(camera, uv_px, p1_ws, n1_ws, ior, model);
     let size = UVec2::new(camera.width(), camera.height());
-    let size_f = size.as_vec2();
-    let incident = (p1_ws - camera.eye()).normalize_or_zero();
-    let fragment_depth = view_depth(camera, p1_ws);
-    let own_texel = clamp_to_screen(uv_px, size).0;
-    let projected = |p: Vec3| camera.world_to_pixel(p).map(|q| Vec2::new(q.x, q.y));
-    let screen_only = |texel: UVec2, off_screen: bool, p2: Vec3, t2: Vec3| EnginePath {
-        texel,
-        screen_weight: 1.0,
-        environment_dir: Vec3::NAN,
-        p2,
-        t2,
-        off_screen,
+    finish(size, screen, uv_px, &g, model)
+}
+
+/// glam's `normalize_or_zero` on lanes: `v · (1/|v|)` where that reciprocal is finite and
+/// positive, else zero.
+#[inline]
+fn normalize_or_zero_x8(v: Vec3x8) -> Vec3x8 {
+    let rcp = F32x8::ONE / v.dot(v).sqrt();
+    let ok = rcp.is_finite() & rcp.simd_gt(F32x8::ZERO);
+    Vec3x8::select(ok, v * rcp, Vec3x8::ZERO)
+}
+
+/// [`engine_path`] for eight pixels: lane `i` is `engine_path(camera, screen, uv_px[i],
+/// p1_ws[i], n1_ws[i], ior, model)`, bit for bit (tested). The vector math runs on eight
+/// lanes; the reads of the screen's depth run per lane.
+pub fn engine_path_x8<S: OpaqueDepth>(
+    camera: &Camera,
+    screen: &S,
+    uv_px: &[Vec2; LANES],
+    p1_ws: &[Vec3; LANES],
+    n1_ws: &[Vec3; LANES],
+    ior: f32,
+    model: EngineModel,
+) -> [EnginePath; LANES] {
+    let (p, n) = (Vec3x8::from_lanes(p1_ws), Vec3x8::from_lanes(n1_ws));
+    let from_eye = p - Vec3x8::splat(camera.eye());
+    let incident = normalize_or_zero_x8(from_eye);
+    let fragment_depth = from_eye.dot(Vec3x8::splat(camera.look_dir())).to_array();
+    let eta = F32x8::splat(1.0 / ior);
+    let entry = || {
+        let t = refract_x8(incident, n, eta);
+        (t, -n.dot(t))
     };
-    match model {
-        EngineModel::ScreenOffset { scale, depth_guard } => {
-            let n_view = camera.world_to_view().transform_vector3(n1_ws);
-            let offset = uv_px + screen_offset_px(n_view, scale, size_f);
-            let (texel, off_screen) = clamp_to_screen(offset, size);
-            let texel = if depth_guard {
-                let w = smoothstep01(screen.view_depth(texel) - fragment_depth);
-                clamp_to_screen(uv_px.lerp(offset, w), size).0
-            } else {
-                texel
-            };
-            screen_only(texel, off_screen, Vec3::NAN, Vec3::NAN)
+    let projected = |q: Vec3x8| -> [Option<Vec2>; LANES] {
+        let (x, y, front) = world_to_pixel_xy(camera, q);
+        let (x, y, front) = (x.to_array(), y.to_array(), mask_lanes(front));
+        core::array::from_fn(|i| front[i].then(|| Vec2::new(x[i], y[i])))
+    };
+    let nan = [Vec3::NAN; LANES];
+    let (p2, t2, projected) = match model {
+        EngineModel::ScreenOffset { scale, .. } => {
+            let n_view = Vec3x8::transform_vector3(&camera.world_to_view(), n);
+            let (w, h) = (camera.width() as f32, camera.height() as f32);
+            let ox = (-n_view.x * F32x8::splat(scale) * F32x8::splat(w)).to_array();
+            let oy = (-n_view.y * F32x8::splat(scale) * F32x8::splat(h)).to_array();
+            let offsets = core::array::from_fn(|i| Some(uv_px[i] + Vec2::new(ox[i], oy[i])));
+            (nan, nan, offsets)
         }
-        EngineModel::VolumeThickness {
-            thickness,
-            reject_nearer,
-        } => {
-            let (x, t) = volume_exit(p1_ws, n1_ws, incident, ior, thickness);
-            let (texel, off_screen) = match projected(x) {
-                Some(q) => clamp_to_screen(q, size),
-                None => (own_texel, true),
-            };
-            if reject_nearer && screen.view_depth(texel) < fragment_depth {
-                return EnginePath {
-                    texel,
-                    screen_weight: 0.0,
-                    environment_dir: bevy_fallback_dir(incident, t, thickness),
-                    p2: x,
-                    t2: t,
-                    off_screen,
-                };
-            }
-            screen_only(texel, off_screen, x, t)
+        EngineModel::VolumeThickness { thickness, .. } => {
+            let (t, _) = entry();
+            let x = p + t * F32x8::splat(thickness);
+            (x.to_lanes(), t.to_lanes(), projected(x))
         }
         EngineModel::Proxy {
             shape,
             thickness,
             lookup,
         } => {
+            let (t, cos_t) = entry();
             let (p1, r2) = match shape {
-                ProxyShape::Sphere => proxy_sphere_exit(p1_ws, n1_ws, incident, ior, thickness),
-                ProxyShape::Box => proxy_box_exit(p1_ws, n1_ws, incident, ior, thickness),
-                ProxyShape::Thin => proxy_box_exit(p1_ws, n1_ws, incident, ior, THIN_THICKNESS),
-            };
-            match lookup {
-                ProxyLookup::Filament => {
-                    let (texel, off_screen) = match projected(p1) {
-                        Some(q) => clamp_to_screen(q, size),
-                        None => (own_texel, true),
-                    };
-                    screen_only(texel, off_screen, p1, r2)
+                ProxyShape::Sphere => {
+                    let d = F32x8::splat(thickness);
+                    let p1 = p + t * (d * cos_t);
+                    let center = p - n * (F32x8::splat(0.5) * d);
+                    let n1 = normalize_or_zero_x8(center - p1);
+                    let r2 = refract_x8(t, n1, F32x8::splat(ior));
+                    (p1, Vec3x8::select(r2.is_zero(), t, r2))
                 }
-                ProxyLookup::Hdrp => {
-                    let Some(hit) = projected(p1 + r2 * HDRP_SKY_DISTANCE) else {
-                        return EnginePath {
-                            texel: own_texel,
-                            screen_weight: 0.0,
-                            environment_dir: r2,
-                            p2: p1,
-                            t2: r2,
-                            off_screen: true,
-                        };
-                    };
-                    let weight = hdrp_edge_fade(hit / size_f);
-                    let (hit_texel, off_screen) = clamp_to_screen(hit, size);
-                    let texel = if screen.view_depth(hit_texel) > fragment_depth {
-                        hit_texel
+                ProxyShape::Box | ProxyShape::Thin => {
+                    let d = if shape == ProxyShape::Thin {
+                        THIN_THICKNESS
                     } else {
-                        own_texel
+                        thickness
                     };
-                    EnginePath {
-                        texel,
-                        screen_weight: weight,
-                        environment_dir: r2,
-                        p2: p1,
-                        t2: r2,
-                        off_screen,
-                    }
+                    let dist = F32x8::splat(d) / cos_t.max(F32x8::splat(HDRP_MIN_COS));
+                    (p + t * dist, incident)
                 }
-            }
+            };
+            let point = match lookup {
+                ProxyLookup::Filament => p1,
+                ProxyLookup::Hdrp => p1 + r2 * F32x8::splat(HDRP_SKY_DISTANCE),
+            };
+            (p1.to_lanes(), r2.to_lanes(), projected(point))
         }
-    }
+    };
+    let incident = incident.to_lanes();
+    let size = UVec2::new(camera.width(), camera.height());
+    core::array::from_fn(|i| {
+        let g = Geometry {
+            incident: incident[i],
+            fragment_depth: fragment_depth[i],
+            p2: p2[i],
+            t2: t2[i],
+            projected: projected[i],
+        };
+        finish(size, screen, uv_px[i], &g, model)
+    })
 }
 
 /// Model code of [`EngineModel::ScreenOffset`].
@@ -368,6 +512,7 @@ impl EngineUniforms {
 mod tests {
     use super::*;
     use crate::camera::CameraDesc;
+    use crate::nearby_geometry::view_depth;
 
     /// A screen with one depth everywhere.
     struct Flat(f32);
@@ -384,6 +529,92 @@ mod tests {
             ..CameraDesc::default()
         })
         .expect("a valid camera")
+    }
+
+    /// A screen whose depth varies per texel, so that depth tests pass and fail across lanes.
+    struct Ramp;
+    impl OpaqueDepth for Ramp {
+        fn view_depth(&self, texel: UVec2) -> f32 {
+            if texel.x.is_multiple_of(3) {
+                f32::INFINITY
+            } else {
+                2.0 + 0.05 * texel.y as f32 + 0.01 * texel.x as f32
+            }
+        }
+    }
+
+    /// `engine_path_x8` is `engine_path` lane by lane, bit for bit, for every model and lookup
+    /// (pseudo-random surfaces: grazing normals, points near and far, off-screen lookups).
+    #[test]
+    fn lanes_equal_the_scalar_path_bit_for_bit() {
+        let camera = camera();
+        let mut seed = 0x2545_f491_u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed as f32) / (u32::MAX as f32)
+        };
+        let models = [
+            EngineModel::ScreenOffset {
+                scale: 0.05,
+                depth_guard: true,
+            },
+            EngineModel::ScreenOffset {
+                scale: 0.3,
+                depth_guard: false,
+            },
+            EngineModel::VolumeThickness {
+                thickness: 0.7,
+                reject_nearer: false,
+            },
+            EngineModel::VolumeThickness {
+                thickness: 2.5,
+                reject_nearer: true,
+            },
+            EngineModel::Proxy {
+                shape: ProxyShape::Sphere,
+                thickness: 1.6,
+                lookup: ProxyLookup::Hdrp,
+            },
+            EngineModel::Proxy {
+                shape: ProxyShape::Sphere,
+                thickness: 0.4,
+                lookup: ProxyLookup::Filament,
+            },
+            EngineModel::Proxy {
+                shape: ProxyShape::Box,
+                thickness: 1.0,
+                lookup: ProxyLookup::Hdrp,
+            },
+            EngineModel::Proxy {
+                shape: ProxyShape::Thin,
+                thickness: 0.0,
+                lookup: ProxyLookup::Hdrp,
+            },
+        ];
+        for model in models {
+            for _ in 0..64 {
+                let uv: [Vec2; LANES] =
+                    core::array::from_fn(|_| Vec2::new(next() * 200.0, next() * 100.0));
+                let p: [Vec3; LANES] =
+                    core::array::from_fn(|i| camera.pixel_to_world(uv[i], 0.2 + 0.79 * next()));
+                let n: [Vec3; LANES] = core::array::from_fn(|i| {
+                    let toward_eye = (camera.eye() - p[i]).normalize();
+                    let jitter = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.5;
+                    (toward_eye + jitter).normalize()
+                });
+                let lanes = engine_path_x8(&camera, &Ramp, &uv, &p, &n, 1.5, model);
+                for i in 0..LANES {
+                    let scalar = engine_path(&camera, &Ramp, uv[i], p[i], n[i], 1.5, model);
+                    assert_eq!(
+                        format!("{:?}", lanes[i]),
+                        format!("{scalar:?}"),
+                        "{model:?} lane {i}"
+                    );
+                }
+            }
+        }
     }
 
     /// A sphere of radius r at the origin: the sphere model with d = 2r is exact, so its exit

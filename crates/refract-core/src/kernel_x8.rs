@@ -70,7 +70,7 @@ fn face_forward(normal: Vec3x8, incident: Vec3x8) -> Vec3x8 {
 
 /// [`crate::optics::refract`]: the zero vector where `k < 0`.
 #[inline]
-fn refract(incident: Vec3x8, normal: Vec3x8, eta: F32x8) -> Vec3x8 {
+pub(crate) fn refract(incident: Vec3x8, normal: Vec3x8, eta: F32x8) -> Vec3x8 {
     let n_dot_i = normal.dot(incident);
     let eta2 = eta * eta;
     let k = (F32x8::ONE - eta2) + eta2 * n_dot_i * n_dot_i;
@@ -425,7 +425,7 @@ pub fn two_interface_lanes<S: BackFaceSampler + ?Sized>(
 
 /// [`Camera::world_to_pixel`]'s `(u_px, v_px)` and the lanes in front of the eye (`w > 0`).
 #[inline]
-fn world_to_pixel_xy(camera: &Camera, p: Vec3x8) -> (F32x8, F32x8, Mask) {
+pub(crate) fn world_to_pixel_xy(camera: &Camera, p: Vec3x8) -> (F32x8, F32x8, Mask) {
     let m = camera.world_to_clip();
     let row = |c: glam::Vec4| Vec3x8::splat(c.truncate());
     // glam's Mat4 · Vec4: ((c0·x + c1·y) + c2·z) + c3·1, lane-wise per output row.

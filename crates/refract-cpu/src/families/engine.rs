@@ -10,17 +10,21 @@
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
-use refract_core::engine::{EngineModel, OpaqueDepth, engine_path};
+use refract_core::engine::{EngineModel, OpaqueDepth, engine_path_x8};
+use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
 use refract_core::vector::robust_normalize;
-use refract_scene::{Aov, EngineParams, Frame, LayerValue, PixelLayers, RenderError, Scene};
+use refract_scene::{
+    Aov, EngineParams, Environment, Frame, LayerValue, PixelLayers, RenderError, Scene,
+};
 
-use super::nearby_geometry::{NearbyMeshes, NearbyTexture};
+use super::nearby_geometry::{NearbyMeshes, NearbyTexel, NearbyTexture};
 use crate::buffers::front_faces_into;
 use crate::family::{CpuFamily, FrameCx};
+use crate::pixel_group::PixelGroup;
 use crate::raster::SurfaceBuffer;
 use crate::scene_meshes::SceneMeshes;
 
@@ -60,13 +64,15 @@ impl PixelLayers for EngineAov {
     }
 }
 
-/// The screen texture's depths as the engines' lookups read them.
-struct ScreenDepth<'a>(&'a NearbyTexture);
+/// The screen texture's depths as the engines' lookups read them (`None`: no objects).
+struct ScreenDepth<'a>(Option<&'a NearbyTexture>);
 
 impl OpaqueDepth for ScreenDepth<'_> {
     #[inline]
     fn view_depth(&self, texel: UVec2) -> f32 {
-        self.0.surface(texel).map_or(f32::INFINITY, |s| s.depth)
+        self.0
+            .and_then(|t| t.surface(texel))
+            .map_or(f32::INFINITY, |s| s.depth)
     }
 }
 
@@ -94,7 +100,11 @@ impl CpuFamily for EnginePasses {
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
         let model = params.model(&scene.refractor);
-        self.screen.render_into(scene, &self.meshes, camera);
+        // Without opaque objects the screen texture is the environment everywhere: not drawn.
+        let screen = (!scene.objects.is_empty()).then(|| {
+            self.screen.render_into(scene, &self.meshes, camera);
+            &self.screen
+        });
         front_faces_into(&scene.refractor, camera, &mut self.front);
         let (width, height) = (camera.width(), camera.height());
         let n = (width * height) as usize;
@@ -104,25 +114,18 @@ impl CpuFamily for EnginePasses {
             camera,
             model,
             front: &self.front,
-            screen: &self.screen,
+            screen,
         };
         let rows = frame.color.par_chunks_mut(width as usize).enumerate();
         if cx.with_aovs() {
             self.aovs.clear();
             self.aovs.resize(n, EngineAov::NONE);
             rows.zip(self.aovs.par_chunks_mut(width as usize))
-                .for_each(|((y, colors), aovs)| {
-                    for (x, (c, a)) in colors.iter_mut().zip(aovs).enumerate() {
-                        (*c, *a) = pixels.pixel(x as u32, y as u32);
-                    }
-                });
+                .for_each(|((y, colors), aovs)| pixels.row(y as u32, colors, Some(aovs)));
             frame.write_row_layers(cx.method, &self.aovs[..n])?;
         } else {
-            rows.for_each(|(y, colors)| {
-                for (x, c) in colors.iter_mut().enumerate() {
-                    *c = pixels.pixel(x as u32, y as u32).0;
-                }
-            });
+            // Colour only, as displayed: no per-pixel AOV memory is touched.
+            rows.for_each(|(y, colors)| pixels.row(y as u32, colors, None));
         }
         Ok(())
     }
@@ -134,67 +137,213 @@ struct PixelContext<'a> {
     camera: &'a Camera,
     model: EngineModel,
     front: &'a SurfaceBuffer,
-    screen: &'a NearbyTexture,
+    /// The opaque objects' screen texture; `None` for a scene without objects.
+    screen: Option<&'a NearbyTexture>,
 }
 
 impl PixelContext<'_> {
-    /// The screen texture at `texel`: the object drawn there, or the environment along that
-    /// texel's eye ray (the engines draw the sky before the glass).
-    #[inline]
-    fn screen_color(&self, texel: UVec2) -> Vec3 {
-        match self.screen.texel(texel) {
-            Some(t) => t.color,
-            None => {
-                let dir = self
-                    .camera
-                    .pixel_ray(Camera::pixel_center(texel.x, texel.y))
-                    .dir;
-                self.scene.environment.radiance(dir)
+    /// Row `y`: pixels that see an object or the environment directly at once, the
+    /// refractor's pixels eight at a time through [`engine_path_x8`] (bit-identical to the
+    /// scalar path), the environment lookups eight at a time ([`EnvironmentLanes`]).
+    fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [EngineAov]>) {
+        let mut lanes = EnvironmentLanes::new(&self.scene.environment, self.camera);
+        let mut group = PixelGroup::new();
+        let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
+        for x in 0..colors.len() as u32 {
+            colors[x as usize] = Vec3::ZERO;
+            let index = (y * self.camera.width() + x) as usize;
+            let texel = UVec2::new(x, y);
+            let object = self.object(texel);
+            let front = self.front.texel(index).filter(|f| {
+                object.is_none_or(|o| view_depth(self.camera, f.p_ws) < o.surface.depth)
+            });
+            match front {
+                Some(front) => {
+                    p1[group.len] = front.p_ws;
+                    n1[group.len] = robust_normalize(front.n_ws).unwrap_or(front.n_ws);
+                    if group.push(x) {
+                        self.refractor(
+                            &group,
+                            y,
+                            &p1,
+                            &n1,
+                            colors,
+                            &mut lanes,
+                            aovs.as_deref_mut(),
+                        );
+                        group.len = 0;
+                    }
+                }
+                None => {
+                    self.screen(x, texel, 1.0, colors, &mut lanes);
+                    if let Some(aovs) = aovs.as_deref_mut() {
+                        aovs[x as usize] = EngineAov::NONE;
+                    }
+                }
             }
         }
+        if group.len > 0 {
+            let len = group.len;
+            group.pad();
+            let (first_p, first_n) = (p1[0], n1[0]);
+            p1[len..].fill(first_p);
+            n1[len..].fill(first_n);
+            self.refractor(&group, y, &p1, &n1, colors, &mut lanes, aovs);
+        }
+        lanes.flush(colors);
     }
 
-    /// Pixel `(x, y)`: its colour and layers.
-    fn pixel(&self, x: u32, y: u32) -> (Vec3, EngineAov) {
-        let index = (y * self.camera.width() + x) as usize;
-        let texel = UVec2::new(x, y);
-        let object = self.screen.texel(texel);
-        let front = self
-            .front
-            .texel(index)
-            .filter(|f| object.is_none_or(|o| view_depth(self.camera, f.p_ws) < o.surface.depth));
-        let Some(front) = front else {
-            return (self.screen_color(texel), EngineAov::NONE);
-        };
-        let n1 = robust_normalize(front.n_ws).unwrap_or(front.n_ws);
-        let path = engine_path(
+    /// Eight refractor pixels of row `y` (front surfaces `p1`, unit `n1`): the engine's path,
+    /// then its reads.
+    #[allow(clippy::too_many_arguments)]
+    fn refractor(
+        &self,
+        group: &PixelGroup,
+        y: u32,
+        p1: &[Vec3; LANES],
+        n1: &[Vec3; LANES],
+        colors: &mut [Vec3],
+        lanes: &mut EnvironmentLanes<'_>,
+        mut aovs: Option<&mut [EngineAov]>,
+    ) {
+        let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
+        let paths = engine_path_x8(
             self.camera,
             &ScreenDepth(self.screen),
-            Camera::pixel_center(x, y),
-            front.p_ws,
+            &uv,
+            p1,
             n1,
             self.scene.refractor.ior(),
             self.model,
         );
-        let mut aov = EngineAov {
-            covered: true,
-            p2: path.p2,
-            t2: path.t2,
-            off_screen: path.off_screen,
-            ..EngineAov::NONE
-        };
-        let mut color = Vec3::ZERO;
-        if path.screen_weight > 0.0 {
-            color += path.screen_weight * self.screen_color(path.texel);
-            if let Some(t) = self.screen.texel(path.texel) {
-                aov.p_geom = t.surface.p_ws;
-                aov.ng_texel = Vec3::new(path.texel.x as f32, path.texel.y as f32, t.object as f32);
+        for (&x, path) in group.x.iter().zip(&paths).take(group.len) {
+            let mut aov = EngineAov {
+                covered: true,
+                p2: path.p2,
+                t2: path.t2,
+                off_screen: path.off_screen,
+                ..EngineAov::NONE
+            };
+            if path.screen_weight > 0.0 {
+                self.screen(x, path.texel, path.screen_weight, colors, lanes);
+                if let Some(t) = self.object(path.texel) {
+                    aov.p_geom = t.surface.p_ws;
+                    aov.ng_texel =
+                        Vec3::new(path.texel.x as f32, path.texel.y as f32, t.object as f32);
+                }
+            }
+            if path.screen_weight < 1.0 {
+                lanes.push(x, path.environment_dir, 1.0 - path.screen_weight, colors);
+            }
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[x as usize] = aov;
             }
         }
-        if path.screen_weight < 1.0 {
-            color +=
-                (1.0 - path.screen_weight) * self.scene.environment.radiance(path.environment_dir);
+    }
+
+    /// The object drawn at screen texel `texel`, if any.
+    #[inline]
+    fn object(&self, texel: UVec2) -> Option<NearbyTexel> {
+        self.screen.and_then(|s| s.texel(texel))
+    }
+
+    /// Adds the screen texture at `texel` times `weight` to pixel `x`: the object drawn there,
+    /// or the environment along the texel's eye ray (the engines draw the sky before the
+    /// glass), queued in `lanes`.
+    #[inline]
+    fn screen(
+        &self,
+        x: u32,
+        texel: UVec2,
+        weight: f32,
+        colors: &mut [Vec3],
+        lanes: &mut EnvironmentLanes<'_>,
+    ) {
+        match self.object(texel) {
+            Some(t) => colors[x as usize] += weight * t.color,
+            None => lanes.push_texel(x, texel, weight, colors),
         }
-        (color, aov)
+    }
+}
+
+/// Environment lookups of one row queued eight at a time: `colors[x] += weight · L(dir)`,
+/// added in the order they were queued (so a pixel's screen term precedes its fallback, as
+/// on the GPU). A request is a direction, or a screen texel whose eye ray is the direction
+/// (computed eight at a time, [`Camera::pixel_ray_dir_x8`], bit-identical to the scalar ray).
+struct EnvironmentLanes<'a> {
+    environment: &'a Environment,
+    camera: &'a Camera,
+    x: [u32; LANES],
+    dirs: [Vec3; LANES],
+    texels: [Option<Vec2>; LANES],
+    weights: [f32; LANES],
+    len: usize,
+}
+
+impl<'a> EnvironmentLanes<'a> {
+    fn new(environment: &'a Environment, camera: &'a Camera) -> Self {
+        Self {
+            environment,
+            camera,
+            x: [0; LANES],
+            dirs: [Vec3::Z; LANES],
+            texels: [None; LANES],
+            weights: [0.0; LANES],
+            len: 0,
+        }
+    }
+
+    /// Queues `weight · L(dir)` for pixel `x`.
+    #[inline]
+    fn push(&mut self, x: u32, dir: Vec3, weight: f32, colors: &mut [Vec3]) {
+        self.queue(x, dir, None, weight, colors);
+    }
+
+    /// Queues `weight · L(eye ray through the centre of texel)` for pixel `x`.
+    #[inline]
+    fn push_texel(&mut self, x: u32, texel: UVec2, weight: f32, colors: &mut [Vec3]) {
+        let uv = Camera::pixel_center(texel.x, texel.y);
+        self.queue(x, Vec3::Z, Some(uv), weight, colors);
+    }
+
+    #[inline]
+    fn queue(&mut self, x: u32, dir: Vec3, texel: Option<Vec2>, weight: f32, colors: &mut [Vec3]) {
+        self.x[self.len] = x;
+        self.dirs[self.len] = dir;
+        self.texels[self.len] = texel;
+        self.weights[self.len] = weight;
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(colors);
+        }
+    }
+
+    fn flush(&mut self, colors: &mut [Vec3]) {
+        if self.len == 0 {
+            return;
+        }
+        if self.texels[..self.len].iter().any(Option::is_some) {
+            let uv: [Vec2; LANES] =
+                core::array::from_fn(|i| self.texels[i].unwrap_or(Vec2::splat(0.5)));
+            let rays = self
+                .camera
+                .pixel_ray_dir_x8(Vec2x8::from_lanes(&uv))
+                .to_lanes();
+            for i in 0..self.len {
+                if self.texels[i].is_some() {
+                    self.dirs[i] = rays[i];
+                }
+            }
+        }
+        let first = self.dirs[0];
+        self.dirs[self.len..].fill(first);
+        let radiance = self
+            .environment
+            .radiance_x8(Vec3x8::from_lanes(&self.dirs))
+            .to_lanes();
+        for i in 0..self.len {
+            colors[self.x[i] as usize] += self.weights[i] * radiance[i];
+        }
+        self.len = 0;
     }
 }
