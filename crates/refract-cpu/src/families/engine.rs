@@ -329,9 +329,10 @@ impl<'a> EnvironmentLanes<'a> {
                 .camera
                 .pixel_ray_dir_x8(Vec2x8::from_lanes(&uv))
                 .to_lanes();
-            for i in 0..self.len {
-                if self.texels[i].is_some() {
-                    self.dirs[i] = rays[i];
+            let queued = self.texels.iter().zip(&mut self.dirs).zip(rays);
+            for ((texel, dir), ray) in queued.take(self.len) {
+                if texel.is_some() {
+                    *dir = ray;
                 }
             }
         }
