@@ -10,7 +10,8 @@ struct EngineUniforms {
     amount: f32,
     depth_test: u32,
     filament_lookup: u32,
-    _padding: u32,
+    // 0: the scene has no opaque objects; the screen texture is neither drawn nor read.
+    has_objects: u32,
 }
 
 @group(0) @binding(16) var<uniform> engine: EngineUniforms;
@@ -18,9 +19,17 @@ struct EngineUniforms {
 // refract_core::engine::ENGINE_* (one pipeline per method).
 override ENGINE_MODEL: u32 = ENGINE_SCREEN_OFFSET;
 
+// The screen texel: xyz = P, w = 1 where it holds an object.
+fn screen_surface(texel: vec2<i32>) -> vec4<f32> {
+    if engine.has_objects == 0u {
+        return vec4<f32>(0.0);
+    }
+    return ng_surface(texel);
+}
+
 // The view depth of what screen texel `texel` shows (F32_MAX where the environment).
 fn screen_depth(texel: vec2<i32>) -> f32 {
-    let s = ng_surface(texel);
+    let s = screen_surface(texel);
     if s.w < 0.5 {
         return F32_MAX;
     }
@@ -30,7 +39,7 @@ fn screen_depth(texel: vec2<i32>) -> f32 {
 // The screen texture's colour at `texel`: the object drawn there or the environment along the
 // texel's eye ray.
 fn screen_color(texel: vec2<i32>) -> vec3<f32> {
-    if ng_surface(texel).w > 0.5 {
+    if screen_surface(texel).w > 0.5 {
         return ng_color(texel);
     }
     return environment_radiance(pixel_ray_dir(vec2<f32>(texel) + vec2<f32>(0.5)));
@@ -147,10 +156,11 @@ fn write_engine_aovs(i: u32, path: EnginePath, covered: bool) {
         var object = 0.0;
         var hit = 0.0;
         var p_geom = vec3<f32>(0.0);
-        if covered && path.screen_weight > 0.0 && ng_surface(path.texel).w > 0.5 {
+        let s = screen_surface(path.texel);
+        if covered && path.screen_weight > 0.0 && s.w > 0.5 {
             object = textureLoad(ng_uv_object, path.texel, 0).z;
             hit = 1.0;
-            p_geom = ng_surface(path.texel).xyz;
+            p_geom = s.xyz;
         }
         out_p_geom[i] = vec4<f32>(p_geom, hit);
         out_ng[i] = vec4<f32>(vec2<f32>(path.texel), object, 0.0);
@@ -173,7 +183,7 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let texel = vec2<i32>(i32(id.x), i32(id.y));
-    let object = ng_surface(texel);
+    let object = screen_surface(texel);
     let in_front = !px.covered || (object.w > 0.5 && ng_view_depth(object.xyz) < ng_view_depth(px.p1));
     if in_front {
         out_color[i] = vec4<f32>(screen_color(texel), f32(COVERAGE_BACKGROUND));

@@ -481,13 +481,14 @@ pub struct EngineUniforms {
     pub depth_test: u32,
     /// 1: Filament's lookup, 0: HDRP's.
     pub filament_lookup: u32,
-    /// Padding to 16 bytes.
-    pub _padding: u32,
+    /// 1 when the scene has opaque objects; 0: the screen texture is the environment
+    /// everywhere and is neither drawn nor read.
+    pub has_objects: u32,
 }
 
 impl EngineUniforms {
-    /// The uniforms of `model` seen by `camera`.
-    pub fn new(camera: &Camera, model: &EngineModel) -> Self {
+    /// The uniforms of `model` seen by `camera`, for a scene with or without opaque objects.
+    pub fn new(camera: &Camera, model: &EngineModel, has_objects: bool) -> Self {
         let (amount, depth_test, filament_lookup) = match *model {
             EngineModel::ScreenOffset { scale, depth_guard } => (scale, depth_guard, false),
             EngineModel::VolumeThickness {
@@ -503,7 +504,7 @@ impl EngineUniforms {
             amount,
             depth_test: u32::from(depth_test),
             filament_lookup: u32::from(filament_lookup),
-            _padding: 0,
+            has_objects: u32::from(has_objects),
         }
     }
 }

@@ -85,7 +85,9 @@ impl GpuFamily for EnginePipelines {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError> {
         let model = params.model(&cx.scene.refractor);
-        targets.encode(cx, self, &EngineUniforms::new(cx.camera, &model), encoder);
+        let has_objects = !cx.scene.objects.is_empty();
+        let uniforms = EngineUniforms::new(cx.camera, &model, has_objects);
+        targets.encode(cx, self, &uniforms, encoder);
         Ok(())
     }
 
@@ -217,9 +219,12 @@ impl EngineTargets {
             .queue
             .write_buffer(&self.engine_uniforms, 0, bytemuck::bytes_of(engine));
         self.refractor.encode(cx, &uniforms, None, encoder);
-        let objects: Vec<_> = scene.objects.iter().collect();
-        self.screen
-            .encode(&context.queue, raster, encoder, camera, &uniforms, &objects);
+        // Without opaque objects the shader never reads the screen texture.
+        if engine.has_objects != 0 {
+            let objects: Vec<_> = scene.objects.iter().collect();
+            self.screen
+                .encode(&context.queue, raster, encoder, camera, &uniforms, &objects);
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("engine kernel"),
