@@ -148,64 +148,55 @@ impl PixelContext<'_> {
     fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [EngineAov]>) {
         let mut lanes = EnvironmentLanes::new(&self.scene.environment, self.camera);
         let mut group = PixelGroup::new();
-        let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
         for x in 0..colors.len() as u32 {
             colors[x as usize] = Vec3::ZERO;
             let index = (y * self.camera.width() + x) as usize;
             let texel = UVec2::new(x, y);
-            let object = self.object(texel);
-            let front = self.front.texel(index).filter(|f| {
-                object.is_none_or(|o| view_depth(self.camera, f.p_ws) < o.surface.depth)
-            });
-            match front {
-                Some(front) => {
-                    p1[group.len] = front.p_ws;
-                    n1[group.len] = robust_normalize(front.n_ws).unwrap_or(front.n_ws);
-                    if group.push(x) {
-                        self.refractor(
-                            &group,
-                            y,
-                            &p1,
-                            &n1,
-                            colors,
-                            &mut lanes,
-                            aovs.as_deref_mut(),
-                        );
-                        group.len = 0;
-                    }
+            // The refractor where it is drawn in front of any object there: its surface is
+            // reconstructed here only for that depth test, else eight at a time below.
+            let refractor = self.front.is_covered(index)
+                && self.object(texel).is_none_or(|o| {
+                    self.front
+                        .texel(index)
+                        .is_some_and(|f| view_depth(self.camera, f.p_ws) < o.surface.depth)
+                });
+            if refractor {
+                if group.push(x) {
+                    self.refractor(&group, y, colors, &mut lanes, aovs.as_deref_mut());
+                    group.len = 0;
                 }
-                None => {
-                    self.screen(x, texel, 1.0, colors, &mut lanes);
-                    if let Some(aovs) = aovs.as_deref_mut() {
-                        aovs[x as usize] = EngineAov::NONE;
-                    }
+            } else {
+                self.screen(x, texel, 1.0, colors, &mut lanes);
+                if let Some(aovs) = aovs.as_deref_mut() {
+                    aovs[x as usize] = EngineAov::NONE;
                 }
             }
         }
         if group.len > 0 {
-            let len = group.len;
             group.pad();
-            let (first_p, first_n) = (p1[0], n1[0]);
-            p1[len..].fill(first_p);
-            n1[len..].fill(first_n);
-            self.refractor(&group, y, &p1, &n1, colors, &mut lanes, aovs);
+            self.refractor(&group, y, colors, &mut lanes, aovs);
         }
         lanes.flush(colors);
     }
 
-    /// Eight refractor pixels of row `y` (front surfaces `p1`, unit `n1`): the engine's path,
-    /// then its reads.
-    #[allow(clippy::too_many_arguments)]
+    /// Eight refractor pixels of row `y` (all covered; padding repeats lane 0): their front
+    /// surfaces eight at a time (bit-identical to one at a time), the engine's path, then its
+    /// reads.
     fn refractor(
         &self,
         group: &PixelGroup,
         y: u32,
-        p1: &[Vec3; LANES],
-        n1: &[Vec3; LANES],
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
         mut aovs: Option<&mut [EngineAov]>,
     ) {
+        let fronts = self.front.texels_x8(&group.x, y);
+        let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
+        for (i, f) in fronts.iter().enumerate() {
+            p1[i] = f.p_ws;
+            n1[i] = robust_normalize(f.n_ws).unwrap_or(f.n_ws);
+        }
+        let (p1, n1) = (&p1, &n1);
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
         let paths = engine_path_x8(
             self.camera,

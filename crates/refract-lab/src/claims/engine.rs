@@ -265,8 +265,10 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
         "\n## Engine glass against the exact reference\n\n\
          The refraction of Godot, three.js, Bevy, Unity HDRP and Filament (`docs/methods.md`, \
          \"Engine methods\"), CPU backend, {res}², against the same reference, beside Wyman 2005a \
-         (`wyman`), Wyman 2005b (`iterative-seeded`) and the distance maps. Engine defaults, with \
-         the scene-derived thickness (the refractor's mean `d_N`) where the engine's is 0. FLIP \
+         (`wyman`), Wyman 2005b (`iterative-seeded`) and the distance maps. The engines' defaults \
+         but the thickness, which is `auto` (the refractor's mean `d_N`) for every \
+         thickness-driven method (three.js and Bevy default to 0, no refraction; the engines' \
+         own values are in the thickness table below). FLIP \
          over the refractor's pixels; T2 where the method has a direction (`volume-thickness`: \
          `T`, no exit refraction); `P_geom` p50: the on-screen distance between the surface a \
          pixel shows and the one the exact path meets, over pixels where both meet one; misses: \
