@@ -55,6 +55,15 @@ fn clamp_to_screen(uv_px: vec2<f32>) -> vec3<i32> {
     return vec3<i32>(x, y, select(1, 0, inside));
 }
 
+// The texel `p` projects to, clamped (z = 1 when outside the frame); `own` behind the eye.
+fn projected_texel(p: vec3<f32>, own: vec2<i32>) -> vec3<i32> {
+    let q = world_to_pixel(p);
+    if q.w > 0.5 {
+        return clamp_to_screen(q.xy);
+    }
+    return vec3<i32>(own, 1);
+}
+
 struct EnginePath {
     texel: vec2<i32>,
     screen_weight: f32,
@@ -91,15 +100,9 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
         let e = volume_exit(p1_ws, n1_ws, incident, frame.ior, engine.amount);
         path.p2 = e.p;
         path.t2 = e.dir;
-        let q = world_to_pixel(e.p);
-        if q.w > 0.5 {
-            let c = clamp_to_screen(q.xy);
-            path.texel = c.xy;
-            path.off_screen = c.z == 1;
-        } else {
-            path.texel = own.xy;
-            path.off_screen = true;
-        }
+        let c = projected_texel(e.p, own.xy);
+        path.texel = c.xy;
+        path.off_screen = c.z == 1;
         if engine.depth_test != 0u && screen_depth(path.texel) < fragment_depth {
             path.screen_weight = 0.0;
             path.environment_dir = bevy_fallback_dir(incident, e.dir, engine.amount);
@@ -117,15 +120,9 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
     path.p2 = e.p;
     path.t2 = e.dir;
     if engine.filament_lookup != 0u {
-        let q = world_to_pixel(e.p);
-        if q.w > 0.5 {
-            let c = clamp_to_screen(q.xy);
-            path.texel = c.xy;
-            path.off_screen = c.z == 1;
-        } else {
-            path.texel = own.xy;
-            path.off_screen = true;
-        }
+        let c = projected_texel(e.p, own.xy);
+        path.texel = c.xy;
+        path.off_screen = c.z == 1;
         return path;
     }
     path.environment_dir = e.dir;

@@ -18,7 +18,7 @@ use crate::frame_uniforms::frame_uniforms;
 use crate::methods::MethodPipelines;
 use crate::methods::image_space::{OutputBuffers, RefractorTargets, check_limits};
 use crate::methods::nearby_geometry::{
-    NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_layout, nearby_uniforms,
+    NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_layout, nearby_resources, nearby_uniforms,
 };
 use crate::passes::raster::SurfaceTargets;
 use crate::shaders::{
@@ -142,30 +142,10 @@ impl EngineTargets {
                 &["colour", "T2", "P2", "flags", "P_geom", "texel"],
                 u64::from(width) * u64::from(height),
             );
-            let group = bind_group(
-                device,
-                "engine",
-                &pipelines.0.layout,
-                &[
-                    refractor.uniforms.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&refractor.front_p1),
-                    wgpu::BindingResource::TextureView(&refractor.front_n1),
-                    wgpu::BindingResource::TextureView(&refractor.back),
-                    scene.environment_texels.as_entire_binding(),
-                    outputs.outputs[0].as_entire_binding(),
-                    outputs.outputs[1].as_entire_binding(),
-                    outputs.outputs[2].as_entire_binding(),
-                    outputs.outputs[3].as_entire_binding(),
-                    outputs.outputs[4].as_entire_binding(),
-                    outputs.outputs[5].as_entire_binding(),
-                    scene.materials.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&screen.views[0]),
-                    wgpu::BindingResource::TextureView(&screen.views[1]),
-                    wgpu::BindingResource::TextureView(&screen.views[2]),
-                    nearby_uniforms.as_entire_binding(),
-                    engine_uniforms.as_entire_binding(),
-                ],
-            );
+            let mut resources =
+                nearby_resources(&refractor, scene, &outputs, &screen, &nearby_uniforms);
+            resources.push(engine_uniforms.as_entire_binding());
+            let group = bind_group(device, "engine", &pipelines.0.layout, &resources);
             Self {
                 size: (width, height),
                 refractor,

@@ -52,6 +52,29 @@ pub(crate) const NEARBY_GEOMETRY_WGSL: crate::shaders::WgslFile = (
 /// The `shade_nearby` pipelines: one per nearby-geometry method (`LOOKUP` fixed per method).
 pub(crate) struct NearbyPipelines(MethodPipelines);
 
+/// What [`nearby_layout`] binds: the refractor's targets, the environment, six outputs, the
+/// materials, the NG (or screen) targets and their uniforms.
+pub(crate) fn nearby_resources<'a>(
+    refractor: &'a RefractorTargets,
+    scene: &'a GpuScene,
+    outputs: &'a OutputBuffers,
+    ng: &'a SurfaceTargets,
+    nearby_uniforms: &'a wgpu::Buffer,
+) -> Vec<wgpu::BindingResource<'a>> {
+    let mut resources = vec![
+        refractor.uniforms.as_entire_binding(),
+        wgpu::BindingResource::TextureView(&refractor.front_p1),
+        wgpu::BindingResource::TextureView(&refractor.front_n1),
+        wgpu::BindingResource::TextureView(&refractor.back),
+        scene.environment_texels.as_entire_binding(),
+    ];
+    resources.extend(outputs.outputs.iter().map(|o| o.as_entire_binding()));
+    resources.push(scene.materials.as_entire_binding());
+    resources.extend(ng.views.iter().map(wgpu::BindingResource::TextureView));
+    resources.push(nearby_uniforms.as_entire_binding());
+    resources
+}
+
 /// The bindings of `shade_nearby` (and of the engine family's `shade_engine`, which adds its own).
 pub(crate) fn nearby_layout() -> Vec<wgpu::BindGroupLayoutEntry> {
     vec![
@@ -212,24 +235,7 @@ impl NearbyTargets {
                 device,
                 "nearby geometry",
                 &pipelines.0.layout,
-                &[
-                    refractor.uniforms.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&refractor.front_p1),
-                    wgpu::BindingResource::TextureView(&refractor.front_n1),
-                    wgpu::BindingResource::TextureView(&refractor.back),
-                    scene.environment_texels.as_entire_binding(),
-                    outputs.outputs[0].as_entire_binding(),
-                    outputs.outputs[1].as_entire_binding(),
-                    outputs.outputs[2].as_entire_binding(),
-                    outputs.outputs[3].as_entire_binding(),
-                    outputs.outputs[4].as_entire_binding(),
-                    outputs.outputs[5].as_entire_binding(),
-                    scene.materials.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&ng.views[0]),
-                    wgpu::BindingResource::TextureView(&ng.views[1]),
-                    wgpu::BindingResource::TextureView(&ng.views[2]),
-                    nearby_uniforms.as_entire_binding(),
-                ],
+                &nearby_resources(&refractor, scene, &outputs, &ng, &nearby_uniforms),
             );
             Self {
                 size: (width, height, ng_width, ng_height),
