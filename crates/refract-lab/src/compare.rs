@@ -11,7 +11,7 @@ use refract_core::TirPolicy;
 use refract_eval::metrics::{MetricsRecord, evaluate_method, reference_record};
 use refract_eval::{BUILTIN_SCENES, load_scene};
 use refract_scene::{
-    Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceSettings,
+    Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
 };
 use refract_trace::ReferenceRenderer;
 
@@ -118,6 +118,9 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         ..TraceSettings::default()
     });
 
+    for note in skipped_pairs(&options.methods, &scenes) {
+        progress.note(note);
+    }
     progress.start(STAGE_REFERENCE, scenes.len() as u64);
     progress.start(
         STAGE_METHODS,
@@ -158,8 +161,8 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
             renderer.prepare(scene)?;
         }
         for method in &options.methods {
-            if let Err(reason) = refract_scene::scene_support(method.id(), scene) {
-                progress.note(Note::Skipped(format!("{reason}: skipped")));
+            if refract_scene::scene_support(method.id(), scene).is_err() {
+                // Said once for all pairs before the run (`skipped_pairs`).
                 progress.advance(STAGE_METHODS, renderers.len() as u64);
                 continue;
             }
@@ -300,4 +303,71 @@ pub fn summary(records: &[MetricsRecord], out: &Path) -> String {
         out.display()
     );
     text
+}
+
+/// The (method, scene) pairs `compare` leaves out, one note per reason: how many methods on
+/// how many scenes, then their names (`refract_scene::scene_support` says why each pair is
+/// left out; the pairs of one reason share it but for the names).
+fn skipped_pairs(methods: &[MethodParams], scenes: &[Arc<Scene>]) -> Vec<Note> {
+    // The reasons, in the order `scene_support` checks them.
+    let reasons = [
+        (
+            "refract through glass only",
+            "whose specular object is a conductor",
+            (|s: &Scene| s.refractor.conductor().is_some()) as fn(&Scene) -> bool,
+        ),
+        (
+            "shade opaque objects as diffuse only",
+            "with a conductor among their objects",
+            |s: &Scene| s.objects.iter().any(|o| o.conductor().is_some()),
+        ),
+    ];
+    let mut notes = Vec::new();
+    let mut said: Vec<(MethodId, &str)> = Vec::new();
+    for (what, which, applies) in reasons {
+        let mut method_names: Vec<&str> = Vec::new();
+        let mut scene_names: Vec<&str> = Vec::new();
+        for scene in scenes.iter().filter(|s| applies(s)) {
+            for method in methods {
+                let id = method.id();
+                let pair = (id, scene.name.as_str());
+                if said.contains(&pair) || refract_scene::scene_support(id, scene).is_ok() {
+                    continue;
+                }
+                said.push(pair);
+                if !method_names.contains(&id.name()) {
+                    method_names.push(id.name());
+                }
+                if !scene_names.contains(&scene.name.as_str()) {
+                    scene_names.push(&scene.name);
+                }
+            }
+        }
+        if !method_names.is_empty() {
+            let count = |n: usize, noun: &str| match n {
+                1 => format!("1 {noun}"),
+                n => format!("{n} {noun}s"),
+            };
+            notes.push(Note::Skipped(format!(
+                "{} that {what} skipped on {} {which}: {} on {}",
+                count(method_names.len(), "method"),
+                count(scene_names.len(), "scene"),
+                method_names.join(", "),
+                scene_names.join(", ")
+            )));
+        }
+    }
+    // Any other reason `scene_support` may give: one line per pair, as it says it.
+    for scene in scenes {
+        for method in methods {
+            let id = method.id();
+            if said.contains(&(id, scene.name.as_str())) {
+                continue;
+            }
+            if let Err(reason) = refract_scene::scene_support(id, scene) {
+                notes.push(Note::Skipped(format!("{reason}: skipped")));
+            }
+        }
+    }
+    notes
 }
