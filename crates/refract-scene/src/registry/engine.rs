@@ -219,7 +219,7 @@ const ENGINE_MEMORY: MemoryModel = MemoryModel {
 };
 
 /// The engines that ship `screen-offset`.
-const GODOT: &str = "Godot 4 (scene/resources/material.cpp, BaseMaterial3D refraction); Unreal's IOR offset mode has the same shape";
+const GODOT: &str = "scene/resources/material.cpp (BaseMaterial3D refraction); Unreal's IOR offset mode has the same shape";
 
 /// The rows of the family.
 pub(super) const ROWS: &[MethodInfo] = &[
@@ -269,7 +269,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         id: MethodId::ProxyBox,
         name: "proxy-box",
         paper: "engine: Unity HDRP",
-        section: "HDRP Refraction.hlsl RefractionModelBox (_REFRACTION_PLANE), Lit.hlsl",
+        section: "Refraction.hlsl RefractionModelBox (_REFRACTION_PLANE), Lit.hlsl",
         family: Family::Engine,
         summary: "exit from a slab of thickness d (P + T d / cos θt, direction unchanged), then HDRP's proxy ray to the sky",
         params: PROXY_PARAMS,
@@ -283,7 +283,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         id: MethodId::ProxyThin,
         name: "proxy-thin",
         paper: "engine: Unity HDRP",
-        section: "HDRP Refraction.hlsl (REFRACTION_MODEL_THIN, 5 mm), Lit.hlsl",
+        section: "Refraction.hlsl (REFRACTION_MODEL_THIN, 5 mm), Lit.hlsl",
         family: Family::Engine,
         summary: "the box model with a 5 mm slab: the direction unchanged, the exit nearly at the entry",
         params: THIN_PARAMS,
