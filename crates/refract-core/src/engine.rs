@@ -225,7 +225,7 @@ fn geometry(
     model: EngineModel,
 ) -> Geometry {
     let incident = (p1_ws - camera.eye()).normalize_or_zero();
-    let fragment_depth = (p1_ws - camera.eye()).dot(camera.look_dir());
+    let fragment_depth = crate::nearby_geometry::view_depth(camera, p1_ws);
     let projected = |p: Vec3| camera.world_to_pixel(p).map(|q| Vec2::new(q.x, q.y));
     let (p2, t2, projected) = match model {
         EngineModel::ScreenOffset { scale, .. } => {

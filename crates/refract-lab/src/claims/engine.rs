@@ -22,6 +22,12 @@ fn with(id: MethodId, settings: &[(&str, &str)]) -> crate::Result<MethodParams> 
     Ok(params)
 }
 
+/// The labels of the rows the claims read.
+const THREE_JS: &str = "`volume-thickness` (three.js)";
+const BEVY: &str = "`volume-thickness depth-test=reject` (Bevy)";
+const HDRP_SPHERE: &str = "`proxy-sphere` (HDRP)";
+const WYMAN: &str = "`wyman`";
+
 /// The rows of the comparison: a label and the parameters (engine defaults unless named).
 fn methods() -> crate::Result<Vec<(&'static str, MethodParams)>> {
     Ok(vec![
@@ -53,7 +59,7 @@ fn methods() -> crate::Result<Vec<(&'static str, MethodParams)>> {
             "`proxy-thin` (HDRP)",
             MethodParams::defaults(MethodId::ProxyThin),
         ),
-        ("`wyman`", MethodParams::defaults(MethodId::Wyman)),
+        (WYMAN, MethodParams::defaults(MethodId::Wyman)),
         (
             "`iterative-seeded`",
             MethodParams::defaults(MethodId::IterativeSeeded),
@@ -178,9 +184,9 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
                 value(r.nearby_miss_rate.map(|m| 100.0 * m), 1),
             );
         }
-        // The failures of the engine rows.
+        // The failures of the engine rows (the rows with an `off_screen` layer).
         let mut leaks = Vec::new();
-        for (label, _, frame) in records.iter().take(7) {
+        for (label, _, frame) in &records {
             if let Some(f) = failures(&truth, frame) {
                 let _ = writeln!(
                     failure_rows,
@@ -190,12 +196,17 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
                     pct(f.glass_behind_glass),
                     pct(f.off_screen)
                 );
-                leaks.push((label.to_string(), f.leak));
+                leaks.push((*label, f.leak));
             }
         }
         if name == "engine-failures" || name == "chart" {
-            let leak = |k: usize| leaks.get(k).map_or(f64::NAN, |l| l.1);
-            let (three, bevy, hdrp) = (leak(1), leak(2), leak(3));
+            let leak = |label: &str| {
+                leaks
+                    .iter()
+                    .find(|l| l.0 == label)
+                    .map_or(f64::NAN, |l| l.1)
+            };
+            let (three, bevy, hdrp) = (leak(THREE_JS), leak(BEVY), leak(HDRP_SPHERE));
             claims[0].rows.push((
                 name.clone(),
                 three > 0.0 && bevy == 0.0 && hdrp == 0.0,
@@ -208,8 +219,13 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
             ));
         }
         if name == "sphere" {
-            let t2 = |k: usize| records[k].1.t2_angle_deg_mean_non_tir;
-            let (sphere, wyman) = (t2(3), t2(7));
+            let t2 = |label: &str| {
+                records
+                    .iter()
+                    .find(|r| r.0 == label)
+                    .and_then(|r| r.1.t2_angle_deg_mean_non_tir)
+            };
+            let (sphere, wyman) = (t2(HDRP_SPHERE), t2(WYMAN));
             claims[1].rows.push((
                 name.clone(),
                 matches!((sphere, wyman), (Some(s), Some(w)) if s < 0.5 && s <= w),
