@@ -253,6 +253,7 @@ fn main() -> ExitCode {
             .map(|md| println!("{md}"))
             .map_err(Into::into),
     };
+    cleanup::yield_to_interrupt();
     match result {
         Ok(()) => {
             refract_lab::output_dirs::keep_created();
