@@ -127,6 +127,20 @@ fn crates_depend_only_downward() {
             && !deps("refract-view").contains("refract-lab"),
         "the viewer depends on the renderers and the files only"
     );
+    // The Python package is an edge like the CLI: it calls the experiments library, never the
+    // CLI or the viewer, and nothing depends on it.
+    let python = deps("refract-python");
+    assert!(python.contains("refract-lab"), "refract-python: {python:?}");
+    assert!(
+        !python.contains("refract-cli") && !python.contains("refract-view"),
+        "refract-python: {python:?}"
+    );
+    for (name, d, _) in &packages {
+        assert!(
+            !d.contains("refract-python"),
+            "{name} must not depend on the Python package"
+        );
+    }
     for name in [
         "refract-core",
         "refract-geometry",

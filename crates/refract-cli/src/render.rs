@@ -6,11 +6,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use refract_core::CameraDesc;
 use refract_eval::load_scene;
-use refract_scene::{BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, TraceMode};
-use refract_trace::ReferenceRenderer;
-
-use refract_lab::backends;
+use refract_lab::render::{FrameRequest, Renders};
+use refract_scene::{BackendId, Frame, FrameOutputs, MethodId, MethodParams, TraceMode};
 
 use crate::TirArg;
 
@@ -115,13 +114,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let (width, height) = parse_res(&args.res)?;
     let method = method_params(args)?;
-    let exr = extension.as_deref() == Some("exr");
-    let backends = if method.id() == MethodId::Reference {
-        vec![BackendId::Trace]
-    } else {
-        vec![backend]
-    };
-    refract_lab::memory::check_method("this render", &method, width, height, exr, &backends)?;
     let loaded = load_scene(&args.scene)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
@@ -130,29 +122,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if let Some(ior) = args.ior {
         scene.refractor.set_ior(ior).context("--ior")?;
     }
-    let camera = scene.camera(width, height)?;
-    let scene = Arc::new(scene);
-    let mut renderer: Box<dyn Renderer> = if method.id() == MethodId::Reference {
-        Box::new(ReferenceRenderer::new())
-    } else {
-        backends::open(
-            &[backend],
-            backends::GpuPolicy::Required,
-            &crate::progress::Bars::new(),
-        )?
-        .pop()
-        .context("no renderer")?
+    let camera = CameraDesc {
+        width,
+        height,
+        ..scene.camera
     };
-    backends::check_supported(std::slice::from_ref(&renderer), &[method])?;
-    let start = Instant::now();
-    renderer.prepare(&scene)?;
     // A PNG holds the colour only: the AOV layers (most of a frame's memory) are not computed.
     let outputs = match extension.as_deref() {
         Some("exr") => FrameOutputs::ColorAndAovs,
         _ => FrameOutputs::Color,
     };
+    let mut renders = Renders::new(Arc::new(scene));
+    let start = Instant::now();
     let mut frame = Frame::default();
-    renderer.render(&camera, &method, outputs, &mut frame)?;
+    renders.render(
+        &FrameRequest {
+            method: &method,
+            backend,
+            camera,
+            outputs,
+        },
+        &mut frame,
+    )?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
     match extension.as_deref() {
         Some("exr") => frame.write_exr(&args.out)?,
@@ -160,7 +151,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     println!(
         "{} {} {width}x{height} in {ms:.1} ms -> {}",
-        scene.name,
+        renders.scene().name,
         args.method,
         args.out.display()
     );

@@ -87,6 +87,12 @@ impl FrameFiles for Frame {
 
     fn read_exr(path: &Path) -> Result<Frame, SceneError> {
         use exr::prelude::*;
+        // A missing or unreadable file is an OS error (with its kind), not a format error.
+        std::fs::File::open(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            action: "cannot read the frame file",
+            source,
+        })?;
         let format = |message: String| SceneError::Format {
             path: path.to_owned(),
             message,

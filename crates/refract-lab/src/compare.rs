@@ -135,6 +135,9 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         crate::output_dirs::create_dir(&dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
 
+        if progress.cancelled() {
+            return Err(crate::LabError::Cancelled);
+        }
         reference.prepare(scene)?;
         let mut truth = Frame::default();
         let timing =
@@ -167,6 +170,9 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 continue;
             }
             for renderer in &mut renderers {
+                if progress.cancelled() {
+                    return Err(crate::LabError::Cancelled);
+                }
                 let mut frame = Frame::default();
                 renderer.render(&camera, method, FrameOutputs::ColorAndAovs, &mut frame)?;
                 // Timed frames write the colour only, as a real-time renderer displays it.

@@ -37,6 +37,12 @@ pub enum LabError {
     /// name), or a run that cannot be done (not enough memory, nothing to do).
     #[error("{0}")]
     Invalid(String),
+    /// An OS error without a file to name (the context around it names one).
+    #[error(transparent)]
+    Os(std::io::Error),
+    /// The caller asked the experiment to stop ([`crate::Progress::cancelled`]).
+    #[error("interrupted")]
+    Cancelled,
     /// An error with what was being done when it happened.
     #[error("{context}")]
     Context {
@@ -57,7 +63,7 @@ impl LabError {
 
 impl From<std::io::Error> for LabError {
     fn from(source: std::io::Error) -> Self {
-        Self::Invalid(source.to_string())
+        Self::Os(source)
     }
 }
 

@@ -10,6 +10,7 @@
 //! * [`claims`]: the papers' testable claims, measured, with computed verdicts
 //!   (`docs/claims.md`).
 //! * [`bench`](mod@bench): the papers' timing tables on this machine.
+//! * [`render`](mod@render): one frame of one method, as `refract render` and Python render it.
 //! * [`backends`], [`memory`], [`timing`], [`data_scenes`], [`output_dirs`]: what they share.
 //!
 //! Progress and notes go through [`Progress`] ([`Quiet`] ignores them); errors are
@@ -27,6 +28,7 @@ pub mod jobs;
 pub mod memory;
 pub mod output_dirs;
 pub mod progress;
+pub mod render;
 pub mod report;
 pub mod sweep;
 pub mod sweep_report;

@@ -37,6 +37,12 @@ pub trait Progress {
     fn finish(&self, _stage: &str) {}
     /// A note.
     fn note(&self, _note: Note) {}
+    /// Whether the caller wants the experiment to stop: asked between frames (compare) and
+    /// between jobs (sweep), which then return [`crate::LabError::Cancelled`]. The Python
+    /// package answers from Python's signal handlers, so that Ctrl-C stops a long run.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// A [`Progress`] that ignores everything.

@@ -426,6 +426,9 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
     let mut prepared_for: HashMap<String, (String, Option<u32>, u32)> = HashMap::new();
     let (mut ok, mut failed) = (0usize, 0usize);
     for job in todo {
+        if progress.cancelled() {
+            return Err(crate::LabError::Cancelled);
+        }
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             run_job(
                 &sweep,
@@ -488,6 +491,27 @@ fn record_failure(job: &Job, error: String) -> JobResult {
         metrics: None,
         images: None,
     }
+}
+
+/// The recorded results of the jobs of `args.shard`, in job order (what [`run`] wrote into
+/// `OUT/jobs/`, this run's and earlier runs'); a job without a result file is left out.
+pub fn shard_results(args: &SweepArgs) -> crate::Result<Vec<JobResult>> {
+    let jobs_dir = args.out.join("jobs");
+    let mut results = Vec::new();
+    for job in shard_jobs(args)? {
+        let path = jobs_dir.join(format!("{}.json", job.id));
+        let text = match std::fs::read_to_string(&path) {
+            Ok(text) => text,
+            Err(err) if err.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(err) => {
+                return Err(err).with_context(|| format!("{}: cannot read", path.display()));
+            }
+        };
+        let result: JobResult = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a job result", path.display()))?;
+        results.push(result);
+    }
+    Ok(results)
 }
 
 /// Whether `job` has a recorded successful result (failed jobs run again).

@@ -90,6 +90,20 @@ pub enum Family {
     Engine,
 }
 
+impl Family {
+    /// Its id in lists and the Python package (`image-space`, `nearby-geometry`, ...).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Family::Reference => "reference",
+            Family::ImageSpace => "image-space",
+            Family::NearbyGeometry => "nearby-geometry",
+            Family::DistanceMap => "distance-map",
+            Family::Pvrr => "pvrr",
+            Family::Engine => "engine",
+        }
+    }
+}
+
 /// A renderer implementation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum BackendId {

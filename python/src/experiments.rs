@@ -1,0 +1,175 @@
+//! `refract.compare` and `refract.sweep`: the CLI's experiments, run by the same library
+//! functions ([`refract_lab::compare::run`], [`refract_lab::sweep::run`]), returning their
+//! records as JSON text the Python layer parses.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, PoisonError};
+
+use pyo3::prelude::*;
+use refract_core::TirPolicy;
+use refract_lab::backends::{self, GpuPolicy};
+use refract_lab::jobs::CompareOptions;
+use refract_lab::{Note, Progress};
+use refract_scene::MethodId;
+
+use crate::errors::{detached, value_error};
+
+/// The progress of an experiment run from Python: Ctrl-C (a pending Python signal) stops it
+/// between frames or jobs; warnings and skip notes are kept for `warnings.warn`.
+#[derive(Default)]
+struct PythonProgress {
+    notes: Mutex<Vec<String>>,
+}
+
+impl Progress for PythonProgress {
+    fn note(&self, note: Note) {
+        if matches!(note, Note::Warning(_) | Note::Skipped(_)) {
+            self.notes
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .push(note.to_string());
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        // A pending KeyboardInterrupt is consumed here and raised as `Cancelled`'s exception.
+        Python::attach(|py| py.check_signals().is_err())
+    }
+}
+
+impl PythonProgress {
+    /// Issues the kept notes as Python warnings.
+    fn warn(&self, py: Python<'_>) -> PyResult<()> {
+        let warnings = py.import("warnings")?;
+        for note in self
+            .notes
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .drain(..)
+        {
+            warnings.call_method1(
+                "warn",
+                (note, py.get_type::<pyo3::exceptions::PyUserWarning>(), 2),
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs an experiment without the GIL; directories it created stay on success and go on
+/// failure (as in the CLI); its notes become warnings.
+fn run_experiment<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&PythonProgress) -> refract_lab::Result<T> + Send,
+) -> PyResult<T> {
+    let progress = PythonProgress::default();
+    let result = detached(py, || work(&progress));
+    match &result {
+        Ok(_) => refract_lab::output_dirs::keep_created(),
+        Err(_) => refract_lab::output_dirs::remove_created(),
+    }
+    progress.warn(py)?;
+    result
+}
+
+/// Every method (default: all but the reference) against the reference on each scene, as
+/// `refract compare` runs it: writes images, `metrics.json`, `report.md` and `index.html` into
+/// `out`; returns the records (JSON text of a list of `metrics.json` rows).
+#[pyfunction]
+#[pyo3(signature = (scenes, methods=None, backends=vec!["cpu".to_owned()], res=256, spp=1, frames=3, params=None, out=PathBuf::from("out")))]
+#[allow(clippy::too_many_arguments)]
+pub fn compare(
+    py: Python<'_>,
+    scenes: Vec<String>,
+    methods: Option<Vec<String>>,
+    backends: Vec<String>,
+    res: i64,
+    spp: i64,
+    frames: i64,
+    params: Option<Vec<(String, String)>>,
+    out: PathBuf,
+) -> PyResult<String> {
+    let checked = |name: &str, v: i64, max: u32| {
+        u32::try_from(v)
+            .ok()
+            .filter(|v| (1..=max).contains(v))
+            .ok_or_else(|| value_error(format!("{name} = {v}: expected 1 to {max}")))
+    };
+    let (res, spp, frames) = (
+        checked("res", res, 8192)?,
+        checked("spp", spp, 1024)?,
+        checked("frames", frames, 10000)?,
+    );
+    if scenes.is_empty() {
+        return Err(value_error("scenes: expected at least one scene"));
+    }
+    let ids: Vec<MethodId> = match methods {
+        Some(names) => names
+            .iter()
+            .map(|n| n.parse())
+            .collect::<Result<_, refract_scene::registry::UnknownMethod>>()
+            .map_err(|err| value_error(err.to_string()))?,
+        None => MethodId::approximations().collect(),
+    };
+    if ids.contains(&MethodId::Reference) {
+        return Err(value_error(
+            "methods: the reference is always rendered; list the methods to compare with it",
+        ));
+    }
+    let records = run_experiment(py, move |progress| {
+        let assignments: Vec<(&str, &str)> = params
+            .iter()
+            .flatten()
+            .map(|(n, v)| (n.as_str(), v.as_str()))
+            .collect();
+        let options = CompareOptions {
+            backends: backends::parse_backends(&backends)?,
+            gpu_policy: GpuPolicy::Required,
+            scenes,
+            methods: refract_lab::compare::method_params(
+                &ids,
+                TirPolicy::ClampToCritical,
+                &assignments,
+                "params",
+            )?,
+            res,
+            spp,
+            frames,
+            out,
+        };
+        refract_lab::compare::run(&options, progress)
+    })?;
+    serde_json::to_string(&records).map_err(|err| value_error(err.to_string()))
+}
+
+/// Runs the jobs of a sweep file (of shard `(i, n)` when given) as `refract sweep` does,
+/// resuming where an earlier run stopped; returns this shard's recorded results (JSON text
+/// of a list of `jobs/<id>.json` objects).
+#[pyfunction]
+#[pyo3(signature = (path, shard=None, out=PathBuf::from("sweep-out"), cache=None))]
+pub fn sweep(
+    py: Python<'_>,
+    path: PathBuf,
+    shard: Option<(i64, i64)>,
+    out: PathBuf,
+    cache: Option<PathBuf>,
+) -> PyResult<String> {
+    let shard = shard
+        .map(|(i, n)| {
+            refract_lab::sweep::parse_shard(&format!("{i}/{n}"))
+                .map_err(|err| value_error(format!("shard = ({i}, {n}): {err}")))
+        })
+        .transpose()?;
+    let args = refract_lab::sweep::SweepArgs {
+        file: path,
+        shard,
+        out,
+        cache,
+        list: false,
+    };
+    let results = run_experiment(py, move |progress| {
+        refract_lab::sweep::run(&args, progress)?;
+        refract_lab::sweep::shard_results(&args)
+    })?;
+    serde_json::to_string(&results).map_err(|err| value_error(err.to_string()))
+}
