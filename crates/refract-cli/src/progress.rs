@@ -31,7 +31,7 @@ impl Progress for Bars {
     fn start(&self, stage: &str, total: u64) {
         let bar = self.bars.add(ProgressBar::new(total));
         if let Ok(style) =
-            ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}")
+            ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed} (ETA {eta})")
         {
             bar.set_style(style.progress_chars("=> "));
         }

@@ -183,8 +183,25 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 14] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
+        // The backend a user names runs, or the command says why not (before: the reference
+        // ran on the CPU tracer in silence).
+        (
+            &[
+                "render",
+                "sphere",
+                "--method",
+                "reference",
+                "--backend",
+                "gpu",
+                "--res",
+                "8",
+                "--out",
+                "x.png",
+            ],
+            "CPU tracer only",
+        ),
         (
             &[
                 "render", "sphere", "--ior", "1e20", "--res", "8", "--out", "x.png",

@@ -170,20 +170,7 @@ fn reruns_skip_finished_jobs_and_failures_are_recorded() {
 /// opens with the A/B slider, and no console message is logged.
 #[test]
 fn the_report_works_in_headless_chromium() {
-    let Some(chromium) = ["chromium", "chromium-browser", "google-chrome"]
-        .into_iter()
-        .find(|b| {
-            Command::new(b)
-                .arg("--version")
-                .output()
-                .is_ok_and(|o| o.status.success())
-        })
-    else {
-        assert!(
-            !std::env::var("REFRACT_REQUIRE_BROWSER").is_ok_and(|v| v == "1"),
-            "REFRACT_REQUIRE_BROWSER=1 but no chromium"
-        );
-        println!("skipped: chromium not found");
+    let Some(chromium) = chromium() else {
         return;
     };
     let dir = tempfile::tempdir().expect("tempdir");
@@ -251,6 +238,126 @@ fn the_report_works_in_headless_chromium() {
     );
 }
 
+/// The headless browser, or `None` after saying it is skipped (a failure under
+/// `REFRACT_REQUIRE_BROWSER=1`).
+fn chromium() -> Option<&'static str> {
+    let found = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        });
+    if found.is_none() {
+        assert!(
+            !std::env::var("REFRACT_REQUIRE_BROWSER").is_ok_and(|v| v == "1"),
+            "REFRACT_REQUIRE_BROWSER=1 but no chromium"
+        );
+        println!("skipped: chromium not found");
+    }
+    found
+}
+
+/// The first screen of a comparison's `index.html` at 1400 x 900 (issue 31) holds the whole
+/// method x scene matrix (every method of the registry: the default job's rows), its cells
+/// carry values and colours, and a cell opens the viewer on its job. The screenshots stay in
+/// `target/tmp/report-first-screen/` for a person to look at.
+#[test]
+fn the_first_screen_shows_the_method_scene_matrix() {
+    let Some(chromium) = chromium() else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    ok(&refract(
+        &[
+            "compare",
+            "sphere",
+            "convex-mirror",
+            "--res",
+            "16",
+            "--frames",
+            "1",
+            "--backends",
+            "cpu",
+            "--out",
+            "out",
+        ],
+        dir.path(),
+    ));
+    let url = format!("file://{}", dir.path().join("out/index.html").display());
+    let browse = |extra: &[&str], target: &str| {
+        let output = Command::new(chromium)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--virtual-time-budget=3000",
+                "--window-size=1400,900",
+            ])
+            .args(extra)
+            .arg(target)
+            .output()
+            .expect("chromium");
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-first-screen");
+    std::fs::create_dir_all(&shots).expect("mkdir");
+    for (name, target) in [
+        ("first-screen", url.clone()),
+        ("cell-opened", format!("{url}#view=0")),
+    ] {
+        let png = shots.join(format!("{name}.png"));
+        browse(&[&format!("--screenshot={}", png.display())], &target);
+        assert!(
+            png.metadata().map(|m| m.len()).unwrap_or(0) > 10_000,
+            "{name}"
+        );
+        println!("screenshot: {}", png.display());
+    }
+    let dom = browse(&["--dump-dom"], &url);
+    let bottom: u32 = dom
+        .split("data-matrix-bottom=\"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("report.js did not lay the matrix out"));
+    assert!(
+        (100..=900).contains(&bottom),
+        "the matrix ends at y = {bottom}, below the first screen"
+    );
+    let matrix = dom
+        .split("id=\"matrix\"")
+        .nth(1)
+        .and_then(|rest| rest.split("</table>").next())
+        .expect("the matrix");
+    let rows = matrix.matches("</th><td>").count();
+    assert_eq!(
+        rows,
+        refract_scene::MethodId::approximations().count(),
+        "a row per method"
+    );
+    // report.js wrote each cell's value and colour.
+    assert!(
+        dom.contains("<span class=\"v\">0."),
+        "no values in the cells"
+    );
+    assert!(
+        dom.contains("style=\"background: rgb("),
+        "no colours in the cells"
+    );
+    // The first thumbnail of the page is the matrix's first cell: #view=0 opens it.
+    let opened = browse(&["--dump-dom"], &format!("{url}#view=0"));
+    assert!(
+        opened.contains("id=\"viewer\" class=\"open\""),
+        "viewer not open"
+    );
+    assert!(
+        opened.contains("sphere-16-single-cpu"),
+        "the viewer shows another job"
+    );
+}
+
 /// A cache path that is a regular file fails the sweep and leaves no output directory behind
 /// (issue 34, item 7).
 #[test]
@@ -290,9 +397,10 @@ fn the_report_names_missing_images() {
     assert!(err.contains("images the results name are missing"), "{err}");
     let page = std::fs::read_to_string(dir.path().join("r/index.html")).expect("page");
     assert!(page.contains("id=\"missing\""), "no missing-images banner");
+    // Two jobs, each marked in the overview matrix and in its scene's grid.
     assert_eq!(
         page.matches("missing: images/").count(),
-        2,
-        "two thumbnails marked"
+        4,
+        "two thumbnails marked twice"
     );
 }

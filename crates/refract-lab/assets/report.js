@@ -253,9 +253,64 @@ function panAndZoom(stage) {
   window.addEventListener("pointerup", () => { drag = null; });
 }
 
+// The overview matrix (overview.rs): the metric and backend shown, every cell of that backend
+// coloured on one scale (log where the values span more than 20x), light green = lowest.
+function cellColour(t) {
+  return `hsl(${Math.round(120 * (1 - t))}, 65%, ${Math.round(82 - 8 * t)}%)`;
+}
+
+function formatValue(v, metric) {
+  if (metric === "t2") return `${v.toFixed(2)}°`;
+  if (metric === "ms") return v >= 100 ? v.toFixed(0) : v.toFixed(1);
+  return v.toFixed(3);
+}
+
+function colourMatrix() {
+  const table = document.getElementById("matrix");
+  if (!table) return;
+  const metric = document.getElementById("metric").value;
+  const cells = Array.from(table.querySelectorAll(`.cell[data-backend="${table.dataset.backend}"]`));
+  const values = cells.map((c) => parseFloat(c.dataset[metric])).filter(Number.isFinite);
+  const lo = Math.min(...values), hi = Math.max(...values);
+  const log = lo > 0 && hi / lo > 20;
+  const f = (v) => (log ? Math.log(v) : v);
+  cells.forEach((cell) => {
+    const v = parseFloat(cell.dataset[metric]);
+    const label = cell.querySelector(".v");
+    if (!Number.isFinite(v)) {
+      label.textContent = "–";
+      cell.style.background = "#eee";
+      return;
+    }
+    const t = hi > lo ? (f(v) - f(lo)) / (f(hi) - f(lo)) : 0;
+    cell.style.background = cellColour(t);
+    label.textContent = formatValue(v, metric);
+  });
+  const scale = document.getElementById("scale");
+  if (scale && values.length) {
+    const stops = [0, 0.25, 0.5, 0.75, 1].map((t) => `${cellColour(t)} ${100 * t}%`).join(",");
+    scale.innerHTML = `${formatValue(lo, metric)} <i style="background:linear-gradient(90deg,${stops})"></i> ${formatValue(hi, metric)}${log ? " (log scale)" : ""}`;
+  }
+}
+
+function overview() {
+  const table = document.getElementById("matrix");
+  if (!table) return;
+  document.getElementById("metric").addEventListener("change", colourMatrix);
+  document.querySelectorAll("input[name=backend]").forEach((radio) =>
+    radio.addEventListener("change", () => {
+      table.dataset.backend = radio.value;
+      colourMatrix();
+    }));
+  colourMatrix();
+  // For tests and scripts: where the matrix ends on the first screen.
+  document.body.dataset.matrixBottom = String(Math.round(table.getBoundingClientRect().bottom));
+}
+
 document.addEventListener("DOMContentLoaded", () => {
   const table = document.getElementById("metrics");
   if (table) sortable(table);
+  overview();
   viewer.thumbs = Array.from(document.querySelectorAll("figure.thumb"));
   viewer.thumbs.forEach((thumb, i) => thumb.addEventListener("click", () => open(i)));
   panAndZoom(document.getElementById("stage"));

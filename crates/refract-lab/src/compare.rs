@@ -70,10 +70,10 @@ pub fn default_options() -> crate::Result<CompareOptions> {
     })
 }
 
-/// The stage of the reference renders (one step per scene).
-pub const STAGE_REFERENCE: &str = "reference";
-/// The stage of the method frames (one step per scene, method and backend).
-pub const STAGE_METHODS: &str = "methods";
+/// The one stage of a comparison: one step per reference render (one per scene) and one per
+/// (scene, method, backend), skipped pairs included, so that a progress bar's ETA covers the
+/// whole job.
+pub const STAGE_COMPARE: &str = "compare";
 
 /// Runs the comparison and writes everything into `options.out`; returns the records (the
 /// reference's row, then one per method and backend, per scene). Scene warnings and skipped
@@ -121,10 +121,9 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     for note in skipped_pairs(&options.methods, &scenes) {
         progress.note(note);
     }
-    progress.start(STAGE_REFERENCE, scenes.len() as u64);
     progress.start(
-        STAGE_METHODS,
-        (scenes.len() * options.methods.len() * renderers.len()) as u64,
+        STAGE_COMPARE,
+        (scenes.len() * (1 + options.methods.len() * renderers.len())) as u64,
     );
     let mut records = Vec::new();
     let mut scene_images = Vec::new();
@@ -142,7 +141,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         let mut truth = Frame::default();
         let timing =
             reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
-        progress.advance(STAGE_REFERENCE, 1);
+        progress.advance(STAGE_COMPARE, 1);
         write_color(&dir.join("reference.png"), w, h, &truth.color)?;
         let key = format!("{}/reference.hdr.js", scene.name);
         write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
@@ -166,7 +165,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         for method in &options.methods {
             if refract_scene::scene_support(method.id(), scene).is_err() {
                 // Said once for all pairs before the run (`skipped_pairs`).
-                progress.advance(STAGE_METHODS, renderers.len() as u64);
+                progress.advance(STAGE_COMPARE, renderers.len() as u64);
                 continue;
             }
             for renderer in &mut renderers {
@@ -242,7 +241,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                     has_p2,
                     has_miss,
                 });
-                progress.advance(STAGE_METHODS, 1);
+                progress.advance(STAGE_COMPARE, 1);
             }
         }
         scene_images.push(SceneImages {
@@ -250,8 +249,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
             methods: images,
         });
     }
-    progress.finish(STAGE_REFERENCE);
-    progress.finish(STAGE_METHODS);
+    progress.finish(STAGE_COMPARE);
     write_reports(&options.out, &records, &scene_images, options)?;
     Ok(records)
 }

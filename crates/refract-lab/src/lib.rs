@@ -27,6 +27,7 @@ pub mod error;
 pub mod jobs;
 pub mod memory;
 pub mod output_dirs;
+pub mod overview;
 pub mod progress;
 pub mod render;
 pub mod report;

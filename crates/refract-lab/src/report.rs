@@ -130,6 +130,63 @@ fn nearby_table(records: &[MetricsRecord]) -> (Vec<&'static str>, Vec<Vec<String
     (headers, rows)
 }
 
+/// The method × scene matrix of one backend's records as a Markdown table: each cell the mean
+/// FLIP over the refractor's pixels and the frame time, the lowest FLIP of each scene in bold,
+/// `–` where the method does not run on the scene.
+fn matrix_markdown(records: &[MetricsRecord], backend: &str) -> Option<String> {
+    let rows: Vec<&MetricsRecord> = records.iter().filter(|r| r.backend == backend).collect();
+    if rows.is_empty() {
+        return None;
+    }
+    let mut scenes: Vec<&str> = Vec::new();
+    let mut methods: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    let find = |method: &str, scene: &str| {
+        rows.iter()
+            .find(|r| r.method == method && r.scene == scene)
+            .copied()
+    };
+    let best: Vec<Option<f64>> = scenes
+        .iter()
+        .map(|scene| {
+            rows.iter()
+                .filter(|r| r.scene == *scene)
+                .filter_map(|r| r.flip_mean)
+                .min_by(f64::total_cmp)
+        })
+        .collect();
+    let mut md = String::new();
+    let _ = writeln!(md, "| method | {} |", scenes.join(" | "));
+    let _ = writeln!(md, "|---|{}|", vec!["---"; scenes.len()].join("|"));
+    for method in &methods {
+        let cells: Vec<String> = scenes
+            .iter()
+            .zip(&best)
+            .map(|(scene, best)| match find(method, scene) {
+                Some(r) => {
+                    let flip = cell(r.flip_mean, 3);
+                    let flip = if r.flip_mean.is_some() && r.flip_mean == *best {
+                        format!("**{flip}**")
+                    } else {
+                        flip
+                    };
+                    format!("{flip} · {} ms", cell(r.ms_per_frame, 1))
+                }
+                None => "–".to_owned(),
+            })
+            .collect();
+        let _ = writeln!(md, "| `{method}` | {} |", cells.join(" | "));
+    }
+    Some(md)
+}
+
 /// Writes the three report files.
 pub fn write_reports(
     out: &Path,
@@ -148,6 +205,24 @@ pub fn write_reports(
         "{}², reference: exact tracer, `transmission` mode, {} spp, depth 8. Times: median of {} colour-only frames \
          after 2 warm-up frames (buffers + kernel; GPU: timestamp queries around all passes), this machine.\n",
         options.res, options.spp, options.frames
+    );
+    for backend in ["cpu", "gpu"] {
+        if let Some(matrix) = matrix_markdown(records, backend) {
+            let _ = writeln!(
+                md,
+                "## Methods × scenes, {} backend
+
+Mean FLIP over the refractor's pixels (0:                  identical to the reference; the lowest of each scene in bold) · median frame time.                  `–`: the method does not run on that scene.
+
+{matrix}",
+                backend.to_uppercase()
+            );
+        }
+    }
+    let _ = writeln!(
+        md,
+        "## Every job
+"
     );
     let _ = writeln!(md, "| {} |", HEADERS.join(" | "));
     let _ = writeln!(md, "|{}|", ["---"; HEADERS.len()].join("|"));
@@ -316,4 +391,43 @@ fn job_results(records: &[MetricsRecord], scenes: &[SceneImages], res: u32) -> V
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(scene: &str, method: &str, backend: &str, flip: f64, ms: f64) -> MetricsRecord {
+        MetricsRecord {
+            scene: scene.to_owned(),
+            method: method.to_owned(),
+            backend: backend.to_owned(),
+            flip_mean: Some(flip),
+            ms_per_frame: Some(ms),
+            ..MetricsRecord::default()
+        }
+    }
+
+    /// The matrix has a row per method and a column per scene, the lowest FLIP of each scene in
+    /// bold, `–` for a pair that did not run, and one backend's records only.
+    #[test]
+    fn the_matrix_marks_the_best_method_per_scene() {
+        let records = [
+            record("sphere", "reference", "trace", 0.0, 300.0),
+            record("sphere", "single", "cpu", 0.30, 2.0),
+            record("sphere", "wyman", "cpu", 0.10, 4.0),
+            record("torus", "single", "cpu", 0.20, 2.0),
+            record("sphere", "wyman", "gpu", 0.01, 1.0),
+        ];
+        let md = matrix_markdown(&records, "cpu").expect("cpu rows");
+        let lines: Vec<&str> = md.lines().collect();
+        assert_eq!(lines[0], "| method | sphere | torus |");
+        assert_eq!(
+            lines[2],
+            "| `single` | 0.300 · 2.0 ms | **0.200** · 2.0 ms |"
+        );
+        assert_eq!(lines[3], "| `wyman` | **0.100** · 4.0 ms | – |");
+        assert_eq!(lines.len(), 4, "{md}");
+        assert!(matrix_markdown(&records, "none").is_none());
+    }
 }

@@ -13,7 +13,7 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::{MethodId, REGISTRY};
 
-use crate::jobs::JobResult;
+use crate::jobs::{JobImages, JobResult};
 
 /// Arguments of `refract report`.
 #[derive(Clone, Debug)]
@@ -511,6 +511,42 @@ fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// A job's clickable thumbnail: a `figure.thumb` with what the A/B viewer (`report.js`) needs
+/// as data attributes (`class` adds classes; the figure of a missing image is marked, not
+/// clickable).
+fn thumb_figure(r: &JobResult, imgs: &JobImages, missing: &[String], class: &str) -> String {
+    let miss = imgs.miss.as_deref().unwrap_or("");
+    let (hdr, reference_hdr) = (
+        imgs.color_hdr.as_deref().unwrap_or(""),
+        imgs.reference_hdr.as_deref().unwrap_or(""),
+    );
+    let params: Vec<String> = r
+        .job
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    let caption = format!("{} {} {}", r.job.method, r.job.backend, params.join(" "));
+    if missing.contains(&imgs.color) {
+        return format!(
+            "<figure class=\"failed\"><figcaption>missing: {}<br>{}</figcaption></figure>",
+            escape(&imgs.color),
+            escape(&caption)
+        );
+    }
+    format!(
+        "<figure class=\"{class}\" data-image=\"{}\" data-flip=\"{}\" data-t2=\"{}\" data-reference=\"{}\" data-miss=\"{miss}\" \
+data-hdr=\"{hdr}\" data-reference-hdr=\"{reference_hdr}\" data-title=\"{}\"><img src=\"{}\" loading=\"lazy\"><figcaption>{}</figcaption></figure>",
+        imgs.color,
+        imgs.flip,
+        imgs.t2,
+        imgs.reference,
+        escape(&format!("{} — {caption}", r.job.id)),
+        imgs.color,
+        escape(&caption)
+    )
+}
+
 fn html(
     results: &[JobResult],
     plots: &[(String, String)],
@@ -533,7 +569,16 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
 #stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
 #stage img,#stage canvas{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
 .plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed,.failed figcaption{{color:#b00}}\
-.grid figure.failed{{width:160px;min-height:160px;border:1px dashed #b00;box-sizing:border-box;padding:4px;cursor:default}}</style></head><body>\
+.grid figure.failed{{width:160px;min-height:160px;border:1px dashed #b00;box-sizing:border-box;padding:4px;cursor:default}}\
+h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-size:13px}}\
+#controls{{display:flex;gap:14px;align-items:center;font-size:13px;margin:4px 0}}#controls .hint{{color:#777}}\
+#scale{{display:inline-flex;align-items:center;gap:4px;font-size:12px}}#scale i{{display:inline-block;width:120px;height:10px}}\
+#matrix{{margin:4px 0}}#matrix th,#matrix td{{padding:1px 3px;border:0;font-size:12px}}#matrix thead th{{background:none;cursor:default;text-align:center}}\
+#matrix tbody th{{background:none;text-align:right;white-space:nowrap;cursor:default}}\
+#matrix .cell{{display:none;align-items:center;gap:3px;border-radius:3px;padding:1px 3px 1px 1px}}\
+#matrix[data-backend=cpu] .cell[data-backend=cpu],#matrix[data-backend=gpu] .cell[data-backend=gpu]{{display:flex}}\
+#matrix figure{{margin:0;cursor:pointer}}#matrix figure img{{width:36px;height:36px;display:block;border:0}}#matrix figcaption{{display:none}}\
+#matrix .v{{font-variant-numeric:tabular-nums;min-width:42px;text-align:right}}</style></head><body>\
 <h1>refract report</h1><p>{} jobs{}. Click a column to sort; click a thumbnail to compare it with the reference \
 (keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
         results.len(),
@@ -558,7 +603,12 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
             }
         );
     }
-    h.push_str("<table id=\"metrics\"><thead><tr>");
+    h.push_str(&crate::overview::matrix_html(results, |r, class| {
+        r.images.as_ref().map_or_else(String::new, |imgs| {
+            thumb_figure(r, imgs, missing, &format!("thumb {class}"))
+        })
+    }));
+    h.push_str("<h2>Every job</h2><table id=\"metrics\"><thead><tr>");
     for (name, _) in &cols {
         let _ = write!(h, "<th>{}</th>", escape(name));
     }
@@ -632,39 +682,7 @@ td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-s
         });
         for r in ordered {
             let Some(imgs) = &r.images else { continue };
-            let miss = imgs.miss.as_deref().unwrap_or("");
-            let (hdr, reference_hdr) = (
-                imgs.color_hdr.as_deref().unwrap_or(""),
-                imgs.reference_hdr.as_deref().unwrap_or(""),
-            );
-            let params: Vec<String> = r
-                .job
-                .params
-                .iter()
-                .map(|(k, v)| format!("{k}={v}"))
-                .collect();
-            let caption = format!("{} {} {}", r.job.method, r.job.backend, params.join(" "));
-            if missing.contains(&imgs.color) {
-                let _ = write!(
-                    h,
-                    "<figure class=\"failed\"><figcaption>missing: {}<br>{}</figcaption></figure>",
-                    escape(&imgs.color),
-                    escape(&caption)
-                );
-                continue;
-            }
-            let _ = write!(
-                h,
-                "<figure class=\"thumb\" data-image=\"{}\" data-flip=\"{}\" data-t2=\"{}\" data-reference=\"{}\" data-miss=\"{miss}\" \
-data-hdr=\"{hdr}\" data-reference-hdr=\"{reference_hdr}\" data-title=\"{}\"><img src=\"{}\" loading=\"lazy\"><figcaption>{}</figcaption></figure>",
-                imgs.color,
-                imgs.flip,
-                imgs.t2,
-                imgs.reference,
-                escape(&format!("{} — {caption}", r.job.id)),
-                imgs.color,
-                escape(&caption)
-            );
+            h.push_str(&thumb_figure(r, imgs, missing, "thumb"));
         }
         h.push_str("</div>");
     }
