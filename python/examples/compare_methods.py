@@ -28,7 +28,10 @@ def main():
     res = (args.res, args.res)
     reference = scene.render("reference", res=res, aovs=True)
     rows = []
-    fig, axes = plt.subplots(2, len(METHODS) + 1, figsize=(3.2 * (len(METHODS) + 1), 7.4))
+    columns = len(METHODS) + 1
+    fig = plt.figure(figsize=(3.3 * columns + 1.0, 8.6), layout="constrained")
+    grid = fig.add_gridspec(3, columns, height_ratios=[1, 1, 0.42])
+    axes = np.array([[fig.add_subplot(grid[r, c]) for c in range(columns)] for r in range(2)])
     axes[0, 0].imshow(reference.srgb8())
     axes[0, 0].set_title(f"reference ({reference.timing['ms']:.0f} ms)")
     covered = reference.aov("covered")
@@ -54,16 +57,16 @@ def main():
     for ax in axes.flat:
         ax.set_xticks([])
         ax.set_yticks([])
-    fig.colorbar(image, ax=axes[1, :].tolist(), shrink=0.8, label="FLIP (0 = identical)")
-    table = fig.add_axes([0.08, 0.0, 0.7, 0.1])
+    fig.colorbar(image, ax=axes[1, :].tolist(), shrink=0.9, label="FLIP (0: identical)")
+    table = fig.add_subplot(grid[2, :])
     table.axis("off")
     table.table(
         cellText=rows,
-        colLabels=["method", "FLIP mean", "T2 error (deg)", "P2 error (rel.)", "ms / frame (CPU)"],
+        colLabels=["method", "FLIP mean", "T2 error (deg)", "P2 error (rel. diam.)", "ms / frame (CPU)"],
         loc="center",
-    ).scale(1, 1.3)
+        cellLoc="center",
+    ).scale(1, 1.4)
     fig.suptitle(f"{scene.name}, IOR {scene.ior:g}, {res[0]}x{res[1]}: against the exact reference")
-    fig.subplots_adjust(bottom=0.16, top=0.9, wspace=0.05, hspace=0.15, right=0.84)
     fig.savefig(args.out, dpi=110)
     print(f"wrote {args.out}")
     for row in rows:
