@@ -307,9 +307,41 @@ function overview() {
   document.body.dataset.matrixBottom = String(Math.round(table.getBoundingClientRect().bottom));
 }
 
+// Filters over the metrics table: a menu per column named in `names`, listing its values.
+function filterable(table, names) {
+  const headers = Array.from(table.tHead.rows[0].cells).map((th) => th.textContent.trim());
+  const columns = names.map((name) => headers.indexOf(name)).filter((i) => i >= 0);
+  const rows = Array.from(table.tBodies[0].rows);
+  const bar = document.createElement("div");
+  bar.id = "filters";
+  const menus = columns.map((column) => {
+    const values = [...new Set(rows.map((r) => r.cells[column].textContent.trim()))].sort();
+    const label = document.createElement("label");
+    label.textContent = `${headers[column]} `;
+    const menu = document.createElement("select");
+    menu.dataset.column = String(column);
+    menu.innerHTML = `<option value="">all</option>` +
+      values.map((v) => `<option>${v.replace(/&/g, "&amp;").replace(/</g, "&lt;")}</option>`).join("");
+    label.appendChild(menu);
+    bar.appendChild(label);
+    return menu;
+  });
+  const apply = () => {
+    rows.forEach((row) => {
+      const shown = menus.every((m) => !m.value || row.cells[Number(m.dataset.column)].textContent.trim() === m.value);
+      row.style.display = shown ? "" : "none";
+    });
+  };
+  menus.forEach((m) => m.addEventListener("change", apply));
+  table.parentNode.insertBefore(bar, table);
+}
+
 document.addEventListener("DOMContentLoaded", () => {
   const table = document.getElementById("metrics");
-  if (table) sortable(table);
+  if (table) {
+    sortable(table);
+    filterable(table, ["scene", "method", "backend"]);
+  }
   overview();
   viewer.thumbs = Array.from(document.querySelectorAll("figure.thumb"));
   viewer.thumbs.forEach((thumb, i) => thumb.addEventListener("click", () => open(i)));

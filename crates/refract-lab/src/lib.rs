@@ -28,6 +28,7 @@ pub mod jobs;
 pub mod memory;
 pub mod output_dirs;
 pub mod overview;
+pub mod plots;
 pub mod progress;
 pub mod render;
 pub mod report;

@@ -8,10 +8,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::error::Context;
-use plotters::prelude::*;
 use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::metrics::MetricsRecord;
-use refract_scene::{MethodId, REGISTRY};
+use refract_scene::MethodId;
 
 use crate::jobs::{JobImages, JobResult};
 
@@ -128,7 +127,7 @@ pub fn run(args: &ReportArgs) -> crate::Result<ReportSummary> {
 /// (whose `images/` or scene directories hold the images the results name); returns the plots
 /// and the images that are missing.
 pub fn write_html(out: &Path, results: &[JobResult]) -> crate::Result<Page> {
-    let plots = write_plots(out, results)?;
+    let plots = crate::plots::write_plots(out, results)?;
     write_text_atomically(&out.join("img-comparison-slider.js"), SLIDER_JS)?;
     write_text_atomically(&out.join("report.js"), REPORT_JS)?;
     let all_images = out.join("all-images.html").is_file();
@@ -168,6 +167,29 @@ fn cell(v: Option<f64>, digits: usize) -> String {
 /// A table column: its header and how a result shows in it.
 type Column = (&'static str, fn(&JobResult) -> String);
 
+/// A job's parameters that differ from its method's defaults, `name=value` (`–` for none): a
+/// compare job lists every parameter, which wrapped into four lines of the table.
+fn non_default_params(r: &JobResult) -> String {
+    let defaults = r
+        .job
+        .method
+        .parse::<MethodId>()
+        .ok()
+        .map(refract_scene::MethodParams::defaults);
+    let changed: Vec<String> = r
+        .job
+        .params
+        .iter()
+        .filter(|(k, v)| defaults.as_ref().and_then(|d| d.get(k)).as_ref() != Some(*v))
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    if changed.is_empty() {
+        "–".to_owned()
+    } else {
+        changed.join(" ")
+    }
+}
+
 /// The table columns.
 fn columns() -> Vec<Column> {
     fn m(r: &JobResult) -> Option<&MetricsRecord> {
@@ -184,14 +206,7 @@ fn columns() -> Vec<Column> {
         ("res", |r| r.job.res.to_string()),
         ("backend", |r| r.job.backend.clone()),
         ("method", |r| r.job.method.clone()),
-        ("params", |r| {
-            r.job
-                .params
-                .iter()
-                .map(|(k, v)| format!("{k}={v}"))
-                .collect::<Vec<_>>()
-                .join(" ")
-        }),
+        ("params (not default)", non_default_params),
         ("status", |r| r.status.clone()),
         ("PSNR (dB)", |r| cell(m(r).and_then(|m| m.psnr_ldr_db), 2)),
         ("mean FLIP", |r| cell(m(r).and_then(|m| m.flip_mean), 4)),
@@ -245,263 +260,6 @@ fn markdown(results: &[JobResult], plots: &[(String, String)]) -> String {
         let _ = writeln!(md, "\n## {title}\n\n![{title}]({file})");
     }
     md
-}
-
-/// One colour per method, the same in every plot (registry order).
-fn method_color(method: &str) -> RGBColor {
-    const PALETTE: [RGBColor; 10] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-        RGBColor(188, 189, 34),
-        RGBColor(23, 190, 207),
-    ];
-    let index = REGISTRY.iter().position(|m| m.name == method).unwrap_or(0);
-    PALETTE[index % PALETTE.len()]
-}
-
-/// A series: legend label, method (its colour) and `(x, y)` points sorted by `x`.
-struct Series {
-    label: String,
-    method: String,
-    points: Vec<(f64, f64)>,
-}
-
-/// The results grouped into series by everything but the `x` axis; `x` and `y` from each result.
-fn series(
-    results: &[JobResult],
-    x: impl Fn(&JobResult) -> Option<f64>,
-    y: impl Fn(&MetricsRecord) -> Option<f64>,
-    group: impl Fn(&JobResult) -> String,
-) -> Vec<Series> {
-    let mut groups: BTreeMap<String, Series> = BTreeMap::new();
-    for r in results {
-        let (Some(m), Some(x)) = (r.metrics.as_ref(), x(r)) else {
-            continue;
-        };
-        let Some(y) = y(m) else { continue };
-        let label = group(r);
-        groups
-            .entry(label.clone())
-            .or_insert_with(|| Series {
-                label,
-                method: r.job.method.clone(),
-                points: Vec::new(),
-            })
-            .points
-            .push((x, y));
-    }
-    let mut out: Vec<Series> = groups.into_values().collect();
-    for s in &mut out {
-        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    }
-    out
-}
-
-fn label_except(r: &JobResult, skip: &[&str]) -> String {
-    let mut parts = Vec::new();
-    if !skip.contains(&"method") {
-        parts.push(r.job.method.clone());
-    }
-    if !skip.contains(&"scene") {
-        parts.push(r.job.scene.clone());
-    }
-    if !skip.contains(&"backend") {
-        parts.push(r.job.backend.clone());
-    }
-    if !skip.contains(&"res") {
-        parts.push(format!("{}²", r.job.res));
-    }
-    if let Some(i) = r.job.ior.filter(|_| !skip.contains(&"ior")) {
-        parts.push(format!("IOR {i}"));
-    }
-    for (k, v) in &r.job.params {
-        if !skip.contains(&k.as_str()) {
-            parts.push(format!("{k}={v}"));
-        }
-    }
-    parts.join(" ")
-}
-
-/// Draws one SVG plot; `lines` joins each series' points.
-fn plot(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-    lines: bool,
-) -> crate::Result<()> {
-    let points = series.iter().flat_map(|s| s.points.iter());
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for &(x, y) in points {
-        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-    }
-    let pad = |a: f64, b: f64| {
-        if b > a {
-            0.05 * (b - a)
-        } else {
-            0.5 * a.abs().max(1.0)
-        }
-    };
-    let (px, py) = (pad(x0, x1), pad(y0, y1));
-    let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
-    let draw = || -> Result<(), Box<dyn std::error::Error>> {
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(44)
-            .y_label_area_size(64)
-            .build_cartesian_2d((x0 - px)..(x1 + px), (y0 - py).max(0.0)..(y1 + py))?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .draw()?;
-        for s in series {
-            let color = method_color(&s.method);
-            let style = ShapeStyle::from(&color).filled();
-            if lines {
-                chart
-                    .draw_series(LineSeries::new(
-                        s.points.iter().copied(),
-                        color.stroke_width(2),
-                    ))?
-                    .label(s.label.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
-                chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, style)))?;
-            } else {
-                chart
-                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, style)))?
-                    .label(s.label.clone())
-                    .legend(move |(x, y)| Circle::new((x + 9, y), 4, style));
-            }
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
-        root.present()?;
-        Ok(())
-    };
-    draw().map_err(|e| {
-        crate::LabError::invalid(format_args!(
-            "{}: cannot draw the plot: {e}",
-            path.display()
-        ))
-    })
-}
-
-/// The plots the results support: an axis with at least two values gets its plot. Returns
-/// `(file, title)` pairs.
-fn write_plots(out: &Path, results: &[JobResult]) -> crate::Result<Vec<(String, String)>> {
-    let distinct = |f: &dyn Fn(&JobResult) -> Option<String>| {
-        let mut values: Vec<String> = results.iter().filter_map(f).collect();
-        values.sort();
-        values.dedup();
-        values.len()
-    };
-    let flip = |m: &MetricsRecord| m.flip_mean;
-    let mut plots = Vec::new();
-    let mut add = |file: &str, title: &str, x: &str, y: &str, s: Vec<Series>, lines: bool| {
-        if s.is_empty() {
-            return Ok(());
-        }
-        plot(&out.join(file), title, x, y, &s, lines)?;
-        plots.push((file.to_owned(), title.to_owned()));
-        Ok::<(), crate::LabError>(())
-    };
-    if distinct(&|r| r.job.ior.map(|i| i.to_string())) >= 2 {
-        add(
-            "error-vs-ior.svg",
-            "Error vs index of refraction (Wyman 2005b Fig. 11)",
-            "index of refraction",
-            "mean FLIP (refractor pixels)",
-            series(
-                results,
-                |r| r.job.ior.map(f64::from),
-                flip,
-                |r| label_except(r, &["ior"]),
-            ),
-            true,
-        )?;
-    }
-    // Every numeric method parameter swept over at least two values (seeds K, iterations, and
-    // whatever parameters later methods add: linear/secant steps, tessellation).
-    let mut names: Vec<&String> = results.iter().flat_map(|r| r.job.params.keys()).collect();
-    names.sort();
-    names.dedup();
-    for name in names {
-        let numeric = results
-            .iter()
-            .filter_map(|r| r.job.params.get(name))
-            .all(|v| v.parse::<f64>().is_ok());
-        if !numeric || distinct(&|r| r.job.params.get(name).cloned()) < 2 {
-            continue;
-        }
-        let title = if name == "seeds" {
-            "Error vs seeds K (iterative-seeded)".to_owned()
-        } else {
-            format!("Error vs {name}")
-        };
-        add(
-            &format!("error-vs-{}.svg", safe_name(name)),
-            &title,
-            name,
-            "mean FLIP (refractor pixels)",
-            series(
-                results,
-                |r| r.job.params.get(name).and_then(|v| v.parse().ok()),
-                flip,
-                |r| label_except(r, &[name.as_str()]),
-            ),
-            true,
-        )?;
-    }
-    if distinct(&|r| Some(r.job.res.to_string())) >= 2 {
-        add(
-            "time-vs-resolution.svg",
-            "Frame time vs resolution, per backend",
-            "pixels (millions)",
-            "median frame time (ms)",
-            series(
-                results,
-                |r| Some(f64::from(r.job.res) * f64::from(r.job.res) / 1e6),
-                |m| m.ms_per_frame,
-                |r| label_except(r, &["res"]),
-            ),
-            true,
-        )?;
-    }
-    add(
-        "error-vs-time.svg",
-        "Error vs frame time (the trade-off)",
-        "median frame time (ms)",
-        "mean FLIP (refractor pixels)",
-        series(
-            results,
-            |r| r.metrics.as_ref().and_then(|m| m.ms_per_frame),
-            flip,
-            |r| r.job.method.clone(),
-        ),
-        false,
-    )?;
-    Ok(plots)
-}
-
-/// A parameter name as a file name part.
-fn safe_name(name: &str) -> String {
-    name.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-        .collect()
 }
 
 fn escape(text: &str) -> String {
@@ -562,13 +320,13 @@ fn html(
 body{{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fafafa}}\
 table{{border-collapse:collapse;margin:12px 0}}td,th{{padding:3px 8px;border-bottom:1px solid #ddd;text-align:right;white-space:nowrap}}\
 th{{background:#eee;cursor:pointer;user-select:none}}th.asc::after{{content:' ▲'}}th.desc::after{{content:' ▼'}}\
-td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{white-space:normal;min-width:160px;max-width:240px;font-size:12px}}.grid{{display:grid;gap:6px;margin:8px 0}}.grid figure{{margin:0;cursor:pointer}}\
+td:nth-child(-n+8),th:nth-child(-n+8){{text-align:left}}td:nth-child(7){{font-size:12px}}.grid{{display:grid;gap:6px;margin:8px 0}}.grid figure{{margin:0;cursor:pointer}}\
 .grid img{{width:160px;image-rendering:pixelated;border:1px solid #ccc}}figcaption{{font-size:11px;color:#555;max-width:160px}}\
 #viewer{{display:none;position:fixed;inset:0;background:#181818;color:#eee;z-index:10}}\
 #viewer.open{{display:flex;flex-direction:column}}#bar{{padding:8px 12px;font-size:14px}}#bar kbd{{background:#444;border-radius:3px;padding:0 4px}}\
 #stage{{flex:1;overflow:hidden;display:flex;align-items:center;justify-content:center}}\
 #stage img,#stage canvas{{image-rendering:pixelated;transform-origin:0 0}}img-comparison-slider{{--divider-width:2px;--divider-color:#ff0}}\
-.plots img{{max-width:760px;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed,.failed figcaption{{color:#b00}}\
+.plots img{{max-width:100%;background:#fff;border:1px solid #ccc;margin:6px 0}}.failed,.failed figcaption{{color:#b00}}\
 .grid figure.failed{{width:160px;min-height:160px;border:1px dashed #b00;box-sizing:border-box;padding:4px;cursor:default}}\
 h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-size:13px}}\
 #controls{{display:flex;gap:14px;align-items:center;font-size:13px;margin:4px 0}}#controls .hint{{color:#777}}\
@@ -578,7 +336,8 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
 #matrix .cell{{display:none;align-items:center;gap:3px;border-radius:3px;padding:1px 3px 1px 1px}}\
 #matrix[data-backend=cpu] .cell[data-backend=cpu],#matrix[data-backend=gpu] .cell[data-backend=gpu]{{display:flex}}\
 #matrix figure{{margin:0;cursor:pointer}}#matrix figure img{{width:36px;height:36px;display:block;border:0}}#matrix figcaption{{display:none}}\
-#matrix .v{{font-variant-numeric:tabular-nums;min-width:42px;text-align:right}}</style></head><body>\
+#matrix .v{{font-variant-numeric:tabular-nums;min-width:42px;text-align:right}}\
+#filters{{display:flex;gap:14px;font-size:13px}}</style></head><body>\
 <h1>refract report</h1><p>{} jobs{}. Click a column to sort; click a thumbnail to compare it with the reference \
 (keys in the viewer). Errors against the exact reference over refractor pixels (<code>docs/metrics.md</code>).</p>",
         results.len(),
@@ -608,6 +367,17 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
             thumb_figure(r, imgs, missing, &format!("thumb {class}"))
         })
     }));
+    // Under the matrix: error against frame time per scene, with the Pareto fronts.
+    let (trade_off, other_plots): (Vec<_>, Vec<_>) = plots
+        .iter()
+        .partition(|(file, _)| file == "error-vs-time.svg");
+    for (file, title) in &trade_off {
+        let _ = write!(
+            h,
+            "<div class=\"plots\"><img id=\"trade-off\" src=\"{file}\" alt=\"{}\"></div>",
+            escape(title)
+        );
+    }
     h.push_str("<h2>Every job</h2><table id=\"metrics\"><thead><tr>");
     for (name, _) in &cols {
         let _ = write!(h, "<th>{}</th>", escape(name));
@@ -634,9 +404,9 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
             escape(r.error.as_deref().unwrap_or(""))
         );
     }
-    if !plots.is_empty() {
+    if !other_plots.is_empty() {
         h.push_str("<h2>Plots</h2><div class=\"plots\">");
-        for (file, title) in plots {
+        for (file, title) in other_plots {
             let _ = write!(
                 h,
                 "<figure><img src=\"{file}\" alt=\"{}\"></figure>",
