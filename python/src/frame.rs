@@ -271,6 +271,27 @@ fn comparable<'a>(frame: &'a Frame, reference: &'a Frame) -> PyResult<(&'a Origi
     Ok((ours, truth))
 }
 
+/// `refract_eval::metrics::evaluate_method` of two comparable frames (`ours` is the frame's
+/// origin).
+fn evaluate(
+    frame: &Frame,
+    reference: &Frame,
+    ours: &Origin,
+) -> refract_lab::Result<(
+    refract_eval::metrics::MetricsRecord,
+    refract_eval::metrics::ErrorMaps,
+)> {
+    let camera = refract_core::Camera::new(ours.camera)
+        .map_err(|err| refract_lab::LabError::invalid(format!("camera: {err}")))?;
+    Ok(refract_eval::metrics::evaluate_method(
+        &reference.frame,
+        &frame.frame,
+        &camera,
+        &ours.scene,
+        &ours.method,
+    ))
+}
+
 /// The metrics of `frame` against `reference` (both rendered with `aovs=True` from one scene
 /// and camera): a dict with every field of `metrics.json` (docs/metrics.md), as
 /// `refract compare` computes it.
@@ -282,15 +303,7 @@ pub fn metrics<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let (ours, _) = comparable(frame, reference)?;
     let json = detached(py, || {
-        let camera = refract_core::Camera::new(ours.camera)
-            .map_err(|err| refract_lab::LabError::invalid(format!("camera: {err}")))?;
-        let (mut record, _) = refract_eval::metrics::evaluate_method(
-            &reference.frame,
-            &frame.frame,
-            &camera,
-            &ours.scene,
-            &ours.method,
-        );
+        let (mut record, _) = evaluate(frame, reference, ours)?;
         record.scene.clone_from(&ours.scene.name);
         record.method = ours.method.id().name().to_owned();
         record.backend = ours.backend.id().to_owned();
@@ -312,18 +325,7 @@ pub fn error_maps<'py>(
     reference: &Frame,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (ours, _) = comparable(frame, reference)?;
-    let maps = detached(py, || {
-        let camera = refract_core::Camera::new(ours.camera)
-            .map_err(|err| refract_lab::LabError::invalid(format!("camera: {err}")))?;
-        let (_, maps) = refract_eval::metrics::evaluate_method(
-            &reference.frame,
-            &frame.frame,
-            &camera,
-            &ours.scene,
-            &ours.method,
-        );
-        Ok(maps)
-    })?;
+    let maps = detached(py, || Ok(evaluate(frame, reference, ours)?.1))?;
     let shape = frame.shape();
     let out = PyDict::new(py);
     out.set_item("flip", array(py, maps.flip, shape)?)?;

@@ -186,26 +186,7 @@ fn the_report_works_in_headless_chromium() {
     ok(&refract(&["report", "out", "--out", "rep"], dir.path()));
     let page = dir.path().join("rep/index.html");
     let url = format!("file://{}", page.display());
-    let browse = |extra: &[&str], target: &str| {
-        let output = Command::new(chromium)
-            .args([
-                "--headless",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--enable-logging=stderr",
-                "--v=0",
-                "--virtual-time-budget=3000",
-                "--window-size=1100,800",
-            ])
-            .args(extra)
-            .arg(target)
-            .output()
-            .expect("chromium");
-        let log = String::from_utf8_lossy(&output.stderr).into_owned();
-        let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
-        assert!(console.is_empty(), "console messages: {console:?}");
-        String::from_utf8_lossy(&output.stdout).into_owned()
-    };
+    let browse = |extra: &[&str], target: &str| browse(chromium, "1100,800", extra, target);
     let shots = dir.path().join("shots");
     std::fs::create_dir_all(&shots).expect("mkdir");
     for (name, target) in [("page", url.clone()), ("viewer", format!("{url}#view=1"))] {
@@ -259,6 +240,29 @@ fn chromium() -> Option<&'static str> {
     found
 }
 
+/// Headless `chromium` at `window` (`W,H`) on `target` with `extra` flags: its stdout (the DOM
+/// with `--dump-dom`); the page must log nothing to the console.
+fn browse(chromium: &str, window: &str, extra: &[&str], target: &str) -> String {
+    let output = Command::new(chromium)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=3000",
+        ])
+        .arg(format!("--window-size={window}"))
+        .args(extra)
+        .arg(target)
+        .output()
+        .expect("chromium");
+    let log = String::from_utf8_lossy(&output.stderr).into_owned();
+    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:?}");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// The first screen of a comparison's `index.html` at 1400 x 900 (issue 31) holds the whole
 /// method x scene matrix (every method of the registry: the default job's rows), its cells
 /// carry values and colours, and a cell opens the viewer on its job. The screenshots stay in
@@ -286,21 +290,7 @@ fn the_first_screen_shows_the_method_scene_matrix() {
         dir.path(),
     ));
     let url = format!("file://{}", dir.path().join("out/index.html").display());
-    let browse = |extra: &[&str], target: &str| {
-        let output = Command::new(chromium)
-            .args([
-                "--headless",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--virtual-time-budget=3000",
-                "--window-size=1400,900",
-            ])
-            .args(extra)
-            .arg(target)
-            .output()
-            .expect("chromium");
-        String::from_utf8_lossy(&output.stdout).into_owned()
-    };
+    let browse = |extra: &[&str], target: &str| browse(chromium, "1400,900", extra, target);
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-first-screen");
     std::fs::create_dir_all(&shots).expect("mkdir");
     for (name, target) in [

@@ -357,17 +357,29 @@ fn plot(
     );
     let (methods, backends) = legend_entries(series);
     let height = legend_height(&methods, &backends).max(480);
-    let root = SVGBackend::new(path, (900, height)).into_drawing_area();
-    let draw = || -> Result<(), Box<dyn std::error::Error>> {
-        root.fill(&WHITE)?;
+    draw_svg(path, (900, height), |root| {
         let (chart, legend) = root.split_horizontally(900 - 170);
         let all: Vec<&Series> = series.iter().collect();
         draw_chart(&chart, title, x_label, y_label, &all, lines, false, axes)?;
         draw_legend(&legend, &methods, &backends)?;
+        Ok(())
+    })
+}
+
+/// An SVG of `size` at `path`: a white page `draw` draws on; a drawing error names the file.
+fn draw_svg(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<(), Box<dyn std::error::Error>>,
+) -> crate::Result<()> {
+    let root = SVGBackend::new(path, size).into_drawing_area();
+    let drawn = (|| -> Result<(), Box<dyn std::error::Error>> {
+        root.fill(&WHITE)?;
+        draw(&root)?;
         root.present()?;
         Ok(())
-    };
-    draw().map_err(|e| {
+    })();
+    drawn.map_err(|e| {
         crate::LabError::invalid(format_args!(
             "{}: cannot draw the plot: {e}",
             path.display()
@@ -394,9 +406,7 @@ fn plot_per_scene(path: &Path, title: &str, panels: &[(String, Vec<Series>)]) ->
         .collect();
     let (methods, backends) = legend_entries(&every);
     let height = (panel_h * rows as u32 + 36).max(legend_height(&methods, &backends) + 36);
-    let root = SVGBackend::new(path, (width, height)).into_drawing_area();
-    let draw = || -> Result<(), Box<dyn std::error::Error>> {
-        root.fill(&WHITE)?;
+    draw_svg(path, (width, height), |root| {
         let root = root.titled(title, ("sans-serif", 18))?;
         let (grid, legend) = root.split_horizontally(width - 170);
         let areas = grid.split_evenly((rows, columns));
@@ -421,14 +431,7 @@ fn plot_per_scene(path: &Path, title: &str, panels: &[(String, Vec<Series>)]) ->
             )?;
         }
         draw_legend(&legend, &methods, &backends)?;
-        root.present()?;
         Ok(())
-    };
-    draw().map_err(|e| {
-        crate::LabError::invalid(format_args!(
-            "{}: cannot draw the plot: {e}",
-            path.display()
-        ))
     })
 }
 
