@@ -529,37 +529,39 @@ fn a_failed_flush_is_an_error_and_leaves_no_file() {
 /// machine with more memory than that the refusal would not happen, and the test says so.
 #[test]
 fn jobs_that_cannot_fit_are_refused_up_front() {
-    let available_gib = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|t| {
-            let line = t
-                .lines()
-                .find(|l| l.starts_with("MemAvailable:"))?
-                .to_owned();
-            line.split_whitespace().nth(1)?.parse::<f64>().ok()
-        })
-        .map(|kib| kib / f64::from(1u32 << 20));
+    // The limit makes the refusal happen on any machine (it skipped where 40 GiB were free).
     let dir = tempfile::tempdir().expect("tempdir");
-    match available_gib {
-        Some(gib) if gib < 40.0 => {
-            let output = refract(
-                &[
-                    "render",
-                    "sphere",
-                    "--res",
-                    "16384x16384",
-                    "--out",
-                    "big.exr",
-                ],
-                dir.path(),
-            );
-            let err = stderr(&output);
-            assert!(!output.status.success(), "refused");
-            assert!(err.contains("GiB") && err.contains("16384x16384"), "{err}");
-            assert!(!dir.path().join("big.exr").exists());
-        }
-        other => println!("skipped: {other:?} GiB available, enough for the 16384² render"),
-    }
+    let render = |limit: &str| {
+        Command::new(env!("CARGO_BIN_EXE_refract"))
+            .args([
+                "render",
+                "sphere",
+                "--res",
+                "16384x16384",
+                "--out",
+                "big.exr",
+            ])
+            .env("REFRACT_MEMORY_LIMIT_MIB", limit)
+            .current_dir(dir.path())
+            .output()
+            .expect("run refract")
+    };
+    let output = render("4096");
+    let err = stderr(&output);
+    assert!(!output.status.success(), "refused");
+    assert!(
+        err.contains("16384x16384") && err.contains("GiB are available"),
+        "{err}"
+    );
+    assert!(!dir.path().join("big.exr").exists());
+    // A limit out of its range is an error naming the variable.
+    let output = render("0");
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("REFRACT_MEMORY_LIMIT_MIB=0"),
+        "{}",
+        stderr(&output)
+    );
 }
 
 /// A failed or interrupted comparison leaves no half-made output directory and no temporary

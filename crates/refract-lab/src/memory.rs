@@ -2,7 +2,8 @@
 //! method's measured model (its registry row's `memory`: bytes per pixel with and without
 //! layers, bytes per texel of the textures its parameters size) or the bytes per pixel measured
 //! for a comparison (`docs/performance.md`), against the memory the system says is available
-//! (`MemAvailable` of `/proc/meminfo`; no check where it cannot be read).
+//! (`MemAvailable` of `/proc/meminfo`, or less with `REFRACT_MEMORY_LIMIT_MIB`; no check
+//! where neither says).
 
 use refract_scene::{BackendId, MethodParams};
 
@@ -24,12 +25,41 @@ pub fn estimate(pixels: u64, per_pixel: u64, backends: &[BackendId]) -> u64 {
     BASE_BYTES + pixels * (per_pixel + gpu)
 }
 
+/// The environment variable that caps the memory a run may plan for, in MiB (1 to 2^30, i.e.
+/// up to 1 PiB): a run on a shared machine, or a test that must see a refusal on any machine.
+pub const LIMIT_VARIABLE: &str = "REFRACT_MEMORY_LIMIT_MIB";
+
 /// `MemAvailable` in bytes, when the system says.
-fn available() -> Option<u64> {
+fn mem_available() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// The bytes a run may plan for: `MemAvailable`, capped by [`LIMIT_VARIABLE`] when set.
+fn available() -> crate::Result<Option<u64>> {
+    let limit = match std::env::var(LIMIT_VARIABLE) {
+        Ok(text) => {
+            let mib = text
+                .trim()
+                .parse::<u64>()
+                .ok()
+                .filter(|m| (1..=1 << 30).contains(m));
+            let mib = mib.ok_or_else(|| {
+                crate::LabError::invalid(format!(
+                    "{LIMIT_VARIABLE}={text}: expected MiB from 1 to {}",
+                    1u64 << 30
+                ))
+            })?;
+            Some(mib << 20)
+        }
+        Err(_) => None,
+    };
+    Ok(match (mem_available(), limit) {
+        (Some(system), Some(limit)) => Some(system.min(limit)),
+        (system, limit) => system.or(limit),
+    })
 }
 
 fn gib(bytes: u64) -> f64 {
@@ -68,7 +98,7 @@ pub fn check_method(
     backends: &[BackendId],
 ) -> crate::Result<()> {
     let needed = method_estimate(method, width, height, layers, backends);
-    if let Some(limit) = available() {
+    if let Some(limit) = available()? {
         crate::ensure!(
             needed <= limit,
             "{what} of {} ({}) at {width}x{height} needs about {:.1} GiB (measured for this method \
@@ -98,7 +128,7 @@ pub fn check(
 ) -> crate::Result<()> {
     let pixels = u64::from(width) * u64::from(height);
     let needed = estimate(pixels, per_pixel, backends);
-    if let Some(limit) = available() {
+    if let Some(limit) = available()? {
         crate::ensure!(
             needed <= limit,
             "{what} at {width}x{height} needs about {:.1} GiB ({per_pixel} bytes a pixel measured{}), \
