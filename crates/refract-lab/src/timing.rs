@@ -54,3 +54,39 @@ mod tests {
         );
     }
 }
+
+/// The CPU the timings ran on, read from the system, not typed: its model (from
+/// `/proc/cpuinfo`, `unknown CPU` where that cannot be read) and the threads the CPU backend
+/// uses (rayon's pool), e.g. `AMD EPYC 7B13, 2 threads`.
+pub fn cpu_description() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, name)| name.split_whitespace().collect::<Vec<_>>().join(" "))
+        })
+        .filter(|name| !name.is_empty())
+        .unwrap_or_else(|| "unknown CPU".to_owned());
+    let threads = rayon::current_num_threads();
+    format!(
+        "{model}, {threads} thread{}",
+        if threads == 1 { "" } else { "s" }
+    )
+}
+
+#[cfg(test)]
+mod machine_tests {
+    /// The description names the thread count rayon really uses.
+    #[test]
+    fn the_cpu_description_is_measured() {
+        let text = super::cpu_description();
+        assert!(
+            text.ends_with(&format!("{} threads", rayon::current_num_threads()))
+                || text.ends_with("1 thread"),
+            "{text}"
+        );
+        assert!(!text.starts_with(','), "{text}");
+    }
+}

@@ -149,7 +149,8 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
             name.clone(),
             speedup >= 1.5,
             format!(
-                "CPU, 2 cores: {:.1} ms ({:.1} fps) without, {:.1} ms ({:.1} fps) with min-max: {speedup:.2}× (paper: 2×, GeForce 8800 GTX)",
+                "CPU ({}): {:.1} ms ({:.1} fps) without, {:.1} ms ({:.1} fps) with min-max: {speedup:.2}× (paper: 2×, GeForce 8800 GTX)",
+                crate::timing::cpu_description(),
                 ms[0],
                 1e3 / ms[0],
                 ms[1],
