@@ -130,17 +130,6 @@ def error_maps(frame: Frame, reference: Frame) -> Dict[str, Any]:
     return _error_maps(frame, reference)
 
 
-def _param_pairs(params: Optional[Mapping[str, Union[str, int]]]) -> Optional[List[Tuple[str, str]]]:
-    if params is None:
-        return None
-    pairs = []
-    for name, value in params.items():
-        if isinstance(value, bool) or not isinstance(value, (str, int)):
-            raise TypeError(f"params[{name!r}]: expected a str or an int (see refract.methods())")
-        pairs.append((str(name), str(value)))
-    return pairs
-
-
 def compare(
     scenes: Union[str, Sequence[str]],
     methods: Optional[Sequence[str]] = None,
@@ -166,7 +155,7 @@ def compare(
         res,
         spp,
         frames,
-        _param_pairs(params),
+        None if params is None else dict(params),
         os.fspath(out),
     )
     return json.loads(text)

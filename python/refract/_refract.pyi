@@ -99,7 +99,7 @@ def compare(
     res: int,
     spp: int,
     frames: int,
-    params: Optional[List[Tuple[str, str]]],
+    params: Optional[Dict[str, Union[str, int]]],
     out: str,
 ) -> str: ...
 def sweep(

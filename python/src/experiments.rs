@@ -86,9 +86,10 @@ pub fn compare(
     res: i64,
     spp: i64,
     frames: i64,
-    params: Option<Vec<(String, String)>>,
+    params: Option<&Bound<'_, pyo3::types::PyDict>>,
     out: PathBuf,
 ) -> PyResult<String> {
+    let params = crate::scene::param_pairs(params)?;
     let checked = |name: &str, v: i64, max: u32| {
         u32::try_from(v)
             .ok()
@@ -119,7 +120,6 @@ pub fn compare(
     let records = run_experiment(py, move |progress| {
         let assignments: Vec<(&str, &str)> = params
             .iter()
-            .flatten()
             .map(|(n, v)| (n.as_str(), v.as_str()))
             .collect();
         let options = CompareOptions {

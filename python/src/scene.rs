@@ -41,9 +41,10 @@ fn tuple(v: glam::Vec3) -> (f32, f32, f32) {
     (v.x, v.y, v.z)
 }
 
-/// A method's parameters from a Python dict of names to `str` or `int` values.
-fn method_params(id: MethodId, params: Option<&Bound<'_, PyDict>>) -> PyResult<MethodParams> {
-    let mut method = MethodParams::defaults(id);
+/// `params` (a dict of parameter names to `str` or `int` values, as `refract.methods()` lists
+/// them) as `(name, value)` text pairs, as the CLI's `--param NAME=VALUE` takes them.
+pub fn param_pairs(params: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
+    let mut pairs = Vec::new();
     for (name, value) in params.into_iter().flat_map(|d| d.iter()) {
         let name: String = name
             .extract()
@@ -60,6 +61,15 @@ fn method_params(id: MethodId, params: Option<&Bound<'_, PyDict>>) -> PyResult<M
                 "params[{name:?}]: expected a str or an int (see refract.methods())"
             ))
         })?;
+        pairs.push((name, text));
+    }
+    Ok(pairs)
+}
+
+/// A method's parameters: its defaults with `params` applied.
+fn method_params(id: MethodId, params: Option<&Bound<'_, PyDict>>) -> PyResult<MethodParams> {
+    let mut method = MethodParams::defaults(id);
+    for (name, text) in param_pairs(params)? {
         method
             .set(&name, &text, "params")
             .map_err(|err| to_py(err.into()))?;

@@ -50,6 +50,8 @@ def test_compare_bad_inputs(tmp_path):
         refract.compare("sphere", res=0, out=tmp_path / "a")
     with pytest.raises(ValueError, match="none of the selected methods"):
         refract.compare("sphere", methods=["single"], params={"seeds": 3}, out=tmp_path / "a")
+    with pytest.raises(TypeError, match="params"):
+        refract.compare("sphere", methods=["wyman"], params={"tir": True}, out=tmp_path / "a")
     with pytest.raises(ValueError, match="unknown scene"):
         refract.compare("nowhere", methods=["single"], res=8, out=tmp_path / "b")
     # A failed comparison leaves no half-made output directory.

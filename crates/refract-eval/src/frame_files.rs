@@ -87,12 +87,6 @@ impl FrameFiles for Frame {
 
     fn read_exr(path: &Path) -> Result<Frame, SceneError> {
         use exr::prelude::*;
-        // A missing or unreadable file is an OS error (with its kind), not a format error.
-        std::fs::File::open(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            action: "cannot read the frame file",
-            source,
-        })?;
         let format = |message: String| SceneError::Format {
             path: path.to_owned(),
             message,
@@ -104,7 +98,15 @@ impl FrameFiles for Frame {
             .first_valid_layer()
             .all_attributes()
             .from_file(path)
-            .map_err(|err| format(format!("not a readable OpenEXR file: {err}")))?;
+            .map_err(|err| match err {
+                // A missing or unreadable file is an OS error (with its kind), not a format error.
+                exr::error::Error::Io(source) => SceneError::Io {
+                    path: path.to_owned(),
+                    action: "cannot read the frame file",
+                    source,
+                },
+                err => format(format!("not a readable OpenEXR file: {err}")),
+            })?;
         let layer = image.layer_data;
         let (width, height) = (layer.size.width() as u32, layer.size.height() as u32);
         let channel = |name: &str| -> Option<Vec<f32>> {

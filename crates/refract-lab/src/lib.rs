@@ -24,6 +24,7 @@ pub mod compare;
 pub mod data_scenes;
 #[macro_use]
 pub mod error;
+pub mod html;
 pub mod jobs;
 pub mod memory;
 pub mod output_dirs;

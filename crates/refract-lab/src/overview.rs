@@ -8,6 +8,7 @@
 
 use std::fmt::Write as _;
 
+use crate::html::escape;
 use crate::jobs::JobResult;
 
 /// The metrics a cell can show: `(key, label, unit)`; the key is the cell's `data-` attribute.
@@ -31,13 +32,6 @@ fn value(result: &JobResult, key: &str) -> String {
         _ => None,
     };
     v.map_or_else(String::new, |v| format!("{v:.6}"))
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The order of first appearance of `key` over `results`.

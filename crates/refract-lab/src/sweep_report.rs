@@ -12,6 +12,7 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::MethodId;
 
+use crate::html::escape;
 use crate::jobs::{JobImages, JobResult};
 
 /// Arguments of `refract report`.
@@ -260,13 +261,6 @@ fn markdown(results: &[JobResult], plots: &[(String, String)]) -> String {
         let _ = writeln!(md, "\n## {title}\n\n![{title}]({file})");
     }
     md
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// A job's clickable thumbnail: a `figure.thumb` with what the A/B viewer (`report.js`) needs
