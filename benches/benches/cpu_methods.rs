@@ -56,7 +56,7 @@ fn cpu_methods(c: &mut Criterion) {
             let kernel = method.kernel(scene.refractor.ior()).expect("kernel");
             let mut buffers = FrameBuffers::default();
             group.bench_function(format!("{id}/buffers"), |b| {
-                b.iter(|| render_buffers_into(&scene.refractor, &camera, back, &mut buffers))
+                b.iter(|| render_buffers_into(&scene, &camera, back, &mut buffers))
             });
             group.bench_function(format!("{id}/kernel"), |b| {
                 b.iter(|| {

@@ -78,7 +78,8 @@ fn agreement(cpu: &Frame, gpu: &Frame) -> Agreement {
 /// Bounds from the measured values printed below (lavapipe: T2 differs on at most 0.8 % of the
 /// cow's refractor pixels, colours on at most 0.7 %), with margin: coverage agrees on ≥ 99.5 %
 /// of the refractor pixels; T2 differs by more than 1e-3 rad on at most 2 % and colours by more
-/// than 1/255 (after the tonemap) on at most 2 % of them.
+/// than 1/255 (after the tonemap) on at most 2 % of them, and on at most 2 % of the pixels
+/// neither backend covers.
 fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
     let cam = camera(256);
     let mut cpu = CpuRenderer::new();
@@ -164,6 +165,13 @@ fn check(label: &str, scene: &Arc<Scene>, gpu: &mut GpuRenderer) {
                 a.color_differs <= 0.02,
                 "{label} {id}: colour {}",
                 a.color_differs
+            );
+            // Opaque objects seen directly (every family draws them; the image-space family
+            // since issue 31, item 4) and the environment.
+            assert!(
+                a.outside_differs <= 0.02,
+                "{label} {id}: outside colour {}",
+                a.outside_differs
             );
         }
     }

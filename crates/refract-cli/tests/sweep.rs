@@ -117,6 +117,41 @@ fn three_shards_in_parallel_merge_to_the_unsharded_result() {
     }
     let svg = std::fs::read_to_string(dir.path().join("merged/error-vs-ior.svg")).expect("svg");
     assert!(svg.contains("index of refraction") && svg.contains("mean FLIP"));
+    for plot in [
+        "error-vs-ior",
+        "error-vs-seeds",
+        "time-vs-resolution",
+        "error-vs-time",
+    ] {
+        check_print_png(&dir.path().join("merged"), plot);
+    }
+}
+
+/// Plot `name`'s PNG beside its SVG is the SVG at 300 dpi (its CSS pixels × 300 / 96) and
+/// shows its lines and text: dark pixels on at least 0.2 % of it (an SVG rasterised without
+/// a font, or not at all, has no text or nothing).
+fn check_print_png(dir: &std::path::Path, name: &str) {
+    let svg = std::fs::read_to_string(dir.join(format!("{name}.svg"))).expect("svg");
+    let attribute = |key: &str| -> f64 {
+        let start = svg.find(&format!("{key}=\"")).expect(key) + key.len() + 2;
+        let end = start + svg[start..].find('"').expect("quote");
+        svg[start..end].parse().expect("a number")
+    };
+    let png = image::open(dir.join(format!("{name}.png")))
+        .expect("png")
+        .to_luma8();
+    let scale = 300.0 / 96.0;
+    assert_eq!(
+        (png.width(), png.height()),
+        (
+            (attribute("width") * scale).round() as u32,
+            (attribute("height") * scale).round() as u32
+        ),
+        "{name}.png"
+    );
+    let dark = png.pixels().filter(|p| p.0[0] < 80).count();
+    let share = dark as f64 / f64::from(png.width() * png.height());
+    assert!(share >= 0.002, "{name}.png: dark pixels on {share}");
 }
 
 #[test]

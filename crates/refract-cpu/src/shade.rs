@@ -2,17 +2,24 @@
 //! refract-core's lane kernels ([`two_interface_x8`], [`one_interface_x8`]) in groups of eight,
 //! its background pixels through the eight-lane camera rays and environment lookup. Lanes are
 //! bit-identical to the scalar kernels, so grouping changes no pixel.
+//!
+//! Where the scene has opaque objects, they are drawn as an engine draws them: a pixel whose
+//! nearest surface is an object (the refractor absent there, or behind it) shows the object's
+//! texel of the eye's object pass; the refraction itself still sees the environment only, as in
+//! Wyman 2005a.
 
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams};
 use refract_core::kernel_x8::{one_interface_x8, two_interface_lanes};
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
+use refract_core::nearby_geometry::view_depth;
 use refract_scene::Environment;
 
 use crate::buffers::BackFaces;
 use crate::image_space::MethodAov;
+use crate::nearby_geometry::{NearbyTexel, NearbyTexture};
 use crate::pixel_group::PixelGroup;
 use crate::raster::{Band, SurfaceBuffer, Texel};
 
@@ -21,6 +28,8 @@ pub(crate) struct ShadeContext<'a> {
     /// The back faces (two-interface methods), or `None` (`single`).
     pub back: Option<&'a BackFaces>,
     pub environment: &'a Environment,
+    /// The opaque objects seen from the eye, pixel for pixel (`None`: the scene has none).
+    pub objects: Option<&'a NearbyTexture>,
     pub camera: &'a Camera,
     pub kernel: &'a ImageSpaceParams,
 }
@@ -54,6 +63,8 @@ pub(crate) trait FrontRow {
     fn is_covered(&self, x: u32) -> bool;
     /// The front surfaces of eight covered pixels.
     fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES];
+    /// The front surface at pixel `x` (`None` where not covered).
+    fn texel(&self, x: u32) -> Option<Texel>;
 }
 
 /// Row `y` of a band just rasterised.
@@ -69,6 +80,9 @@ impl FrontRow for BandRow<'_, '_> {
     }
     fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
         self.band.texels_x8(x, self.y)
+    }
+    fn texel(&self, x: u32) -> Option<Texel> {
+        self.band.texel(x, self.y)
     }
 }
 
@@ -87,6 +101,9 @@ impl FrontRow for BufferRow<'_> {
     fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
         self.buffer.texels_x8(x, self.y)
     }
+    fn texel(&self, x: u32) -> Option<Texel> {
+        self.buffer.texel((self.y * self.buffer.width + x) as usize)
+    }
 }
 
 impl ShadeContext<'_> {
@@ -103,7 +120,10 @@ impl ShadeContext<'_> {
         let mut covered = PixelGroup::new();
         let mut background = PixelGroup::new();
         for x in 0..out.colors.len() as u32 {
-            if front.is_covered(x) {
+            let object = self.object(front, x, y);
+            if let Some(object) = object {
+                out.write(x, object.color, || MethodAov::BACKGROUND);
+            } else if front.is_covered(x) {
                 if covered.push(x) {
                     self.covered(front, &covered, y, &mut out);
                     covered.len = 0;
@@ -121,6 +141,19 @@ impl ShadeContext<'_> {
             background.pad();
             self.background(&background, y, &mut out);
         }
+    }
+
+    /// The object seen at pixel `(x, y)` when it is nearer than the refractor there (or the
+    /// refractor does not cover the pixel); `None` where the refractor or the environment is
+    /// seen. The refractor's surface is reconstructed only where both cover the pixel.
+    #[inline]
+    fn object(&self, front: &impl FrontRow, x: u32, y: u32) -> Option<NearbyTexel> {
+        let object = self.objects?.texel(UVec2::new(x, y))?;
+        let refractor_in_front = front.is_covered(x)
+            && front
+                .texel(x)
+                .is_some_and(|t| view_depth(self.camera, t.p_ws) < object.surface.depth);
+        (!refractor_in_front).then_some(object)
     }
 
     /// Eight pixels that see the environment directly.

@@ -3,6 +3,11 @@
 //! beside the data, never over it; units on both axes; a logarithmic axis where the values
 //! span more than a decade; error against frame time as one panel per scene with each
 //! backend's Pareto front (the methods no other method beats in both error and time).
+//!
+//! Each SVG (for the page) has a PNG beside it at print resolution ([`PRINT_DPI`]): the same
+//! SVG rasterised by `resvg`, its text set in the Ubuntu typeface egui bundles
+//! (`epaint_default_fonts`), so the figure looks the same on every machine, fonts installed or
+//! not.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -366,7 +371,63 @@ fn plot(
     })
 }
 
-/// An SVG of `size` at `path`: a white page `draw` draws on; a drawing error names the file.
+/// The resolution of the PNG beside each SVG: the SVG's pixels are CSS pixels (96 per inch).
+pub const PRINT_DPI: f32 = 300.0;
+
+/// The PNG file beside SVG `svg`.
+pub fn print_png(svg: &str) -> String {
+    match svg.strip_suffix(".svg") {
+        Some(stem) => format!("{stem}.png"),
+        None => format!("{svg}.png"),
+    }
+}
+
+/// Rasterises the SVG at `svg` into `png` at [`PRINT_DPI`] on white.
+fn write_print_png(svg: &Path, png: &Path) -> crate::Result<()> {
+    let cannot = |what: &str, e: &dyn std::fmt::Display| {
+        crate::LabError::invalid(format_args!("{}: cannot {what}: {e}", png.display()))
+    };
+    let text = std::fs::read(svg).map_err(|e| cannot("read the SVG", &e))?;
+    let mut options = resvg::usvg::Options::default();
+    {
+        let fonts = options.fontdb_mut();
+        fonts.load_font_data(epaint_default_fonts::UBUNTU_LIGHT.to_vec());
+        fonts.set_sans_serif_family("Ubuntu");
+    }
+    options.font_family = "Ubuntu".to_owned();
+    let tree = resvg::usvg::Tree::from_data(&text, &options).map_err(|e| cannot("parse", &e))?;
+    let scale = PRINT_DPI / 96.0;
+    let size = tree.size().to_int_size().scale_by(scale).ok_or_else(|| {
+        crate::LabError::invalid(format_args!("{}: an empty plot", svg.display()))
+    })?;
+    let mut pixmap =
+        resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| {
+            crate::LabError::invalid(format_args!("{}: an empty plot", svg.display()))
+        })?;
+    pixmap.fill(resvg::tiny_skia::Color::WHITE);
+    resvg::render(
+        &tree,
+        resvg::tiny_skia::Transform::from_scale(scale, scale),
+        &mut pixmap.as_mut(),
+    );
+    // Opaque pixels: the premultiplied RGBA is the straight RGBA; stored as RGB.
+    let rgb: Vec<u8> = pixmap
+        .data()
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    image::save_buffer(
+        png,
+        &rgb,
+        size.width(),
+        size.height(),
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| cannot("write", &e))
+}
+
+/// An SVG of `size` at `path` (a white page `draw` draws on) and its print PNG beside it
+/// ([`print_png`]); a drawing error names the file.
 fn draw_svg(
     path: &Path,
     size: (u32, u32),
@@ -384,7 +445,10 @@ fn draw_svg(
             "{}: cannot draw the plot: {e}",
             path.display()
         ))
-    })
+    })?;
+    drop(root);
+    let png = path.with_extension("png");
+    write_print_png(path, &png)
 }
 
 /// Error against frame time, one panel per scene (each with its own axes: scenes differ by

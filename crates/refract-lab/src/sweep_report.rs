@@ -258,9 +258,23 @@ fn markdown(results: &[JobResult], plots: &[(String, String)]) -> String {
         );
     }
     for (file, title) in plots {
-        let _ = writeln!(md, "\n## {title}\n\n![{title}]({file})");
+        let png = crate::plots::print_png(file);
+        let _ = writeln!(
+            md,
+            "\n## {title}\n\n![{title}]({file})\n\nFor print: [{png}]({png}) ({} dpi).",
+            crate::plots::PRINT_DPI
+        );
     }
     md
+}
+
+/// The link to plot `file`'s print PNG, as a caption under it.
+fn print_link(file: &str) -> String {
+    let png = crate::plots::print_png(file);
+    format!(
+        "<figcaption class=\"print\"><a href=\"{png}\">PNG, {} dpi, for print</a></figcaption>",
+        crate::plots::PRINT_DPI
+    )
 }
 
 /// A job's clickable thumbnail: a `figure.thumb` with what the A/B viewer (`report.js`) needs
@@ -368,8 +382,9 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
     for (file, title) in &trade_off {
         let _ = write!(
             h,
-            "<div class=\"plots\"><img id=\"trade-off\" src=\"{file}\" alt=\"{}\"></div>",
-            escape(title)
+            "<div class=\"plots\"><img id=\"trade-off\" src=\"{file}\" alt=\"{}\">{}</div>",
+            escape(title),
+            print_link(file)
         );
     }
     h.push_str("<h2>Every job</h2><table id=\"metrics\"><thead><tr>");
@@ -403,8 +418,9 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
         for (file, title) in other_plots {
             let _ = write!(
                 h,
-                "<figure><img src=\"{file}\" alt=\"{}\"></figure>",
-                escape(title)
+                "<figure><img src=\"{file}\" alt=\"{}\">{}</figure>",
+                escape(title),
+                print_link(file)
             );
         }
         h.push_str("</div>");

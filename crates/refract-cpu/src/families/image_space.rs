@@ -1,6 +1,10 @@
 //! Wyman 2005a image-space refraction on the CPU (methods `single`, `wyman`, `wyman-dv`,
 //! `wyman-dn`): the back faces rasterised and resolved, then the front faces rasterised band by
 //! band, each band shaded by refract-core's eight-lane kernels right after it is rasterised.
+//!
+//! A scene's opaque objects are drawn where they are the nearest surface (the eye's object pass,
+//! the engine family's screen texture); the refraction sees the environment only, as in the
+//! paper, so the metrics over the refractor's pixels do not depend on them.
 
 use std::sync::Arc;
 
@@ -13,12 +17,14 @@ use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
 use refract_scene::{
     Aov, Environment, Frame, FrameOutputs, ImageSpaceMethod, LayerValue, MethodId, PixelLayers,
-    Refractor, RenderError, Scene,
+    RenderError, Scene,
 };
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
 use crate::family::{CpuFamily, FrameCx};
+use crate::nearby_geometry::NearbyTexture;
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::scene_meshes::SceneMeshes;
 use crate::shade::{BandRow, BufferRow, ShadeContext};
 
 /// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
@@ -67,24 +73,34 @@ impl MethodAov {
     };
 }
 
-/// The buffers of one frame: front faces always, back faces for two-interface methods.
+/// The buffers of one frame: front faces always, back faces for two-interface methods, the
+/// opaque objects seen from the eye where the scene has any.
 #[derive(Default)]
 pub struct FrameBuffers {
     /// Front faces (P1, N1, d_N).
     pub front: SurfaceBuffer,
     /// Back faces of the chosen surface.
     pub back: Option<BackFaces>,
+    /// The opaque objects from the eye (nearest surface, colour); `None` without objects.
+    pub objects: Option<NearbyTexture>,
 }
 
 /// Pass 1 and 2 of Wyman 2005a §4, stored whole (the two-step path of tests and stage benches;
 /// [`ImageSpacePasses`] fuses the second pass with the kernel): the back faces of `back` (none
-/// for `single`), then the front faces.
+/// for `single`), the front faces, and the opaque objects from the eye (none in the paper's
+/// scenes).
 pub fn render_buffers_into(
-    refractor: &Refractor,
+    scene: &Scene,
     camera: &Camera,
     back: Option<BackSurface>,
     buffers: &mut FrameBuffers,
 ) {
+    let refractor = &scene.refractor;
+    buffers.objects = (!scene.objects.is_empty()).then(|| {
+        let mut objects = buffers.objects.take().unwrap_or_default();
+        objects.render_into(scene, &SceneMeshes::objects(scene), camera);
+        objects
+    });
     match back {
         None => buffers.back = None,
         Some(surface) => buffers
@@ -96,13 +112,9 @@ pub fn render_buffers_into(
 }
 
 /// [`render_buffers_into`] into new buffers.
-pub fn render_buffers(
-    refractor: &Refractor,
-    camera: &Camera,
-    back: Option<BackSurface>,
-) -> FrameBuffers {
+pub fn render_buffers(scene: &Scene, camera: &Camera, back: Option<BackSurface>) -> FrameBuffers {
     let mut buffers = FrameBuffers::default();
-    render_buffers_into(refractor, camera, back, &mut buffers);
+    render_buffers_into(scene, camera, back, &mut buffers);
     buffers
 }
 
@@ -124,6 +136,7 @@ pub fn shade_into(
     let context = ShadeContext {
         back: buffers.back.as_ref(),
         environment,
+        objects: buffers.objects.as_ref(),
         camera,
         kernel,
     };
@@ -170,19 +183,24 @@ fn shade_band(
 /// A frame is two passes (Wyman 2005a §4): the back faces are rasterised and resolved into
 /// normals and distances; then the front faces are rasterised band by band, and each band of
 /// rows is shaded by the kernel right after it is rasterised, while it is in cache (the front
-/// surface is never stored as a whole G-buffer). The result is bit-identical to
-/// [`render_buffers`] followed by [`shade_into`].
+/// surface is never stored as a whole G-buffer). Before them, in a scene with opaque objects,
+/// the objects are rasterised from the eye. The result is bit-identical to [`render_buffers`]
+/// followed by [`shade_into`].
 #[derive(Default)]
 pub struct ImageSpacePasses {
     front: SurfaceBuffer,
     back: BackFaces,
+    object_meshes: SceneMeshes,
+    objects: NearbyTexture,
     aovs: Vec<MethodAov>,
 }
 
 impl CpuFamily for ImageSpacePasses {
     type Params = ImageSpaceMethod;
 
-    fn prepare(&mut self, _scene: &Arc<Scene>) {}
+    fn prepare(&mut self, scene: &Arc<Scene>) {
+        self.object_meshes = SceneMeshes::objects(scene);
+    }
 
     fn render(
         &mut self,
@@ -200,9 +218,14 @@ impl CpuFamily for ImageSpacePasses {
                 Some(&self.back)
             }
         };
+        let objects = (!scene.objects.is_empty()).then(|| {
+            self.objects.render_into(scene, &self.object_meshes, camera);
+            &self.objects
+        });
         let context = ShadeContext {
             back,
             environment: &scene.environment,
+            objects,
             camera,
             kernel,
         };

@@ -1,8 +1,10 @@
 //! Wyman 2005a image-space refraction on the GPU (methods `single`, `wyman`, `wyman-dv`,
 //! `wyman-dn`): the back faces and front faces rasterised into float targets, then the kernel as
 //! a compute pass (`shaders/image_space.wgsl`), one pipeline per method (`shade_single`, and
-//! `shade_two_interface` with `DISTANCE_MODE` fixed per pipeline); readback into a
-//! [`refract_scene::Frame`] with the method's AOV layers.
+//! `shade_two_interface` with `DISTANCE_MODE` fixed per pipeline); in a scene with opaque
+//! objects, the objects drawn over the frame where they are the nearest surface
+//! ([`super::objects_over_frame`]); readback into a [`refract_scene::Frame`] with the method's
+//! AOV layers.
 
 use glam::Vec3;
 use refract_core::BackSurface;
@@ -19,6 +21,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::methods::MethodPipelines;
+use crate::methods::objects_over_frame::{ObjectPipelines, ObjectTargets};
 use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, TARGET_FORMAT, target,
 };
@@ -48,7 +51,15 @@ impl GpuFamily for ImageSpacePipelines {
         _: &ImageSpaceMethod,
     ) -> Result<ImageSpaceTargets, GpuError> {
         let (width, height) = cx.size();
-        ImageSpaceTargets::new(cx.context, cx.raster, self, cx.gpu_scene, width, height)
+        let mut targets =
+            ImageSpaceTargets::new(cx.context, cx.raster, self, cx.gpu_scene, width, height)?;
+        if !cx.scene.objects.is_empty() {
+            let objects = cx.context.checked(|| {
+                ObjectTargets::allocate(cx, &self.objects, &targets.refractor, &targets.outputs)
+            })?;
+            targets.objects = Some(objects);
+        }
+        Ok(targets)
     }
 
     fn encode(
@@ -80,12 +91,15 @@ impl GpuFamily for ImageSpacePipelines {
 }
 
 /// The kernel pipelines: `shade_single` and `shade_two_interface` (`DISTANCE_MODE` fixed per
-/// method).
-pub(crate) struct ImageSpacePipelines(MethodPipelines);
+/// method); the objects' pass.
+pub(crate) struct ImageSpacePipelines {
+    kernels: MethodPipelines,
+    objects: ObjectPipelines,
+}
 
 impl ImageSpacePipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        Self(MethodPipelines::new(
+        let kernels = MethodPipelines::new(
             device,
             &SHADER,
             &[
@@ -106,7 +120,11 @@ impl ImageSpacePipelines {
                     vec![("DISTANCE_MODE", f64::from(distance_mode_code(p.distance)))],
                 ),
             },
-        ))
+        );
+        Self {
+            kernels,
+            objects: ObjectPipelines::new(device),
+        }
     }
 }
 
@@ -292,6 +310,8 @@ pub(crate) struct ImageSpaceTargets {
     shade_group: wgpu::BindGroup,
     /// Colour (w: coverage code), T2 (w: TIR), P~2 (w: exit-normal code), N2 (w: valid).
     outputs: OutputBuffers,
+    /// The opaque objects' pass (`None` for a scene without objects).
+    objects: Option<ObjectTargets>,
 }
 
 impl ImageSpaceTargets {
@@ -325,7 +345,7 @@ impl ImageSpaceTargets {
         let shade_group = bind_group(
             device,
             "image space",
-            &pipelines.0.layout,
+            &pipelines.kernels.layout,
             &[
                 refractor.uniforms.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&refractor.front_p1),
@@ -344,6 +364,7 @@ impl ImageSpaceTargets {
             refractor,
             shade_group,
             outputs,
+            objects: None,
         }
     }
 
@@ -352,8 +373,8 @@ impl ImageSpaceTargets {
         (self.width, self.height) == (width, height)
     }
 
-    /// Encodes every per-frame pass (back faces for two interfaces, front faces, the kernel) and
-    /// the copies of the outputs to the readback buffers.
+    /// Encodes every per-frame pass (back faces for two interfaces, front faces, the kernel, the
+    /// objects where the scene has any) and the copies of the outputs to the readback buffers.
     fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -374,13 +395,18 @@ impl ImageSpaceTargets {
         };
         self.refractor.encode(cx, uniforms, back, encoder);
         {
+            // The frame ends with the last pass: the kernel's, or the objects' after it.
+            let end = timestamps.filter(|_| self.objects.is_none());
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("image-space kernel"),
-                timestamp_writes: timestamps.map(Timestamps::end_compute),
+                timestamp_writes: end.map(Timestamps::end_compute),
             });
-            pass.set_pipeline(pipelines.0.get(id, outputs));
+            pass.set_pipeline(pipelines.kernels.get(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        if let Some(objects) = &self.objects {
+            objects.encode(cx, &pipelines.objects, uniforms, encoder);
         }
         if let Some(timestamps) = timestamps {
             timestamps.resolve(encoder);

@@ -7,6 +7,7 @@ pub(crate) mod distance_map;
 pub(crate) mod engine;
 pub(crate) mod image_space;
 pub(crate) mod nearby_geometry;
+pub(crate) mod objects_over_frame;
 pub(crate) mod pvrr;
 
 use std::sync::Arc;
@@ -73,8 +74,9 @@ use refract_scene::{FrameOutputs, MethodId, MethodParams, REGISTRY};
 use crate::shaders::ShaderModule;
 
 /// Every family's shader module (validated by naga in `tests/shaders.rs` with the shared ones).
-pub(crate) const SHADERS: [ShaderModule; 5] = [
+pub(crate) const SHADERS: [ShaderModule; 6] = [
     image_space::SHADER,
+    objects_over_frame::SHADER,
     nearby_geometry::SHADER,
     distance_map::SHADER,
     pvrr::SHADER,
@@ -98,20 +100,7 @@ impl MethodPipelines {
         entries: &[wgpu::BindGroupLayoutEntry],
         entry: impl Fn(&P) -> (&'static str, Vec<(&'static str, f64)>),
     ) -> Self {
-        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(module.name),
-            source: wgpu::ShaderSource::Wgsl(module.source().into()),
-        });
-        let module = module.name;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(module),
-            entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(module),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let compiler = PipelineCompiler::new(device, module, entries);
         let mut pipelines = Vec::new();
         let rows = REGISTRY
             .iter()
@@ -119,25 +108,15 @@ impl MethodPipelines {
         for (id, params) in rows {
             let (entry_point, method_constants) = entry(&params);
             for outputs in [FrameOutputs::ColorAndAovs, FrameOutputs::Color] {
-                let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
-                let mut constants = vec![("WRITE_AOVS", write_aovs)];
-                constants.extend(method_constants.iter().copied());
                 let label = format!("{id} ({outputs:?})");
-                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&label),
-                    layout: Some(&pipeline_layout),
-                    module: &shader,
-                    entry_point: Some(entry_point),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                });
+                let pipeline = compiler.compile(&label, entry_point, outputs, &method_constants);
                 pipelines.push((id, outputs, pipeline));
             }
         }
-        Self { layout, pipelines }
+        Self {
+            layout: compiler.layout,
+            pipelines,
+        }
     }
 
     /// The pipeline of `method` for `outputs`.
@@ -147,5 +126,68 @@ impl MethodPipelines {
             .find(|(m, o, _)| *m == method && *o == outputs)
             .map(|(_, _, p)| p)
             .expect("a pipeline for every method of the family")
+    }
+}
+
+/// One shader module over one bind-group layout, compiling compute pipelines from it with
+/// `WRITE_AOVS` set per [`FrameOutputs`].
+pub(crate) struct PipelineCompiler<'d> {
+    device: &'d wgpu::Device,
+    shader: wgpu::ShaderModule,
+    pub layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+}
+
+impl<'d> PipelineCompiler<'d> {
+    /// Creates `module` and its layout of `entries`.
+    pub(crate) fn new(
+        device: &'d wgpu::Device,
+        module: &ShaderModule,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> Self {
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(module.name),
+            source: wgpu::ShaderSource::Wgsl(module.source().into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(module.name),
+            entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(module.name),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        Self {
+            device,
+            shader,
+            layout,
+            pipeline_layout,
+        }
+    }
+
+    /// The pipeline of `entry_point` for `outputs` (`WRITE_AOVS`) and `constants`.
+    pub(crate) fn compile(
+        &self,
+        label: &str,
+        entry_point: &str,
+        outputs: FrameOutputs,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        let write_aovs = f64::from(u8::from(outputs == FrameOutputs::ColorAndAovs));
+        let mut all = vec![("WRITE_AOVS", write_aovs)];
+        all.extend(constants.iter().copied());
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&self.pipeline_layout),
+                module: &self.shader,
+                entry_point: Some(entry_point),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &all,
+                    ..Default::default()
+                },
+                cache: None,
+            })
     }
 }

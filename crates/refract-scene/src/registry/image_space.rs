@@ -103,6 +103,16 @@ pub(super) const TWO_INTERFACE_AOVS: &[Aov] = &[
     Aov::Tir,
 ];
 
+/// The frame's buffers (measured, `docs/performance.md`) and, in a scene with opaque objects,
+/// their pass from the eye at the frame's size (the engine family's screen texture, 40 bytes a
+/// texel; counted for every scene: an upper bound where there are none).
+const IMAGE_SPACE_MEMORY: MemoryModel = MemoryModel {
+    color_bytes_per_pixel: 47,
+    layers_bytes_per_pixel: 186,
+    texels: |_, width, height| u64::from(width) * u64::from(height),
+    bytes_per_texel: 40,
+};
+
 /// The rows of the family.
 pub(super) const ROWS: &[MethodInfo] = &[
     MethodInfo {
@@ -116,7 +126,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: &[Aov::Covered, Aov::T2, Aov::Tir],
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::Single),
         renders_conductors: false,
-        memory: MemoryModel::per_pixel(47, 186),
+        memory: IMAGE_SPACE_MEMORY,
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -130,7 +140,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::Interpolated)),
         renders_conductors: false,
-        memory: MemoryModel::per_pixel(47, 186),
+        memory: IMAGE_SPACE_MEMORY,
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -144,7 +154,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::ViewOnly)),
         renders_conductors: false,
-        memory: MemoryModel::per_pixel(47, 186),
+        memory: IMAGE_SPACE_MEMORY,
         backends: CPU_AND_GPU,
     },
     MethodInfo {
@@ -158,7 +168,7 @@ pub(super) const ROWS: &[MethodInfo] = &[
         aovs: TWO_INTERFACE_AOVS,
         defaults: || MethodParams::ImageSpace(ImageSpaceMethod::two(DistanceMode::NormalOnly)),
         renders_conductors: false,
-        memory: MemoryModel::per_pixel(47, 186),
+        memory: IMAGE_SPACE_MEMORY,
         backends: CPU_AND_GPU,
     },
 ];
