@@ -190,3 +190,39 @@ fn image_space_methods_decline_conductor_scenes() {
         .expect_err("declined");
     assert!(err.to_string().contains("object 0"), "{err}");
 }
+
+/// White furnace (no energy from nowhere): a glass sphere, and the glass sphere of
+/// `glass-room` with its room removed, in a constant white environment, with `fresnel=split`:
+/// the Schlick-weighted reflection and the transmitted rest add up to at most the
+/// environment's radiance at every pixel (1 + 1e-4 for f32 rounding), and to nearly all of it
+/// on average (energy is lost only where a path reaches the depth limit).
+#[test]
+fn a_white_furnace_gains_no_energy() {
+    for name in ["sphere", "glass-room"] {
+        let mut s = load_scene(name).expect("scene").scene;
+        s.objects.clear();
+        s.environment = refract_scene::Environment::Constant(glam::Vec3::ONE);
+        let s = Arc::new(s);
+        let camera = s.camera(64, 64).expect("camera");
+        let frame = render(
+            &mut CpuRenderer::new(),
+            &s,
+            &camera,
+            &dm(&[("fresnel", "split"), ("depth", "8")]),
+        );
+        let covered = frame.flag(Aov::Covered).expect("covered");
+        let values: Vec<f32> = (0..frame.pixel_count())
+            .filter(|&i| covered[i])
+            .flat_map(|i| frame.color[i].to_array())
+            .collect();
+        let max = values.iter().copied().fold(0.0f32, f32::max);
+        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+        println!(
+            "{name}: furnace radiance max {max}, mean {mean} over {} values",
+            values.len()
+        );
+        assert!(values.len() > 1000, "{name}: the sphere is seen");
+        assert!(max <= 1.0 + 1e-4, "{name}: energy from nowhere: {max}");
+        assert!(mean >= 0.95, "{name}: energy lost: mean {mean}");
+    }
+}

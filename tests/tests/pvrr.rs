@@ -589,3 +589,34 @@ fn the_specular_object_and_conductor_objects_are_reflectors() {
         ReflectorKind::Lens { .. }
     ));
 }
+
+/// White furnace (no energy from nowhere): the convex mirror (its scene's objects removed)
+/// and the spectacle lens in a constant white environment: every pixel of the mirror or lens
+/// is at most the environment's radiance (1 + 1e-4 for f32 rounding), since a conductor's
+/// Fresnel reflectance and a dielectric's transmittance are at most one; and not black (the
+/// view of the environment through them is kept).
+#[test]
+fn a_white_furnace_gains_no_energy() {
+    for name in ["convex-mirror", "spectacles"] {
+        let mut s = load_scene(name).expect("scene").scene;
+        s.objects.clear();
+        s.environment = refract_scene::Environment::Constant(glam::Vec3::ONE);
+        let s = Arc::new(s);
+        let camera = s.camera(64, 64).expect("camera");
+        let (_, frame) = pvrr(&s, &camera, &params(&[]));
+        let covered = frame.flag(Aov::Covered).expect("covered");
+        let values: Vec<f32> = (0..frame.pixel_count())
+            .filter(|&i| covered[i])
+            .flat_map(|i| frame.color[i].to_array())
+            .collect();
+        let max = values.iter().copied().fold(0.0f32, f32::max);
+        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+        println!(
+            "{name}: furnace radiance max {max}, mean {mean} over {} values",
+            values.len()
+        );
+        assert!(values.len() > 300, "{name}: the specular object is seen");
+        assert!(max <= 1.0 + 1e-4, "{name}: energy from nowhere: {max}");
+        assert!(mean >= 0.5, "{name}: mean {mean}");
+    }
+}

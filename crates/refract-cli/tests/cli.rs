@@ -452,7 +452,9 @@ fn export_writes_meshes_and_scene_json() {
     assert!((json["ior"].as_f64().expect("ior") - 1.5).abs() < 1e-6);
 }
 
-/// `refract claims` measures the Wyman 2005a claims and writes them with verdicts.
+/// `refract claims` measures the claims and writes them with verdicts, and a coverage table
+/// with a row for each of the 64 inventory claims and the 3 beyond the papers; with fewer
+/// timing rounds than a claim states, its verdict is inconclusive.
 #[test]
 fn claims_are_measured_and_written() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -466,13 +468,15 @@ fn claims_are_measured_and_written() {
             data,
             "--out",
             "c/claims.md",
+            "--timing-rounds",
+            "1",
         ],
         dir.path(),
     );
     assert!(output.status.success(), "{}", stderr(&output));
     let md = std::fs::read_to_string(dir.path().join("c/claims.md")).expect("claims.md");
     assert!(md.contains("Written by `refract claims`"), "{md}");
-    for claim in ["Two interfaces", "beats `d_V` alone", "beats `d_N` alone"] {
+    for claim in ["**W1** Two interfaces", "**W3**", "**W4**"] {
         assert!(
             md.lines()
                 .any(|l| l.contains(claim) && l.contains("| sphere |")),
@@ -480,6 +484,24 @@ fn claims_are_measured_and_written() {
         );
     }
     assert!(md.contains("**confirmed**"), "{md}");
+    let coverage = md.split("## Coverage").nth(1).expect("a coverage section");
+    let rows = |prefix: &str| {
+        coverage
+            .lines()
+            .filter(|l| l.starts_with(&format!("| {prefix}")))
+            .count()
+    };
+    assert_eq!(
+        (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
+        (13, 16, 14, 21, 3)
+    );
+    // One timing round of the five U12 states: inconclusive, whatever the speed-up.
+    assert!(
+        md.lines()
+            .any(|l| l.contains("**U12**") && l.ends_with("| **inconclusive** |")),
+        "{md}"
+    );
+    assert!(md.contains("## Revisions"), "{md}");
 }
 
 /// A write that fails at the final flush (here: the file-size limit) is an error, and leaves

@@ -163,7 +163,8 @@ mod tests {
         let narrow = gib_of(&seeded, 8192, true);
         seeded.set("guard", "100", "test").expect("guard");
         let wide = gib_of(&seeded, 8192, true);
-        assert!((10.0..14.0).contains(&gib_of(&wyman, 8192, true)), "wyman");
+        // wyman: its buffers and layers, and the objects' pass from the eye (an upper bound).
+        assert!((12.0..16.0).contains(&gib_of(&wyman, 8192, true)), "wyman");
         assert!((18.0..23.0).contains(&narrow), "seeded: {narrow}");
         assert!((38.0..44.0).contains(&wide), "seeded, guard 100: {wide}");
         // Textures sized by parameters, whatever the frame: 6 x 8 distance-map layers of 2048².

@@ -32,6 +32,32 @@ pub fn time_frames(
     })
 }
 
+/// `repeats` rounds of [`time_frames`] of configuration 0, then configuration 1, alternating so
+/// that a drift of the machine (heat, another process) reaches both alike: `frame(k)` renders
+/// one frame of configuration `k` and returns its milliseconds. One `(times of 0, times of 1)`
+/// pair per round.
+pub fn alternating(
+    repeats: u32,
+    warm_up: u32,
+    frames: u32,
+    mut frame: impl FnMut(usize) -> crate::Result<f64>,
+) -> crate::Result<Vec<(FrameTimes, FrameTimes)>> {
+    (0..repeats.max(1))
+        .map(|_| {
+            let a = time_frames(warm_up, frames, || frame(0))?;
+            let b = time_frames(warm_up, frames, || frame(1))?;
+            Ok((a, b))
+        })
+        .collect()
+}
+
+/// The smallest, median and largest of `values` (empty: `None`).
+pub fn spread(values: &[f64]) -> Option<(f64, f64, f64)> {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    Some((*v.first()?, v[v.len() / 2], *v.last()?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -78,6 +104,8 @@ pub fn cpu_description() -> String {
 
 #[cfg(test)]
 mod machine_tests {
+    use super::{alternating, spread};
+
     /// The description names the thread count rayon really uses.
     #[test]
     fn the_cpu_description_is_measured() {
@@ -88,5 +116,21 @@ mod machine_tests {
             "{text}"
         );
         assert!(!text.starts_with(','), "{text}");
+    }
+
+    /// Rounds alternate the two configurations, each timed after its own warm-up.
+    #[test]
+    fn rounds_alternate_the_configurations() {
+        let mut order = Vec::new();
+        let rounds = alternating(2, 1, 2, |k| {
+            order.push(k);
+            Ok(10.0 * (k as f64 + 1.0))
+        })
+        .expect("rounds");
+        assert_eq!(order, [0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 1, 1]);
+        assert_eq!(rounds.len(), 2);
+        assert_eq!((rounds[0].0.median, rounds[0].1.median), (10.0, 20.0));
+        assert_eq!(spread(&[3.0, 1.0, 2.0]), Some((1.0, 2.0, 3.0)));
+        assert_eq!(spread(&[]), None);
     }
 }

@@ -10,7 +10,8 @@ use refract_eval::load_scene;
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene};
 
-use super::{Bench, Claim, ClaimsArgs, Truth, claim_rows, value};
+use super::inventory::{Inventory, Ledger};
+use super::{Bench, ClaimsArgs, Truth, value};
 use crate::data_scenes;
 use crate::progress::Progress;
 
@@ -149,20 +150,17 @@ fn scenes(
 }
 
 /// Measures the engine methods and returns the markdown section.
-pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
+pub fn section(
+    args: &ClaimsArgs,
+    inventory: &Inventory,
+    ledger: &mut Ledger,
+    progress: &dyn Progress,
+) -> crate::Result<String> {
     let mut bench = Bench::new();
     let mut notes = Vec::new();
     let methods = methods()?;
-    let mut claims = vec![
-        Claim {
-            text: "three.js's transmission lookup has no depth test, so an opaque object in front of the glass shows through it; Bevy's depth rejection and HDRP's depth check never show it (engine-methods.md §1, §2, §4): leak share > 0 for `volume-thickness`, exactly 0 for Bevy and HDRP",
-            rows: Vec::new(),
-        },
-        Claim {
-            text: "HDRP's sphere model (Filament's `solid`) is exact on a sphere whose diameter is the thickness (the chord's symmetry): T2 error < 0.5° and no larger than `wyman`'s",
-            rows: Vec::new(),
-        },
-    ];
+    let mut claims = vec![inventory.claim("B2")?, inventory.claim("B3")?];
+    let b3_deg = claims[1].threshold("deg")?;
     let mut comparison = String::new();
     let mut sweep = String::new();
     let mut failure_rows = String::new();
@@ -207,7 +205,7 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
                     .map_or(f64::NAN, |l| l.1)
             };
             let (three, bevy, hdrp) = (leak(THREE_JS), leak(BEVY), leak(HDRP_SPHERE));
-            claims[0].rows.push((
+            claims[0].push((
                 name.clone(),
                 three > 0.0 && bevy == 0.0 && hdrp == 0.0,
                 format!(
@@ -226,9 +224,9 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
                     .and_then(|r| r.1.t2_angle_deg_mean_non_tir)
             };
             let (sphere, wyman) = (t2(HDRP_SPHERE), t2(WYMAN));
-            claims[1].rows.push((
+            claims[1].push((
                 name.clone(),
-                matches!((sphere, wyman), (Some(s), Some(w)) if s < 0.5 && s <= w),
+                matches!((sphere, wyman), (Some(s), Some(w)) if s < b3_deg && s <= w),
                 format!(
                     "T2 {}° (`proxy-sphere`, thickness = mean d_N = {:.3}) vs {}° (`wyman`)",
                     value(sphere, 3),
@@ -329,6 +327,6 @@ pub fn section(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<Stri
         md,
         "\n### Claims stated before measuring\n\n| claim | scene | measured | verdict |\n|---|---|---|---|"
     );
-    claim_rows(&mut md, &claims);
+    ledger.rows(&mut md, "Engine glass against the exact reference", &claims);
     Ok(md)
 }
