@@ -317,3 +317,38 @@ fn parameters_are_honoured() {
         assert!(iterations.iter().all(|&n| n <= 3), "K = {seeds}");
     }
 }
+
+/// The iterative lookups' hit rule (issue 30, item 5): a lookup reports a hit when its last
+/// step lands on an occupied texel, converged or not. On `chart`: `ray-plane` (exact on planes
+/// up to the texel) puts at least 97 % of its hits within one NG texel of its own ray's exact
+/// hit, and so do the converged hits of `iterative` and `iterative-seeded` (a texel that
+/// repeats is a fixed point of the distance update); their hits as a whole are printed, since
+/// an unconverged iteration reports its last texel wherever it is (measured: 98.8 % for
+/// `iterative`, 89.5 % for `iterative-seeded` on chart at 128²; `docs/methods.md`). A rule
+/// that accepted any occupied texel, or a stale one, would fail the converged bound.
+#[test]
+fn reported_hits_are_near_the_exact_hit_of_their_own_ray() {
+    let scene = Arc::new(load_scene("chart").expect("chart").scene);
+    let camera = scene.camera(128, 128).expect("camera");
+    let truth = reference(&scene, &camera);
+    for id in [
+        MethodId::RayPlane,
+        MethodId::Iterative,
+        MethodId::IterativeSeeded,
+    ] {
+        let (_, record) = measure(&scene, &camera, &truth, &method(id));
+        let all = record
+            .lookup_hits_within_texel
+            .expect("the lookups report hits");
+        let converged = record.lookup_converged_hits_within_texel;
+        println!(
+            "{id}: {:.1} % of the reported hits within one texel, {:?} of the converged ones (converged share {:?})",
+            100.0 * all,
+            converged,
+            record.converged_share
+        );
+        // Ray-plane reports no convergence: all its hits are its converged ones.
+        let share = converged.unwrap_or(all);
+        assert!(share >= 0.97, "{id}: {share}");
+    }
+}

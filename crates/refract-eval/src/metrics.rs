@@ -97,6 +97,13 @@ pub struct MetricsRecord {
     pub lookup_error_px_p90: Option<f64>,
     /// Share of the pixels whose own ray meets an object where the lookup found none.
     pub lookup_miss_rate: Option<f64>,
+    /// The hit rule checked: of the lookups that report a hit (a lookup ending on an occupied
+    /// texel, converged or not), the share whose `P_geom` lies within one pixel (NG texel:
+    /// both axes) of where the method's own ray exactly meets the objects; a reported hit whose
+    /// own ray meets nothing counts as outside.
+    pub lookup_hits_within_texel: Option<f64>,
+    /// The same share over the converged hits only (the texel repeated).
+    pub lookup_converged_hits_within_texel: Option<f64>,
     /// Mean distance updates of the iterative lookups over the method's refractor pixels.
     pub iterations_mean: Option<f64>,
     /// Share of those pixels whose iteration reached a fixed point.
@@ -349,22 +356,39 @@ pub fn evaluate_nearby(
     record.p_geom_error_px_p90 = percentile(&mut px, 90.0);
     let covered: Vec<usize> = (0..n).filter(|&i| Layers::flag(ours.covered, i)).collect();
     let (mut lookup_px, mut own_hits, mut lookup_misses) = (Vec::new(), 0usize, 0usize);
+    let (mut reported, mut within) = (0usize, 0usize);
+    let (mut converged_hits, mut converged_within) = (0usize, 0usize);
+    let converged = frame.flag(Aov::Converged);
     for &i in &covered {
         let (p2, t2) = (Layers::vector(ours.p2, i), Layers::vector(ours.t2, i));
         if p2.is_nan() || t2.is_nan() || t2 == Vec3::ZERO {
             continue;
         }
-        let Some(exact) = nearest_object_hit(scene, p2, t2) else {
+        let exact = nearest_object_hit(scene, p2, t2);
+        let o = Layers::vector(ours_geom, i);
+        if !o.is_nan() {
+            reported += 1;
+            let near = exact.and_then(|e| Some((pixel(o)?, pixel(e)?)));
+            let close = near.is_some_and(|(a, b)| (a - b).abs().max_element() <= 1.0);
+            within += usize::from(close);
+            if converged.is_some_and(|c| c[i]) {
+                converged_hits += 1;
+                converged_within += usize::from(close);
+            }
+        }
+        let Some(exact) = exact else {
             continue;
         };
         own_hits += 1;
-        let o = Layers::vector(ours_geom, i);
         if o.is_nan() {
             lookup_misses += 1;
         } else if let (Some(a), Some(b)) = (pixel(o), pixel(exact)) {
             lookup_px.push(f64::from((a - b).length()));
         }
     }
+    record.lookup_hits_within_texel = (reported > 0).then(|| within as f64 / reported as f64);
+    record.lookup_converged_hits_within_texel = (converged_hits > 0)
+        .then(|| converged_within as f64 / converged_hits as f64);
     record.lookup_error_px_p50 = percentile(&mut lookup_px, 50.0);
     record.lookup_error_px_p90 = percentile(&mut lookup_px, 90.0);
     record.lookup_miss_rate = (own_hits > 0).then(|| lookup_misses as f64 / own_hits as f64);
