@@ -62,3 +62,27 @@ pub fn render(
         .expect("render");
     frame
 }
+
+/// Built-in scene `name` as a white furnace: its opaque objects removed, a constant white
+/// environment.
+pub fn white_furnace(name: &str) -> Arc<Scene> {
+    let mut scene = refract_eval::load_scene(name).expect("built-in").scene;
+    scene.objects.clear();
+    scene.environment = Environment::Constant(glam::Vec3::ONE);
+    Arc::new(scene)
+}
+
+/// The largest channel value and the mean channel value over the pixels `frame` covers, and
+/// how many channel values there are.
+pub fn covered_radiance(frame: &Frame) -> (f32, f64, usize) {
+    let covered = frame
+        .flag(refract_scene::Aov::Covered)
+        .expect("covered layer");
+    let values: Vec<f32> = (0..frame.pixel_count())
+        .filter(|&i| covered[i])
+        .flat_map(|i| frame.color[i].to_array())
+        .collect();
+    let max = values.iter().copied().fold(0.0f32, f32::max);
+    let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
+    (max, mean, values.len())
+}

@@ -20,7 +20,7 @@ use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
     Aov, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Scene, SceneMesh,
 };
-use refract_tests::scenes::{method, render};
+use refract_tests::scenes::{covered_radiance, method, render, white_furnace};
 use refract_trace::ReferenceRenderer;
 
 fn builtin(name: &str) -> Arc<Scene> {
@@ -598,24 +598,12 @@ fn the_specular_object_and_conductor_objects_are_reflectors() {
 #[test]
 fn a_white_furnace_gains_no_energy() {
     for name in ["convex-mirror", "spectacles"] {
-        let mut s = load_scene(name).expect("scene").scene;
-        s.objects.clear();
-        s.environment = refract_scene::Environment::Constant(glam::Vec3::ONE);
-        let s = Arc::new(s);
+        let s = white_furnace(name);
         let camera = s.camera(64, 64).expect("camera");
         let (_, frame) = pvrr(&s, &camera, &params(&[]));
-        let covered = frame.flag(Aov::Covered).expect("covered");
-        let values: Vec<f32> = (0..frame.pixel_count())
-            .filter(|&i| covered[i])
-            .flat_map(|i| frame.color[i].to_array())
-            .collect();
-        let max = values.iter().copied().fold(0.0f32, f32::max);
-        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
-        println!(
-            "{name}: furnace radiance max {max}, mean {mean} over {} values",
-            values.len()
-        );
-        assert!(values.len() > 300, "{name}: the specular object is seen");
+        let (max, mean, count) = covered_radiance(&frame);
+        println!("{name}: furnace radiance max {max}, mean {mean} over {count} values");
+        assert!(count > 300, "{name}: the specular object is seen");
         assert!(max <= 1.0 + 1e-4, "{name}: energy from nowhere: {max}");
         assert!(mean >= 0.5, "{name}: mean {mean}");
     }

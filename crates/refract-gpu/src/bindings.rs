@@ -52,19 +52,9 @@ pub(crate) fn bind_group(
     layout: &wgpu::BindGroupLayout,
     resources: &[wgpu::BindingResource<'_>],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
-        .iter()
-        .enumerate()
-        .map(|(binding, resource)| wgpu::BindGroupEntry {
-            binding: binding as u32,
-            resource: resource.clone(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout,
-        entries: &entries,
-    })
+    let numbered: Vec<(u32, wgpu::BindingResource<'_>)> =
+        (0..).zip(resources.iter().cloned()).collect();
+    bind_group_at(device, label, layout, &numbered)
 }
 
 /// A bind group of whole buffers and texture views at the given bindings (a layout whose

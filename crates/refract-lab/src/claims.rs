@@ -130,12 +130,6 @@ fn fallback_share(frame: &Frame) -> Option<f64> {
     (!pixels.is_empty()).then(|| n as f64 / pixels.len() as f64)
 }
 
-/// The cow's timings (W10, W12): per alternating round, `wyman`'s and `single`'s median frame
-/// at 1024², colour only.
-struct CowTimes {
-    rounds: Vec<(f64, f64)>,
-}
-
 /// Measures every claim, writes `args.out` (docs/claims.md) and returns its text; scenes left
 /// out for want of `args.data` go to `progress`.
 pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
@@ -182,20 +176,12 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         let (_, second) = measure(&second)?;
         if scene.name == "cow" {
             let camera = scene.camera(1024, 1024)?;
-            let mut frame = Frame::default();
             let configs = [
                 MethodParams::defaults(MethodId::Wyman),
                 MethodParams::defaults(MethodId::Single),
             ];
             let repeats = args.rounds(inventory.claim("W12")?.threshold("repeats")?);
-            let rounds = alternating(repeats, 3, 20, |k| {
-                Ok(cpu
-                    .render(&camera, &configs[k], FrameOutputs::Color, &mut frame)?
-                    .ms)
-            })?;
-            cow_times = Some(CowTimes {
-                rounds: rounds.iter().map(|(a, b)| (a.median, b.median)).collect(),
-            });
+            cow_times = Some(Race::run(&mut cpu, &camera, &configs, repeats, 3, 20)?);
         }
         measured.push(Measured {
             scene: scene.name.clone(),
@@ -314,7 +300,7 @@ fn document(
     ledger: &mut Ledger,
     measured: &[Measured],
     notes: &[String],
-    cow: Option<&CowTimes>,
+    cow: Option<&Race>,
 ) -> crate::Result<String> {
     let t2 = |r: &MetricsRecord| r.t2_angle_deg_mean_non_tir;
     let p2 = |r: &MetricsRecord| r.p2_error_rel_mean_non_tir;
@@ -411,7 +397,7 @@ fn document(
     if let Some(cow) = cow {
         let mut w10 = inventory.claim("W10")?;
         let fps_bar = w10.threshold("fps")?;
-        let fps: Vec<f64> = cow.rounds.iter().map(|(wyman, _)| 1e3 / wyman).collect();
+        let fps: Vec<f64> = cow.medians.iter().map(|(wyman, _)| 1e3 / wyman).collect();
         let (lo, mid, hi) = spread(&fps).unwrap_or_default();
         w10.push((
             "cow, 1024²".into(),
@@ -427,7 +413,7 @@ fn document(
         ));
         let mut w12 = inventory.claim("W12")?;
         let (low, high) = (w12.threshold("low")?, w12.threshold("high")?);
-        let ratios: Vec<f64> = cow.rounds.iter().map(|(w, s)| w / s).collect();
+        let ratios = cow.ratios();
         let (lo, mid, hi) = spread(&ratios).unwrap_or_default();
         w12.push((
             "cow, 1024²".into(),
@@ -473,6 +459,48 @@ fn document(
     );
     ledger.rows(&mut md, heading, &claims);
     Ok(md)
+}
+
+/// Two configurations timed in alternating rounds of colour-only frames on the CPU backend
+/// ([`alternating`]): each round's two median frame times.
+pub(crate) struct Race {
+    pub medians: Vec<(f64, f64)>,
+}
+
+impl Race {
+    /// `rounds` rounds of `frames` frames (after `warm_up`) of `configs[0]`, then `configs[1]`.
+    pub fn run(
+        cpu: &mut CpuRenderer,
+        camera: &Camera,
+        configs: &[MethodParams; 2],
+        rounds: u32,
+        warm_up: u32,
+        frames: u32,
+    ) -> crate::Result<Self> {
+        let mut frame = Frame::default();
+        let times = alternating(rounds, warm_up, frames, |k| {
+            Ok(cpu
+                .render(camera, &configs[k], FrameOutputs::Color, &mut frame)?
+                .ms)
+        })?;
+        Ok(Self {
+            medians: times.iter().map(|(a, b)| (a.median, b.median)).collect(),
+        })
+    }
+
+    /// Per round, the first configuration's time over the second's.
+    pub fn ratios(&self) -> Vec<f64> {
+        self.medians.iter().map(|(a, b)| a / b).collect()
+    }
+
+    /// The mean over the rounds of each configuration's median, in milliseconds.
+    pub fn mean_ms(&self) -> (f64, f64) {
+        let n = self.medians.len().max(1) as f64;
+        (
+            self.medians.iter().map(|m| m.0).sum::<f64>() / n,
+            self.medians.iter().map(|m| m.1).sum::<f64>() / n,
+        )
+    }
 }
 
 /// A share as a percentage.

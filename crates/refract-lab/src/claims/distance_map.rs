@@ -8,13 +8,13 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 
 use refract_eval::load_scene;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceMode};
+use refract_scene::{MethodId, MethodParams, Scene, TraceMode};
 
 use super::inventory::{Inventory, Ledger};
-use super::{Bench, ClaimsArgs, less, value};
+use super::{Bench, ClaimsArgs, Race, less, value};
 use crate::data_scenes;
 use crate::progress::Progress;
-use crate::timing::{alternating, spread};
+use crate::timing::spread;
 
 /// The chapter's setting (§17.4): 800 × 600, 3 layers of 6 × 512², depth 2.
 const CHAPTER_SIZE: (u32, u32) = (800, 600);
@@ -132,26 +132,14 @@ pub fn section(
 
         // Min-max at the chapter's setting (colour-only frames), alternating rounds.
         let camera = t.scene.camera(CHAPTER_SIZE.0, CHAPTER_SIZE.1)?;
-        let mut frame = Frame::default();
         let configs = [
             dm(&[("minmax", "off"), ("res", "512"), ("layers", "3")])?,
             dm(&[("minmax", "on"), ("res", "512"), ("layers", "3")])?,
         ];
-        let rounds = alternating(repeats, 2, 10, |k| {
-            Ok(bench
-                .cpu
-                .render(&camera, &configs[k], FrameOutputs::Color, &mut frame)?
-                .ms)
-        })?;
-        let speedups: Vec<f64> = rounds
-            .iter()
-            .map(|(off, on)| off.median / on.median)
-            .collect();
+        let race = Race::run(&mut bench.cpu, &camera, &configs, repeats, 2, 10)?;
+        let speedups = race.ratios();
         let (lo, mid, hi) = spread(&speedups).unwrap_or_default();
-        let (off_ms, on_ms) = (
-            rounds.iter().map(|r| r.0.median).sum::<f64>() / rounds.len() as f64,
-            rounds.iter().map(|r| r.1.median).sum::<f64>() / rounds.len() as f64,
-        );
+        let (off_ms, on_ms) = race.mean_ms();
         claims[3].push((
             name.clone(),
             args.timing_verdict(

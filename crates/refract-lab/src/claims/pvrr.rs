@@ -17,13 +17,12 @@ use refract_eval::load_scene;
 use refract_geometry::{LensDesc, shapes};
 use refract_scene::pvrr::PvrrPlanner;
 use refract_scene::{
-    Aov, Conductor, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
-    SceneMesh, TraceMode,
+    Aov, Conductor, Frame, MethodId, MethodParams, Refractor, Renderer, Scene, SceneMesh, TraceMode,
 };
 
 use super::inventory::{Inventory, Ledger};
-use super::{Bench, ClaimsArgs, Truth, less, value};
-use crate::timing::{alternating, spread};
+use super::{Bench, ClaimsArgs, Race, Truth, less, value};
+use crate::timing::spread;
 
 fn pvrr(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     let mut params = MethodParams::defaults(MethodId::Pvrr);
@@ -521,27 +520,22 @@ pub fn section(
     let scene = Arc::new(load_scene("spectacles")?.scene);
     let camera = scene.camera(1024, 1024)?;
     bench.cpu.prepare(&scene)?;
-    let mut frame = Frame::default();
     let configs = [
         pvrr(&[("update", "every-frame")])?,
         pvrr(&[("update", "on-change")])?,
     ];
     let stated = k17.threshold("repeats")?;
-    let repeats = args.rounds(stated);
-    let rounds = alternating(repeats, 3, 10, |k| {
-        Ok(bench
-            .cpu
-            .render(&camera, &configs[k], FrameOutputs::Color, &mut frame)?
-            .ms)
-    })?;
-    let speedups: Vec<f64> = rounds
-        .iter()
-        .map(|(every, on_change)| every.median / on_change.median)
-        .collect();
-    let fps = [
-        1e3 * rounds.len() as f64 / rounds.iter().map(|r| r.0.median).sum::<f64>(),
-        1e3 * rounds.len() as f64 / rounds.iter().map(|r| r.1.median).sum::<f64>(),
-    ];
+    let race = Race::run(
+        &mut bench.cpu,
+        &camera,
+        &configs,
+        args.rounds(stated),
+        3,
+        10,
+    )?;
+    let speedups = race.ratios();
+    let (every_ms, on_change_ms) = race.mean_ms();
+    let fps = [1e3 / every_ms, 1e3 / on_change_ms];
     let MethodParams::Pvrr(p) = pvrr(&[])? else {
         crate::bail!("pvrr parameters expected");
     };
