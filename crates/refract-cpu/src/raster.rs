@@ -260,6 +260,10 @@ impl ScreenTriangle {
 /// `(x[i], y)`): the barycentrics lane by lane, the interpolation on eight SIMD lanes with the
 /// same operations in the same order, so each texel has the scalar function's bits.
 fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+    let first = triangles[0];
+    if triangles.iter().all(|t| core::ptr::eq(*t, first)) {
+        return texels_x8_one_triangle(first, x, y);
+    }
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
     let (mut depth, mut inv_w, mut scalar) =
@@ -281,16 +285,71 @@ fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [
         }
     }
     let f = F32x8::new;
-    let (l0, l1, l2) = (f(l[0]), f(l[1]), f(l[2]));
-    let depth = l0 * f(depth[0]) + l1 * f(depth[1]) + l2 * f(depth[2]);
-    let pw = [l0 * f(inv_w[0]), l1 * f(inv_w[1]), l2 * f(inv_w[2])];
+    let v = Vec3x8::from_lanes;
+    interpolate_x8(
+        [f(l[0]), f(l[1]), f(l[2])],
+        &CornersX8 {
+            depth: [f(depth[0]), f(depth[1]), f(depth[2])],
+            inv_w: [f(inv_w[0]), f(inv_w[1]), f(inv_w[2])],
+            scalar: [f(scalar[0]), f(scalar[1]), f(scalar[2])],
+            p: [v(&p[0]), v(&p[1]), v(&p[2])],
+            n: [v(&n[0]), v(&n[1]), v(&n[2])],
+        },
+        source,
+    )
+}
+
+/// [`texels_x8`] where every lane sees the same triangle (most groups of eight, inside a
+/// triangle larger than the group): its corners loaded once and splat, the same operations
+/// per lane, so the same bits.
+fn texels_x8_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+    let mut l = [[0.0f32; LANES]; 3];
+    let [a, b, c] = t.xy;
+    for (i, &x) in x.iter().enumerate() {
+        let q = pixel_center_fixed(x, y);
+        let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+        for k in 0..3 {
+            l[k][i] = li[k];
+        }
+    }
+    let f = F32x8::new;
+    let s = F32x8::splat;
+    let corner = |k: usize| &t.attributes[k];
+    interpolate_x8(
+        [f(l[0]), f(l[1]), f(l[2])],
+        &CornersX8 {
+            depth: t.depth.map(s),
+            inv_w: t.inv_w.map(s),
+            scalar: [0, 1, 2].map(|k| s(corner(k).scalar)),
+            p: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).p_ws)),
+            n: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).n_ws)),
+        },
+        [t.source; LANES],
+    )
+}
+
+/// The corner values of eight lanes' triangles.
+struct CornersX8 {
+    depth: [F32x8; 3],
+    inv_w: [F32x8; 3],
+    scalar: [F32x8; 3],
+    p: [Vec3x8; 3],
+    n: [Vec3x8; 3],
+}
+
+/// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
+/// space, the attributes perspective-correct (`λᵢ/wᵢ` normalised), the normal renormalised.
+#[inline(always)]
+fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> [Texel; LANES] {
+    let [l0, l1, l2] = l;
+    let depth = l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2];
+    let pw = [l0 * c.inv_w[0], l1 * c.inv_w[1], l2 * c.inv_w[2]];
     let inv_sum = F32x8::ONE / (pw[0] + pw[1] + pw[2]);
     let (w0, w1, w2) = (pw[0] * inv_sum, pw[1] * inv_sum, pw[2] * inv_sum);
-    let v = Vec3x8::from_lanes;
-    let p_ws = v(&p[0]) * w0 + v(&p[1]) * w1 + v(&p[2]) * w2;
-    let (n_ws, n_ok) = (v(&n[0]) * w0 + v(&n[1]) * w1 + v(&n[2]) * w2).try_normalize();
+    let p_ws = c.p[0] * w0 + c.p[1] * w1 + c.p[2] * w2;
+    let (n_ws, n_ok) = (c.n[0] * w0 + c.n[1] * w1 + c.n[2] * w2).try_normalize();
     let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
-    let scalar = w0 * f(scalar[0]) + w1 * f(scalar[1]) + w2 * f(scalar[2]);
+    let scalar = w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2];
 
     let (depth, scalar) = (depth.to_array(), scalar.to_array());
     let (p_ws, n_ws) = (p_ws.to_lanes(), n_ws.to_lanes());
