@@ -149,10 +149,9 @@ impl ShadeContext<'_> {
     #[inline]
     fn object(&self, front: &impl FrontRow, x: u32, y: u32) -> Option<NearbyTexel> {
         let object = self.objects?.texel(UVec2::new(x, y))?;
-        let refractor_in_front = front.is_covered(x)
-            && front
-                .texel(x)
-                .is_some_and(|t| view_depth(self.camera, t.p_ws) < object.surface.depth);
+        let refractor_in_front = front
+            .texel(x)
+            .is_some_and(|t| view_depth(self.camera, t.p_ws) < object.surface.depth);
         (!refractor_in_front).then_some(object)
     }
 

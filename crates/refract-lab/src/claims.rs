@@ -72,6 +72,8 @@ impl ClaimsArgs {
 struct Measured {
     scene: String,
     metrics: Vec<(MethodId, MetricsRecord)>,
+    /// The refractor's index.
+    ior: f32,
     /// `wyman` with `back=second` (W6).
     second: MetricsRecord,
     /// The share of `wyman`'s refractor pixels whose N2 is the silhouette fallback (W8).
@@ -185,6 +187,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         }
         measured.push(Measured {
             scene: scene.name.clone(),
+            ior: scene.refractor.ior(),
             metrics,
             second,
             fallback_share: fallback,
@@ -304,7 +307,6 @@ fn document(
 ) -> crate::Result<String> {
     let t2 = |r: &MetricsRecord| r.t2_angle_deg_mean_non_tir;
     let p2 = |r: &MetricsRecord| r.p2_error_rel_mean_non_tir;
-    let mut claims = Vec::new();
     let mut w1 = inventory.claim("W1")?;
     let mut w3 = inventory.claim("W3")?;
     let mut w4 = inventory.claim("W4")?;
@@ -366,10 +368,11 @@ fn document(
             format!(
                 "silhouette fallback on {} of `wyman`'s refractor pixels (IOR {})",
                 pct(m.fallback_share),
-                if m.scene == "cow" { "1.2" } else { "1.5" }
+                m.ior
             ),
         ));
     }
+    let mut claims = vec![w1];
     // W2: d_V alone on the low-index cow against the sphere.
     if let (Some(sphere), Some(cow_m)) = (
         measured.iter().find(|m| m.scene == "sphere"),
@@ -392,7 +395,6 @@ fn document(
         ));
         claims.push(w2);
     }
-    claims.splice(0..0, [w1]);
     claims.extend([w3, w4, w6, w8]);
     if let Some(cow) = cow {
         let mut w10 = inventory.claim("W10")?;

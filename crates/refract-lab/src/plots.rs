@@ -14,6 +14,7 @@ use std::path::Path;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use refract_eval::atomic_write::{write_png_rgb8, write_text_atomically};
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::REGISTRY;
 
@@ -382,12 +383,12 @@ pub fn print_png(svg: &str) -> String {
     }
 }
 
-/// Rasterises the SVG at `svg` into `png` at [`PRINT_DPI`] on white.
-fn write_print_png(svg: &Path, png: &Path) -> crate::Result<()> {
+/// Rasterises the SVG `svg` (the text of the plot `png` is beside) into `png` at
+/// [`PRINT_DPI`] on white.
+fn write_print_png(svg: &str, png: &Path) -> crate::Result<()> {
     let cannot = |what: &str, e: &dyn std::fmt::Display| {
         crate::LabError::invalid(format_args!("{}: cannot {what}: {e}", png.display()))
     };
-    let text = std::fs::read(svg).map_err(|e| cannot("read the SVG", &e))?;
     let mut options = resvg::usvg::Options::default();
     {
         let fonts = options.fontdb_mut();
@@ -395,15 +396,16 @@ fn write_print_png(svg: &Path, png: &Path) -> crate::Result<()> {
         fonts.set_sans_serif_family("Ubuntu");
     }
     options.font_family = "Ubuntu".to_owned();
-    let tree = resvg::usvg::Tree::from_data(&text, &options).map_err(|e| cannot("parse", &e))?;
+    let tree = resvg::usvg::Tree::from_str(svg, &options).map_err(|e| cannot("parse", &e))?;
     let scale = PRINT_DPI / 96.0;
-    let size = tree.size().to_int_size().scale_by(scale).ok_or_else(|| {
-        crate::LabError::invalid(format_args!("{}: an empty plot", svg.display()))
-    })?;
+    let empty = || crate::LabError::invalid(format_args!("{}: an empty plot", png.display()));
+    let size = tree
+        .size()
+        .to_int_size()
+        .scale_by(scale)
+        .ok_or_else(empty)?;
     let mut pixmap =
-        resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| {
-            crate::LabError::invalid(format_args!("{}: an empty plot", svg.display()))
-        })?;
+        resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(empty)?;
     pixmap.fill(resvg::tiny_skia::Color::WHITE);
     resvg::render(
         &tree,
@@ -416,39 +418,34 @@ fn write_print_png(svg: &Path, png: &Path) -> crate::Result<()> {
         .chunks_exact(4)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    image::save_buffer(
-        png,
-        &rgb,
-        size.width(),
-        size.height(),
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| cannot("write", &e))
+    write_png_rgb8(png, size.width(), size.height(), &rgb).map_err(|e| cannot("write", &e))
 }
 
 /// An SVG of `size` at `path` (a white page `draw` draws on) and its print PNG beside it
-/// ([`print_png`]); a drawing error names the file.
+/// ([`print_png`]), both written atomically; a drawing error names the file.
 fn draw_svg(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<(), Box<dyn std::error::Error>>,
 ) -> crate::Result<()> {
-    let root = SVGBackend::new(path, size).into_drawing_area();
-    let drawn = (|| -> Result<(), Box<dyn std::error::Error>> {
-        root.fill(&WHITE)?;
-        draw(&root)?;
-        root.present()?;
-        Ok(())
-    })();
-    drawn.map_err(|e| {
-        crate::LabError::invalid(format_args!(
-            "{}: cannot draw the plot: {e}",
-            path.display()
-        ))
-    })?;
-    drop(root);
-    let png = path.with_extension("png");
-    write_print_png(path, &png)
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        let drawn = (|| -> Result<(), Box<dyn std::error::Error>> {
+            root.fill(&WHITE)?;
+            draw(&root)?;
+            root.present()?;
+            Ok(())
+        })();
+        drawn.map_err(|e| {
+            crate::LabError::invalid(format_args!(
+                "{}: cannot draw the plot: {e}",
+                path.display()
+            ))
+        })?;
+    }
+    write_text_atomically(path, &svg)?;
+    write_print_png(&svg, &path.with_extension("png"))
 }
 
 /// Error against frame time, one panel per scene (each with its own axes: scenes differ by

@@ -79,6 +79,22 @@ mod tests {
             }
         );
     }
+
+    /// Rounds alternate the two configurations, each timed after its own warm-up.
+    #[test]
+    fn rounds_alternate_the_configurations() {
+        let mut order = Vec::new();
+        let rounds = alternating(2, 1, 2, |k| {
+            order.push(k);
+            Ok(10.0 * (k as f64 + 1.0))
+        })
+        .expect("rounds");
+        assert_eq!(order, [0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 1, 1]);
+        assert_eq!(rounds.len(), 2);
+        assert_eq!((rounds[0].0.median, rounds[0].1.median), (10.0, 20.0));
+        assert_eq!(spread(&[3.0, 1.0, 2.0]), Some((1.0, 2.0, 3.0)));
+        assert_eq!(spread(&[]), None);
+    }
 }
 
 /// The CPU the timings ran on, read from the system, not typed: its model (from
@@ -104,8 +120,6 @@ pub fn cpu_description() -> String {
 
 #[cfg(test)]
 mod machine_tests {
-    use super::{alternating, spread};
-
     /// The description names the thread count rayon really uses.
     #[test]
     fn the_cpu_description_is_measured() {
@@ -116,21 +130,5 @@ mod machine_tests {
             "{text}"
         );
         assert!(!text.starts_with(','), "{text}");
-    }
-
-    /// Rounds alternate the two configurations, each timed after its own warm-up.
-    #[test]
-    fn rounds_alternate_the_configurations() {
-        let mut order = Vec::new();
-        let rounds = alternating(2, 1, 2, |k| {
-            order.push(k);
-            Ok(10.0 * (k as f64 + 1.0))
-        })
-        .expect("rounds");
-        assert_eq!(order, [0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 1, 1]);
-        assert_eq!(rounds.len(), 2);
-        assert_eq!((rounds[0].0.median, rounds[0].1.median), (10.0, 20.0));
-        assert_eq!(spread(&[3.0, 1.0, 2.0]), Some((1.0, 2.0, 3.0)));
-        assert_eq!(spread(&[]), None);
     }
 }

@@ -4,9 +4,8 @@
 //! refractor's front faces (no back faces), then `shade_engine` of `shaders/engine.wgsl` as a
 //! compute pass, one pipeline per method (`ENGINE_MODEL` fixed per pipeline).
 
-use glam::{UVec2, Vec3};
+use glam::Vec3;
 use refract_core::engine::EngineUniforms;
-use refract_core::nearby_geometry::NearbyLookup;
 use refract_scene::{
     Aov, EngineParams, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, RenderError,
 };
@@ -183,13 +182,7 @@ impl EngineTargets {
             ior,
             refract_core::TirPolicy::default(),
         );
-        let screen = NearbyFrame {
-            ng_camera: camera,
-            pad: UVec2::ZERO,
-            planes: &[],
-            lookup: NearbyLookup::KayGreenberg,
-            light: cx.scene.light,
-        };
+        let screen = NearbyFrame::eye(camera, cx.scene.light);
         context.queue.write_buffer(
             &self.nearby_uniforms,
             0,

@@ -192,6 +192,20 @@ pub(crate) struct NearbyFrame<'a> {
     pub light: DirectionalLight,
 }
 
+impl<'a> NearbyFrame<'a> {
+    /// The objects seen from the eye itself, pixel for pixel (no guard band, no lookup): the
+    /// engine family's screen texture and the objects the image-space family draws.
+    pub(crate) fn eye(camera: &'a Camera, light: DirectionalLight) -> Self {
+        Self {
+            ng_camera: camera,
+            pad: UVec2::ZERO,
+            planes: &[],
+            lookup: NearbyLookup::KayGreenberg,
+            light,
+        }
+    }
+}
+
 /// The targets of nearby-geometry frames at one frame and NG resolution.
 pub(crate) struct NearbyTargets {
     size: (u32, u32, u32, u32),

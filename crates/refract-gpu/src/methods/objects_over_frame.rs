@@ -4,9 +4,7 @@
 //! pixel whose nearest surface is an object. Scenes without objects skip both. The twin of the
 //! CPU backend's `ShadeContext::object`.
 
-use glam::UVec2;
 use refract_core::gpu::{FrameUniforms, NearbyUniforms};
-use refract_core::nearby_geometry::NearbyLookup;
 use refract_scene::FrameOutputs;
 
 use crate::bindings::{bind_group_at, storage_entry, texture_entry, uniform_entry};
@@ -130,13 +128,7 @@ impl ObjectTargets {
         uniforms: &FrameUniforms,
         encoder: &mut wgpu::CommandEncoder,
     ) {
-        let eye = NearbyFrame {
-            ng_camera: cx.camera,
-            pad: UVec2::ZERO,
-            planes: &[],
-            lookup: NearbyLookup::KayGreenberg,
-            light: cx.scene.light,
-        };
+        let eye = NearbyFrame::eye(cx.camera, cx.scene.light);
         cx.context.queue.write_buffer(
             &self.uniforms,
             0,

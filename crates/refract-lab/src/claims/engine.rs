@@ -82,7 +82,7 @@ fn engine_params(id: MethodId) -> Option<refract_scene::EngineParams> {
 }
 
 fn pct(v: f64) -> String {
-    format!("{:.1} %", 100.0 * v)
+    super::pct(Some(v))
 }
 
 /// The failure shares of an engine frame against the reference, over the reference's refractor
