@@ -12,7 +12,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use refract_core::Camera;
 use refract_core::optics::{face_forward_shading_normal, reflect};
-use refract_core::pvrr::{MapTexels, STATE_MAPPED, sample_bilinear};
+use refract_core::pvrr::{STATE_MAPPED, sample_bilinear};
 use refract_cpu::pvrr::PvrrPasses;
 use refract_cpu::{CpuFamily, FrameCx};
 use refract_eval::{load_scene, load_scene_str};
@@ -437,14 +437,44 @@ fn a_fixed_eye_keeps_the_per_vertex_work() {
     }
 }
 
-/// The registry's parameters reach the plan: the map's longer side is `res`.
+/// The longer side of the first map of a `size²` frame of `scene` with `settings`.
+fn map_side(scene: &Scene, size: u32, settings: &[(&str, &str)]) -> u32 {
+    let camera = scene.camera(size, size).expect("camera");
+    let mut planner = PvrrPlanner::default();
+    let plan = planner
+        .plan(scene, &camera, &params(settings))
+        .expect("plan");
+    let map = &plan.views.get(1).expect("a map").camera;
+    map.width().max(map.height())
+}
+
+/// The registry's parameters reach the plan: under `sizing=fixed` the map's longer side is
+/// `res` whatever the frame.
 #[test]
 fn the_map_resolution_is_the_parameter() {
     let scene = builtin("convex-mirror");
-    let camera = scene.camera(32, 32).expect("camera");
-    let (passes, _) = pvrr(&scene, &camera, &params(&[("res", "200")]));
-    let map = passes.map(1).expect("a map");
-    assert_eq!(map.size().0.max(map.size().1), 200);
+    for size in [32, 128] {
+        let side = map_side(&scene, size, &[("res", "200"), ("sizing", "fixed")]);
+        assert_eq!(side, 200, "{size}²");
+    }
+}
+
+/// Under `sizing=footprint` (the default) the map follows the mirror's footprint: 8 texels per
+/// pixel of the frame it is seen in (the mirror covers about 44 % of the default view's
+/// width), so twice the frame gives twice the map, and `res` caps it.
+#[test]
+fn the_map_follows_the_reflector_footprint() {
+    let scene = builtin("convex-mirror");
+    let small = map_side(&scene, 32, &[]);
+    let large = map_side(&scene, 64, &[]);
+    assert!((8 * 8..=8 * 32).contains(&small), "{small}");
+    assert!(
+        large.abs_diff(2 * small) <= 16,
+        "32²: {small} texels, 64²: {large} texels"
+    );
+    assert_eq!(map_side(&scene, 64, &[("res", "100")]), 100);
+    // At 1024² the footprint asks for more than the default cap: the paper's 1024 texels.
+    assert_eq!(map_side(&scene, 1024, &[]), 1024);
 }
 
 /// The exact ray through the lens of vertex `v` seen from `eye`, independently of the plan:

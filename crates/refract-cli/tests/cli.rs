@@ -495,7 +495,7 @@ fn claims_are_measured_and_written() {
     };
     assert_eq!(
         (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
-        (13, 16, 14, 21, 3)
+        (13, 16, 14, 21, 4)
     );
     // One timing round of the five U12 states: inconclusive, whatever the speed-up.
     assert!(

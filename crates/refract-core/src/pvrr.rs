@@ -334,6 +334,43 @@ pub fn texcoord(volume: &ViewVolume, end: RayEnd) -> Option<Vec2> {
     inside.then_some(px)
 }
 
+/// The texels of a map's longer side chosen from its reflector's screen footprint (issue 33:
+/// a map needs about as many texels as the pixels that look it up, not a fixed 1024). The
+/// footprint is the longer side, in pixels, of the bounding rectangle of `points` (the
+/// reflector's vertices) projected by `view` (the view that draws the reflector: the eye, or
+/// for a stack the parent map's camera), clipped to `view`'s image; the result is
+/// `ceil(footprint · texels_per_pixel)` kept within `range` (inclusive). A point behind `view`'s
+/// eye makes the footprint the whole image (the projection of the rest says nothing then).
+pub fn footprint_resolution(
+    view: &Camera,
+    points: &[Vec3],
+    texels_per_pixel: f32,
+    range: (u32, u32),
+) -> u32 {
+    let size = Vec2::new(view.width() as f32, view.height() as f32);
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for &p in points {
+        match view.world_to_pixel(p) {
+            Some(px) => {
+                lo = lo.min(px.truncate());
+                hi = hi.max(px.truncate());
+            }
+            None => {
+                lo = Vec2::ZERO;
+                hi = size;
+                break;
+            }
+        }
+    }
+    let extent = (hi.min(size) - lo.max(Vec2::ZERO)).max(Vec2::ZERO);
+    let footprint = extent.x.max(extent.y);
+    let texels = -crate::math::floor(-(footprint * texels_per_pixel));
+    if texels.is_nan() {
+        return range.1;
+    }
+    (texels.min(range.1 as f32) as u32).clamp(range.0, range.1)
+}
+
 /// A rendered map's texels.
 pub trait MapTexels {
     /// Width and height in texels.
@@ -416,6 +453,45 @@ impl PvrrVertex {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn eye_camera(size: u32) -> Camera {
+        Camera::new(CameraDesc {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: core::f32::consts::FRAC_PI_2,
+            near: 0.1,
+            far: 100.0,
+            width: size,
+            height: size,
+            mirror_x: false,
+        })
+        .expect("camera")
+    }
+
+    #[test]
+    fn footprint_resolution_is_the_projected_extent_times_the_density() {
+        let view = eye_camera(1000);
+        // A square of side 1 at distance 5 under a 90° field of view: 1/(2·5·tan 45°) = 1/10
+        // of the image, 100 pixels.
+        let square =
+            [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)].map(|(x, y)| Vec3::new(x, y, 0.0));
+        let one = footprint_resolution(&view, &square, 1.0, (16, 4096));
+        assert!((99..=101).contains(&one), "{one}");
+        let two = footprint_resolution(&view, &square, 2.0, (16, 4096));
+        assert!((199..=201).contains(&two), "{two}");
+        // Clamped to the range.
+        assert_eq!(footprint_resolution(&view, &square, 1.0, (128, 4096)), 128);
+        assert_eq!(footprint_resolution(&view, &square, 1.0, (16, 64)), 64);
+        // Clipped to the image: a huge square covers 1000 pixels, not more.
+        let huge = square.map(|p| p * 100.0);
+        assert_eq!(footprint_resolution(&view, &huge, 1.0, (16, 4096)), 1000);
+        // A point behind the eye: the whole image.
+        let behind = [Vec3::ZERO, Vec3::new(0.0, 0.0, 10.0)];
+        assert_eq!(footprint_resolution(&view, &behind, 1.0, (16, 4096)), 1000);
+        // Nothing projected: the smallest map.
+        assert_eq!(footprint_resolution(&view, &[], 1.0, (16, 4096)), 16);
+    }
 
     fn ray(origin: Vec3, dir: Vec3, end: RayEnd) -> VertexRay {
         VertexRay {

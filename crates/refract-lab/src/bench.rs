@@ -334,8 +334,9 @@ const PVRR_PAPER: [PvrrCase; 5] = [
     ),
 ];
 
-/// Runs the pvrr table: every row of [`PVRR_PAPER`] at 1024² with 1024-texel maps
-/// (`--quick`: 128², 128-texel maps, 3 frames), every backend, colour only.
+/// Runs the pvrr table: every row of [`PVRR_PAPER`] at 1024², with maps sized from the
+/// footprint (at most 1024 texels) and with fixed 1024-texel maps (`--quick`: 128², at most
+/// 128 texels, 3 frames), every backend, colour only.
 fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     let (res, map, frames) = if args.quick {
         (128, 128, 3)
@@ -353,46 +354,52 @@ fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> 
         let scene = Arc::new(refract_eval::load_scene(name)?.scene);
         let triangles = triangles(&scene);
         let camera = scene.camera(res, res)?;
-        let mut method = MethodParams::defaults(MethodId::Pvrr);
-        method.set("res", &map.to_string(), "bench")?;
-        for (k, v) in settings {
-            method.set(k, v, "bench")?;
-        }
-        let p = PvrrParams::try_from(method)
-            .map_err(|other| crate::LabError::invalid(format_args!("not pvrr: {}", other.id())))?;
-        let mut planner = refract_scene::pvrr::PvrrPlanner::default();
-        planner.prepare(&scene);
-        let plan = planner.plan(&scene, &camera, &p)?;
-        let (rays, views) = (plan.rays(), plan.views.len());
-        for renderer in &mut renderers {
-            renderer.prepare(&scene)?;
-            let mut record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
-                .record(&scene.name, triangles);
-            record.method = format!("pvrr {}", method.describe());
-            progress.note(Note::Row(format!(
-                "{label:<44} {:<4} {res}² {:>9.2} ms {:>7.1} fps ({rays} rays, {views} views)",
-                record.backend, record.ms_median, record.fps
-            )));
-            rows.push((label, rays, views, paper, record.clone()));
-            records.push(record);
+        for sizing in ["footprint", "fixed"] {
+            let mut method = MethodParams::defaults(MethodId::Pvrr);
+            method.set("res", &map.to_string(), "bench")?;
+            method.set("sizing", sizing, "bench")?;
+            for (k, v) in settings {
+                method.set(k, v, "bench")?;
+            }
+            let p = PvrrParams::try_from(method).map_err(|other| {
+                crate::LabError::invalid(format_args!("not pvrr: {}", other.id()))
+            })?;
+            let mut planner = refract_scene::pvrr::PvrrPlanner::default();
+            planner.prepare(&scene);
+            let plan = planner.plan(&scene, &camera, &p)?;
+            let rays = plan.rays();
+            let maps = map_sizes(plan);
+            for renderer in &mut renderers {
+                renderer.prepare(&scene)?;
+                let mut record = timed(renderer.as_mut(), &camera, &method, frames, &mut frame)?
+                    .record(&scene.name, triangles);
+                record.method = format!("pvrr {}", method.describe());
+                progress.note(Note::Row(format!(
+                    "{label:<44} {sizing:<9} {:<4} {res}² {:>9.2} ms {:>7.1} fps ({rays} rays, maps {maps})",
+                    record.backend, record.ms_median, record.fps
+                )));
+                rows.push((label, sizing, rays, maps.clone(), paper, record.clone()));
+                records.push(record);
+            }
         }
     }
     let json = serde_json::to_string_pretty(&records).context("serialising bench records")?;
     write(&args.out.join("bench-pvrr.json"), &json)?;
     let mut md = format!(
-        "# Kakimoto et al. 2007, §5\n\n`pvrr` at {res}², maps of {map} texels on the longer \
-         side, colour only, median of {frames} frames after 3 warm-up frames; the per-vertex rays \
-         are traced with the CPU BVH on both backends (the GPU row adds that time to its \
-         timestamps). Paper: GeForce 8800 Ultra and a 2.66 GHz Core 2 Quad; its scenes had \
-         10,000 polygons (reflection) and a 2,000-triangle lens in 5,000 triangles.\n\n\
-         | case | scene | triangles | ray vertices | views | backend | ms | fps | paper fps | ours / paper |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n"
+        "# Kakimoto et al. 2007, §5\n\n`pvrr` at {res}², maps sized from the reflector's \
+         footprint (`sizing=footprint`, the default, at most {map} texels) and at the fixed {map} \
+         texels (`sizing=fixed`), colour only, median of {frames} frames after 3 warm-up frames; \
+         the per-vertex rays are traced with the CPU BVH on both backends (the GPU row adds that \
+         time to its timestamps). Paper: GeForce 8800 Ultra and a 2.66 GHz Core 2 Quad; its \
+         scenes had 10,000 polygons (reflection) and a 2,000-triangle lens in 5,000 \
+         triangles.\n\n\
+         | case | scene | triangles | ray vertices | sizing | maps (texels) | backend | ms | fps | paper fps | ours / paper |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n"
     );
-
-    for (label, rays, views, (lo, hi), r) in &rows {
+    for (label, sizing, rays, maps, (lo, hi), r) in &rows {
         let _ = writeln!(
             md,
-            "| {label} | {} | {} | {rays} | {views} | {} | {:.1} | {:.1} | {lo}–{hi} | {:.2}× |",
+            "| {label} | {} | {} | {rays} | {sizing} | {maps} | {} | {:.1} | {:.1} | {lo}–{hi} | {:.2}× |",
             r.scene,
             r.triangles,
             r.backend,
@@ -403,6 +410,19 @@ fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> 
     }
     write(&args.out.join("bench-pvrr.md"), &md)?;
     Ok(md)
+}
+
+/// The map sizes of `plan` (views 1..), `w×h` each, comma-separated; `-` without maps.
+fn map_sizes(plan: &refract_scene::pvrr::PvrrPlan) -> String {
+    let sizes: Vec<String> = plan.views[1..]
+        .iter()
+        .map(|v| format!("{}×{}", v.camera.width(), v.camera.height()))
+        .collect();
+    if sizes.is_empty() {
+        "-".to_owned()
+    } else {
+        sizes.join(", ")
+    }
 }
 
 /// The engine methods (which skip the back-face pass) beside `wyman` on the sphere and the cow

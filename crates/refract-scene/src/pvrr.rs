@@ -17,12 +17,12 @@ use rayon::prelude::*;
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::pvrr::{
     MAX_INTERNAL_BOUNCES, PvrrVertex, RayEnd, STATE_DEPTH, STATE_TRAPPED, STATE_ZOOM, SceneBounds,
-    VertexRay, ViewVolume, mean_direction, parallel_viewpoint, texcoord, view_volume,
-    virtual_viewpoint,
+    VertexRay, ViewVolume, footprint_resolution, mean_direction, parallel_viewpoint, texcoord,
+    view_volume, virtual_viewpoint,
 };
 use refract_core::{Camera, CameraDesc, Ray};
 
-use crate::registry::PvrrParams;
+use crate::registry::{FOOTPRINT_TEXELS_PER_PIXEL, MapSizing, PVRR_RESOLUTION, PvrrParams};
 use crate::{RenderError, Scene, SceneMesh};
 
 /// What a reflector does to the rays that meet it.
@@ -237,7 +237,7 @@ pub fn build_plan(
                 });
                 continue;
             }
-            let Some(map) = context.map_of(reflector, eye_camera.eye()) else {
+            let Some(map) = context.map_of(reflector, &eye_camera) else {
                 draws.push(PvrrDraw {
                     reflector: index,
                     map: None,
@@ -342,8 +342,10 @@ impl Context<'_> {
         }
     }
 
-    /// The map of `reflector` seen from `eye`, `None` when no ray ends inside any map.
-    fn map_of(&self, reflector: &Reflector, eye: Vec3) -> Option<MapPlan> {
+    /// The map of `reflector` seen by `view` (the eye, or the map that draws it), `None` when
+    /// no ray ends inside any map.
+    fn map_of(&self, reflector: &Reflector, view: &Camera) -> Option<MapPlan> {
+        let eye = view.eye();
         let mesh = self.scene.mesh(reflector.mesh)?;
         let iors = match reflector.kind {
             ReflectorKind::Mirror { .. } => [1.0; 3],
@@ -399,15 +401,16 @@ impl Context<'_> {
             .filter(|&i| issuing[i])
             .map(|i| mesh.positions[i])
             .collect();
-        let volume = view_volume(
-            c,
-            direction,
-            &issued,
-            &ends,
-            self.bounds,
-            self.params.resolution,
-        )
-        .ok()?;
+        let resolution = match self.params.sizing {
+            MapSizing::Fixed => self.params.resolution,
+            MapSizing::Footprint => footprint_resolution(
+                view,
+                &issued,
+                FOOTPRINT_TEXELS_PER_PIXEL,
+                (PVRR_RESOLUTION.0, self.params.resolution),
+            ),
+        };
+        let volume = view_volume(c, direction, &issued, &ends, self.bounds, resolution).ok()?;
         let vertices = rays
             .iter()
             .map(|r| {

@@ -29,7 +29,10 @@ pub use engine::{
 };
 pub use image_space::{ImageSpaceMethod, TwoInterfaceParams};
 pub use nearby_geometry::{MAX_GUARD_BAND_PERCENT, NearbyParams, seed_spacing};
-pub use pvrr::{MAX_PVRR_DEPTH, MAX_PVRR_DISPERSION, PVRR_RESOLUTION, PvrrParams};
+pub use pvrr::{
+    FOOTPRINT_TEXELS_PER_PIXEL, MAX_PVRR_DEPTH, MAX_PVRR_DISPERSION, MapSizing, PVRR_RESOLUTION,
+    PvrrParams,
+};
 pub use reference::{InterfaceRule, TraceMode, TraceSettings};
 
 /// Every method, by its design.md id.

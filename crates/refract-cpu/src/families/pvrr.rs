@@ -11,6 +11,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
+use refract_core::lanes::{LANES, Vec2x8};
 use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
 use refract_scene::{
@@ -19,7 +20,8 @@ use refract_scene::{
 
 use crate::distance_map::surface_material;
 use crate::family::{CpuFamily, FrameCx};
-use crate::raster::{DepthTest, Faces, SurfaceBuffer, rasterize_into};
+use crate::pixel_group::PixelGroup;
+use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, rasterize_into};
 use crate::scene_meshes::SceneMeshes;
 
 /// A rendered view's radiance, row-major from the top.
@@ -211,7 +213,6 @@ impl ChildMaps<'_> {
     }
 }
 
-/// Renders `view` into `out` (one radiance per pixel) and, for the eye, its AOVs.
 /// One view of a frame's plan and what it is drawn with.
 #[derive(Clone, Copy)]
 struct ViewPass<'a> {
@@ -224,32 +225,129 @@ struct ViewPass<'a> {
     children: &'a ChildMaps<'a>,
 }
 
+/// Renders `pass`'s view into `out` (one radiance per pixel) and, for the eye, its AOVs.
 fn render_view(
     pass: &ViewPass<'_>,
     buffer: &mut SurfaceBuffer,
     out: &mut [Vec3],
     aovs: Option<&mut [PvrrAov]>,
 ) {
-    let ViewPass {
-        scene,
-        plan,
-        view,
-        meshes,
-        children,
-    } = *pass;
-    let camera = &view.camera;
-    let raster = meshes.raster();
+    let camera = &pass.view.camera;
+    let raster = pass.meshes.raster();
     rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);
-    let width = camera.width();
-    let buffer = &*buffer;
-    let shade = |i: usize| -> (Vec3, PvrrAov) {
-        let (x, y) = (i as u32 % width, i as u32 / width);
-        let Some(t) = buffer.texel(i) else {
-            let dir = camera.pixel_ray(Camera::pixel_center(x, y)).dir;
-            return (scene.environment.radiance(dir), PvrrAov::default());
-        };
+    let width = camera.width() as usize;
+    let rows = ViewRows {
+        pass,
+        raster: &raster,
+        buffer,
+    };
+    match aovs {
+        Some(aovs) => out
+            .par_chunks_mut(width)
+            .zip(aovs.par_chunks_mut(width))
+            .enumerate()
+            .for_each(|(y, (colors, aovs))| rows.row(y as u32, colors, Some(aovs))),
+        None => out
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, colors)| rows.row(y as u32, colors, None)),
+    }
+}
+
+/// One rasterised view, shaded row by row: the pixels that see the environment and those that
+/// see a surface each gathered eight at a time (camera rays and sky on lanes, texels resolved
+/// on lanes: [`SurfaceBuffer::texels_x8`], the scalar resolve's bits), the surfaces then shaded
+/// one by one.
+struct ViewRows<'a> {
+    pass: &'a ViewPass<'a>,
+    raster: &'a RasterMesh<'a>,
+    buffer: &'a SurfaceBuffer,
+}
+
+impl ViewRows<'_> {
+    fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [PvrrAov]>) {
+        let mut surface = PixelGroup::new();
+        let mut background = PixelGroup::new();
+        let row = (y as usize) * colors.len();
+        for x in 0..colors.len() as u32 {
+            if self.buffer.is_covered(row + x as usize) {
+                if surface.push(x) {
+                    self.surfaces(&surface, y, colors, aovs.as_deref_mut());
+                    surface.len = 0;
+                }
+            } else if background.push(x) {
+                self.background(&background, y, colors, aovs.as_deref_mut());
+                background.len = 0;
+            }
+        }
+        if surface.len > 0 {
+            surface.pad();
+            self.surfaces(&surface, y, colors, aovs.as_deref_mut());
+        }
+        if background.len > 0 {
+            background.pad();
+            self.background(&background, y, colors, aovs);
+        }
+    }
+
+    /// Eight pixels that see the environment.
+    fn background(
+        &self,
+        group: &PixelGroup,
+        y: u32,
+        colors: &mut [Vec3],
+        aovs: Option<&mut [PvrrAov]>,
+    ) {
+        let mut uv = [Vec2::ZERO; LANES];
+        for (uv, &x) in uv.iter_mut().zip(&group.x) {
+            *uv = Camera::pixel_center(x, y);
+        }
+        let dirs = self
+            .pass
+            .view
+            .camera
+            .pixel_ray_dir_x8(Vec2x8::from_lanes(&uv));
+        let radiance = self.pass.scene.environment.radiance_x8(dirs).to_lanes();
+        for (&x, &color) in group.x.iter().zip(&radiance).take(group.len) {
+            colors[x as usize] = color;
+        }
+        if let Some(aovs) = aovs {
+            for &x in group.x.iter().take(group.len) {
+                aovs[x as usize] = PvrrAov::default();
+            }
+        }
+    }
+
+    /// Eight pixels that see a surface.
+    fn surfaces(
+        &self,
+        group: &PixelGroup,
+        y: u32,
+        colors: &mut [Vec3],
+        mut aovs: Option<&mut [PvrrAov]>,
+    ) {
+        let texels = self.buffer.texels_x8(&group.x, y);
+        for (&x, t) in group.x.iter().zip(&texels).take(group.len) {
+            let (color, aov) = self.surface(t);
+            colors[x as usize] = color;
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[x as usize] = aov;
+            }
+        }
+    }
+
+    /// The colour of a surface texel: a diffuse object shaded, or a reflector's map looked up
+    /// at its vertices' interpolated coordinates (black where they are not all mapped).
+    fn surface(&self, t: &Texel) -> (Vec3, PvrrAov) {
+        let ViewPass {
+            scene,
+            plan,
+            view,
+            meshes,
+            children,
+        } = *self.pass;
         let (mesh, triangle) = meshes.source(t.triangle);
-        let w = raster.barycentrics(&t);
+        let w = self.raster.barycentrics(t);
         let Some(draw) = view
             .draws
             .iter()
@@ -280,7 +378,7 @@ fn render_view(
         });
         let tint = match plan.reflectors[draw.reflector].kind {
             ReflectorKind::Mirror { f0 } => {
-                mirror_tint(f0, t.n_ws, (t.p_ws - camera.eye()).normalize())
+                mirror_tint(f0, t.n_ws, (t.p_ws - view.camera.eye()).normalize())
             }
             ReflectorKind::Lens { .. } => Vec3::ONE,
         };
@@ -291,16 +389,5 @@ fn render_view(
                 zoom: false,
             },
         )
-    };
-    match aovs {
-        Some(aovs) => out
-            .par_iter_mut()
-            .zip(aovs.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, (c, a))| (*c, *a) = shade(i)),
-        None => out
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(i, c)| *c = shade(i).0),
     }
 }

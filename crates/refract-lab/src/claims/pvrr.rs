@@ -233,6 +233,12 @@ fn zooming_region_as_stated(shares: &[(f32, f64)]) -> bool {
 }
 
 /// Mean absolute colour difference over `pixels`.
+/// B4: the footprint-sized maps' FLIP is at most `1 + rise` times the fixed maps' (both
+/// measured).
+fn footprint_within(footprint: Option<f64>, fixed: Option<f64>, rise: f64) -> bool {
+    matches!((footprint, fixed), (Some(a), Some(b)) if a <= (1.0 + rise) * b)
+}
+
 fn mean_abs(a: &Frame, b: &Frame, pixels: impl Iterator<Item = usize>) -> Option<f64> {
     let (sum, n) = pixels.fold((0.0, 0usize), |(s, n), i| {
         (
@@ -261,6 +267,7 @@ pub fn section(
         inventory.claim("K15")?,
         inventory.claim("K17")?,
     );
+    let mut b4 = inventory.claim("B4")?;
 
     // Exactness and occlusion on the built-in convex mirror and its tessellation series.
     let mut series = Vec::new();
@@ -352,6 +359,17 @@ pub fn section(
             TraceMode::Transmission,
         )?;
         let (_, ours) = bench.measure(&truth, &pvrr(&[("depth", "4")])?)?;
+        let (_, fixed) = bench.measure(&truth, &pvrr(&[("depth", "4"), ("sizing", "fixed")])?)?;
+        let rise = b4.threshold("rise")?;
+        b4.push((
+            name.into(),
+            footprint_within(flip(&ours), flip(&fixed), rise),
+            format!(
+                "FLIP {} (footprint) vs {} (fixed 1024)",
+                value(flip(&ours), 5),
+                value(flip(&fixed), 5)
+            ),
+        ));
         let mut dm4 = MethodParams::defaults(MethodId::DistanceMap);
         dm4.set("depth", "4", "claims")?;
         let (_, dm) = bench.measure(&truth, &dm4)?;
@@ -563,7 +581,7 @@ pub fn section(
             1e3 / fps[0]
         ),
     ));
-    let claims = [k1, k2, k7, k4, k9, k8, k15, k17];
+    let claims = [k1, k2, k7, k4, k9, k8, k15, k17, b4];
 
     let mut md = String::new();
     let heading = "Kakimoto et al. 2007, per-vertex reflection and refraction";
@@ -571,7 +589,7 @@ pub fn section(
         md,
         "\n## {heading}\n\n\
          `pvrr` on the CPU backend against the reference (`transmission`, depth 8) at {res}², \
-         maps of 1024 texels on the longer side; FLIP over the specular object's pixels. The \
+         maps sized from each reflector's footprint (the default, at most 1024 texels); FLIP over the specular object's pixels. The \
          bench table (`refract bench --table pvrr`) holds the frame rates against §5.\n\n\
          | claim | scene | measured | verdict |\n|---|---|---|---|"
     );
@@ -641,6 +659,14 @@ mod tests {
 
     /// K1 fails where the image at a vertex differs from the reference by more than the
     /// reference varies around it, and holds within that variation.
+    #[test]
+    fn footprint_verdict_can_fail() {
+        assert!(footprint_within(Some(0.102), Some(0.1), 0.02));
+        assert!(!footprint_within(Some(0.103), Some(0.1), 0.02));
+        assert!(!footprint_within(None, Some(0.1), 0.02));
+        assert!(!footprint_within(Some(0.1), None, 0.02));
+    }
+
     #[test]
     fn vertex_verdict_can_fail() {
         let flat = [Vec3::splat(0.5); 8];

@@ -14,8 +14,33 @@ pub const MAX_PVRR_DEPTH: u32 = 4;
 /// The largest index step between channels of `pvrr` (`dispersion`, in thousandths).
 pub const MAX_PVRR_DISPERSION: u32 = 100;
 
+/// Map texels per pixel of the reflector's footprint under `sizing=footprint`
+/// ([`refract_core::pvrr::footprint_resolution`]): the smallest of 1, 2, 4 and 8 whose error
+/// against the reference stays within 2 % relative FLIP of the fixed 1024-texel maps on every
+/// scene of `pvrr`'s claims (`docs/claims.md`, B4). The reference samples each pixel at one
+/// point; a bilinear lookup blurs over a texel, so the maps must be much finer than the pixels
+/// (at 256², convex mirror: FLIP 0.0707, 0.0542, 0.0453, 0.0430 at 1, 2, 4, 8 against 0.0427
+/// with 1024 texels; `docs/performance.md`).
+pub const FOOTPRINT_TEXELS_PER_PIXEL: f32 = 8.0;
+
 const UPDATE_TABLE: [(&str, bool); 2] = [("every-frame", false), ("on-change", true)];
 const UPDATE_CHOICES: [&str; 2] = choice_names(&UPDATE_TABLE);
+
+/// How a map's size is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MapSizing {
+    /// From the reflector's screen footprint in the view that looks the map up, at most `res`.
+    Footprint,
+    /// `res` texels on the longer side, whatever the reflector covers (the fixed size of
+    /// previous versions and of the bench's paper rows).
+    Fixed,
+}
+
+const SIZING_TABLE: [(&str, MapSizing); 2] = [
+    ("footprint", MapSizing::Footprint),
+    ("fixed", MapSizing::Fixed),
+];
+const SIZING_CHOICES: [&str; 2] = choice_names(&SIZING_TABLE);
 
 const PVRR_PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -29,12 +54,18 @@ const PVRR_PARAMS: &[ParamSpec] = &[
     },
     ParamSpec {
         name: "res",
-        doc: "texels of a map's longer side (the other follows the view volume's aspect)",
+        doc: "texels of a map's longer side (the other follows the view volume's aspect): the size under sizing=fixed, the largest under sizing=footprint",
         kind: ParamKind::Integer {
             min: PVRR_RESOLUTION.0,
             max: PVRR_RESOLUTION.1,
         },
         default: "1024",
+    },
+    ParamSpec {
+        name: "sizing",
+        doc: "how a map's longer side is chosen: footprint (as many texels as the reflector covers pixels in the view that draws it, at most res, at least 16) or fixed (res texels)",
+        kind: ParamKind::Choice(&SIZING_CHOICES),
+        default: "footprint",
     },
     ParamSpec {
         name: "dispersion",
@@ -60,8 +91,11 @@ const PVRR_AOVS: &[Aov] = &[Aov::Covered, Aov::Zoom];
 pub struct PvrrParams {
     /// Levels of the reflection stack (1..=[`MAX_PVRR_DEPTH`]).
     pub depth: u32,
-    /// Texels of a map's longer side.
+    /// Texels of a map's longer side: the size under [`MapSizing::Fixed`], the largest under
+    /// [`MapSizing::Footprint`].
     pub resolution: u32,
+    /// How the map size is chosen.
+    pub sizing: MapSizing,
     /// Index step between channels, thousandths (0..=[`MAX_PVRR_DISPERSION`]).
     pub dispersion: u32,
     /// Keep the per-vertex work while the camera is unchanged.
@@ -69,10 +103,12 @@ pub struct PvrrParams {
 }
 
 impl PvrrParams {
-    /// Three levels, 1024-texel maps, no dispersion, the plan made every frame.
+    /// Three levels, maps sized from the footprint up to 1024 texels, no dispersion, the plan
+    /// made every frame.
     pub const DEFAULT: Self = Self {
         depth: 3,
         resolution: 1024,
+        sizing: MapSizing::Footprint,
         dispersion: 0,
         update_on_change: false,
     };
@@ -125,6 +161,9 @@ impl FamilyParams for PvrrParams {
         match (name, value) {
             ("depth", ParamValue::Integer(v)) => self.depth = v,
             ("res", ParamValue::Integer(v)) => self.resolution = v,
+            ("sizing", ParamValue::Choice(v)) => {
+                return lookup(&SIZING_TABLE, v).map(|s| self.sizing = s).is_some();
+            }
             ("dispersion", ParamValue::Integer(v)) => self.dispersion = v,
             ("update", ParamValue::Choice(v)) => {
                 return lookup(&UPDATE_TABLE, v)
@@ -140,6 +179,7 @@ impl FamilyParams for PvrrParams {
         Some(match name {
             "depth" => ParamValue::Integer(self.depth),
             "res" => ParamValue::Integer(self.resolution),
+            "sizing" => ParamValue::Choice(name_of(&SIZING_TABLE, &self.sizing)),
             "dispersion" => ParamValue::Integer(self.dispersion),
             "update" => ParamValue::Choice(name_of(&UPDATE_TABLE, &self.update_on_change)),
             _ => return None,
