@@ -1,5 +1,6 @@
 //! refract-core's per-pixel kernels over precomputed buffers of an analytic sphere (1024²):
-//! the cost of the math alone, without rasterisation.
+//! the cost of the math alone, without rasterisation; and the distance-map search over
+//! analytic layers.
 
 use std::hint::black_box;
 
@@ -157,5 +158,53 @@ fn kernels(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernels);
+/// The distance-map search alone (`refract_core::distance_map::hit`, Listing 17-1 on eight
+/// lanes and the secant steps) over the analytic room's 512² layers: 64k rays from points
+/// inside the mirror sphere's shell in directions spread over the sphere, with and without
+/// min-max.
+fn distance_search(c: &mut Criterion) {
+    use glam::Vec3;
+    use refract_core::distance_map::{AnalyticRoom, SearchParams, hit};
+    let layers = AnalyticRoom { size: 512 };
+    let rays: Vec<(Vec3, Vec3)> = (0..65_536u32)
+        .map(|k| {
+            let z = (k as f32 + 0.5) / 65_536.0 * 2.0 - 1.0;
+            let phi = k as f32 * 2.399_963;
+            let r = Vec3::new(
+                (1.0 - z * z).sqrt() * phi.cos(),
+                z,
+                (1.0 - z * z).sqrt() * phi.sin(),
+            );
+            (Vec3::new(0.3, -0.2, 0.5), r)
+        })
+        .collect();
+    let mut group = c.benchmark_group("core/distance_search");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    for min_max in [false, true] {
+        let params = SearchParams {
+            min_max,
+            ..SearchParams::default()
+        };
+        // Correctness before timing: every ray meets the room's walls.
+        assert!(
+            rays.iter()
+                .all(|(x, r)| hit(&layers, *x, *r, None, &params).0.is_some())
+        );
+        group.bench_function(format!("hit/minmax={min_max}"), |b| {
+            b.iter(|| {
+                rays.par_iter()
+                    .map(|(x, r)| {
+                        hit(&layers, black_box(*x), *r, None, &params)
+                            .1
+                            .linear_steps
+                    })
+                    .sum::<u32>()
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, kernels, distance_search);
 criterion_main!(benches);

@@ -1,6 +1,8 @@
 //! Kakimoto et al. 2007 on the CPU backend at 1024²: the per-frame plan alone (per-vertex rays
-//! by BVH, virtual viewpoints, view volumes, texture coordinates) and whole colour-only frames,
-//! on the reflection, multiple-reflection and lens scenes of the paper's §5.
+//! by BVH, virtual viewpoints, view volumes, texture coordinates) and whole colour-only frames
+//! (every view rasterised and shaded eight pixels at a time), on the reflection,
+//! multiple-reflection and lens scenes of the paper's §5, with maps sized from the footprint
+//! and fixed at 1024 texels.
 
 use std::sync::Arc;
 
@@ -16,11 +18,13 @@ fn pvrr(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu/pvrr");
     group.sample_size(10);
     group.throughput(Throughput::Elements(u64::from(RES * RES)));
-    for (name, dispersion) in [
-        ("convex-mirror", "0"),
-        ("mirror-stack", "0"),
-        ("spectacles", "0"),
-        ("spectacles", "10"),
+    for (name, dispersion, sizing) in [
+        ("convex-mirror", "0", "footprint"),
+        ("convex-mirror", "0", "fixed"),
+        ("mirror-stack", "0", "footprint"),
+        ("mirror-stack", "0", "fixed"),
+        ("spectacles", "0", "footprint"),
+        ("spectacles", "10", "footprint"),
     ] {
         let scene = Arc::new(load_scene(name).expect("built-in").scene);
         let camera = scene.camera(RES, RES).expect("camera");
@@ -28,6 +32,7 @@ fn pvrr(c: &mut Criterion) {
         params
             .set("dispersion", dispersion, "bench")
             .expect("dispersion");
+        params.set("sizing", sizing, "bench").expect("sizing");
         let MethodParams::Pvrr(p) = params else {
             unreachable!("pvrr parameters")
         };
@@ -36,7 +41,7 @@ fn pvrr(c: &mut Criterion) {
         // Correctness before timing: the plan maps the reflector seen from the eye.
         let plan = planner.plan(&scene, &camera, &p).expect("plan");
         assert!(plan.views.len() >= 2 && plan.rays() > 0, "{name}");
-        let label = format!("{name}/dispersion={dispersion}");
+        let label = format!("{name}/dispersion={dispersion}/sizing={sizing}");
         group.bench_function(format!("{label}/plan"), |b| {
             b.iter(|| planner.plan(&scene, &camera, &p).expect("plan").rays())
         });

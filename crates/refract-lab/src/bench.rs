@@ -742,9 +742,10 @@ fn table(records: &[BenchRecord], reference: &[(String, f64)], res: u32, frames:
     let _ = writeln!(
         md,
         "| model | triangles | 2-sided CPU fps | 1-sided CPU fps | 2-sided GPU fps | 1-sided GPU fps | ray traced (s) | \
-         paper 2-sided | paper 1-sided | paper ray traced (s) | CPU 2-sided / paper | GPU 2-sided / paper | paper RT / ours |"
+         paper 2-sided | paper 1-sided | paper ray traced (s) | CPU 2-sided / paper | CPU 1-sided / paper | \
+         GPU 2-sided / paper | GPU 1-sided / paper | paper RT / ours |"
     );
-    let _ = writeln!(md, "|{}|", ["---"; 13].join("|"));
+    let _ = writeln!(md, "|{}|", ["---"; 15].join("|"));
     for (scene, seconds) in reference {
         let triangles = records
             .iter()
@@ -752,20 +753,22 @@ fn table(records: &[BenchRecord], reference: &[(String, f64)], res: u32, frames:
             .map_or(0, |r| r.triangles);
         let paper = PAPER.iter().find(|p| p.0 == scene);
         let (p2, p1, prt) = (paper.map(|p| p.1), paper.map(|p| p.2), paper.map(|p| p.3));
-        let cpu2 = fps(scene, "wyman", "cpu");
-        let gpu2 = fps(scene, "wyman", "gpu");
+        let (cpu2, cpu1) = (fps(scene, "wyman", "cpu"), fps(scene, "single", "cpu"));
+        let (gpu2, gpu1) = (fps(scene, "wyman", "gpu"), fps(scene, "single", "gpu"));
         let _ = writeln!(
             md,
-            "| {scene} | {triangles} | {} | {} | {} | {} | {seconds:.3} | {} | {} | {} | {} | {} | {} |",
+            "| {scene} | {triangles} | {} | {} | {} | {} | {seconds:.3} | {} | {} | {} | {} | {} | {} | {} | {} |",
             cell(cpu2),
-            cell(fps(scene, "single", "cpu")),
+            cell(cpu1),
             cell(gpu2),
-            cell(fps(scene, "single", "gpu")),
+            cell(gpu1),
             cell(p2),
             cell(p1),
             prt.map_or_else(|| "–".to_owned(), |v| format!("{v:.1}")),
             ratio(cpu2, p2),
+            ratio(cpu1, p1),
             ratio(gpu2, p2),
+            ratio(gpu1, p1),
             prt.map_or_else(|| "–".to_owned(), |p| format!("{:.0}×", p / seconds)),
         );
     }
