@@ -291,6 +291,49 @@ fn gpu_colour_only_frames_have_the_same_colours() {
     }
 }
 
+/// A frame left on the GPU (`render_on_gpu`, what the viewer draws into its window without a
+/// readback) is the frame `render` reads back, bit for bit, for every method of every family.
+#[test]
+fn gpu_frames_left_on_the_gpu_equal_the_read_back_ones() {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
+        return;
+    };
+    let scene = builtin("torus", 1.33);
+    let cam = camera(48);
+    gpu.prepare(&scene).expect("prepare");
+    for id in MethodId::approximations() {
+        let params = method(id);
+        let mut read_back = Frame::default();
+        gpu.render(&cam, &params, FrameOutputs::Color, &mut read_back)
+            .expect("read back");
+        let size = gpu
+            .render_on_gpu(&cam, &params)
+            .expect("on the GPU")
+            .color
+            .size();
+        let color = gpu.last_color(&params).expect("a colour buffer");
+        let device = &gpu.context().device;
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("test readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(color, 0, &staging, 0, size);
+        gpu.context().queue.submit([encoder.finish()]);
+        let bytes = gpu.context().read_buffer(&staging).expect("map");
+        let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        assert_eq!(texels.len(), 48 * 48, "{id}");
+        let differing = texels
+            .iter()
+            .zip(&read_back.color)
+            .filter(|(t, c)| t[..3] != c.to_array())
+            .count();
+        assert_eq!(differing, 0, "{id}: {differing} pixels differ");
+    }
+}
+
 /// The WGSL lat-long lookup follows the CPU's (Mitsuba's rows on the poles, wrapping columns):
 /// on a synthetic map with a different colour per row and column, background pixels (direct
 /// lookups) and refracted pixels agree between the backends.

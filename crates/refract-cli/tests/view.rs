@@ -74,6 +74,16 @@ fn xvfb() -> Option<Xvfb> {
     panic!("Xvfb did not start on any of 20 displays");
 }
 
+/// The largest difference between two images' bytes and how many bytes differ.
+fn byte_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .filter(|d| *d > 0)
+        .fold((0, 0), |(worst, n), d| (worst.max(d), n + 1))
+}
+
 fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
     let image = image::open(path).expect("png").to_rgb8();
     (image.width(), image.height(), image.into_raw())
@@ -178,6 +188,43 @@ fn a_scripted_window_matches_the_offline_render() {
     let mean_flip = flip.to_vec().iter().map(|&v| f64::from(v)).sum::<f64>() / f64::from(w * h);
     println!("window vs offline render: mean FLIP {mean_flip:.5}");
     assert!(mean_flip < 0.01, "mean FLIP {mean_flip}");
+    // The window drew the GPU's frame on the GPU (no readback), tonemapped in WGSL as every PNG
+    // is on the CPU: the same bytes but for an ulp of `pow` here and there.
+    assert!(log.contains("no readback"), "{log}");
+    let (worst, off) = byte_difference(&window, &reference);
+    println!("window vs offline render: {off} bytes differ, by at most {worst}");
+    assert!(
+        worst <= 1 && off * 200 <= window.len(),
+        "{off} bytes differ, by up to {worst}"
+    );
+    // `--readback` shows the same frame through the CPU (read back, tonemapped, uploaded).
+    std::fs::write(dir.path().join("keys.txt"), "key h\nkey m\nwait\n").expect("script");
+    let log = refract(
+        dir.path(),
+        &x.display,
+        &[
+            "view",
+            "chart",
+            "--method",
+            "wyman",
+            "--size",
+            "160x120",
+            "--frames",
+            "3",
+            "--script",
+            "keys.txt",
+            "--readback",
+            "--screenshot",
+            "through-cpu.png",
+        ],
+    );
+    assert!(log.contains("read back and uploaded"), "{log}");
+    let (_, _, through_cpu) = rgb(&dir.path().join("through-cpu.png"));
+    let (worst, off) = byte_difference(&window, &through_cpu);
+    assert!(
+        worst <= 1 && off * 200 <= window.len(),
+        "GPU vs CPU tonemap: {off} bytes differ, by up to {worst}"
+    );
 
     // Without `h` the panel is drawn over the image.
     let ((pw, ph, with_panel), plain, _) = window_and_offline(

@@ -35,6 +35,10 @@ pub(crate) struct GpuFrameCx<'a> {
     pub outputs: FrameOutputs,
     /// Timestamp queries around the frame's passes, where the adapter has them.
     pub timestamps: Option<&'a Timestamps>,
+    /// Whether the frame's outputs are copied to the readback buffers (and read into a
+    /// [`Frame`]); without, the colour stays in [`GpuFamily::color`] for a later GPU pass (the
+    /// viewer's window).
+    pub readback: bool,
 }
 
 impl GpuFrameCx<'_> {
@@ -82,6 +86,10 @@ pub(crate) trait GpuFamily {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError>;
 
+    /// The colour of the last frame encoded with `targets`: one `vec4<f32>` per pixel (RGB
+    /// linear radiance, A unused), row-major from the top.
+    fn color<'t>(&self, targets: &'t Self::Targets) -> &'t wgpu::Buffer;
+
     /// Reads the submitted frame into `frame`: the colour and, with
     /// [`FrameOutputs::ColorAndAovs`], exactly the layers of the method's registry row.
     fn read(
@@ -124,15 +132,20 @@ impl<F: GpuFamily> FamilySlot<F> {
         self.family.prepare(scene);
     }
 
+    /// The colour buffer of the last frame ([`GpuFamily::color`]), `None` before the first.
+    pub(crate) fn color(&self) -> Option<&wgpu::Buffer> {
+        self.targets.as_ref().map(|t| self.family.color(t))
+    }
+
     /// One frame: targets reused when they fit (else the old ones are freed first, then new
     /// ones allocated), the family's CPU part, its passes encoded and submitted, the queue
     /// waited for, the time read (GPU timestamps plus the CPU part, or the wall clock), the
-    /// outputs read back into `frame`.
+    /// outputs read back into `frame` (when given; `cx.readback` must say the same).
     pub(crate) fn run_frame(
         &mut self,
         cx: &GpuFrameCx<'_>,
         params: &F::Params,
-        frame: &mut Frame,
+        frame: Option<&mut Frame>,
     ) -> Result<FrameTiming, RenderError> {
         let targets = match self.targets.take() {
             Some(targets) if self.family.fits(&targets, cx, params) => self.targets.insert(targets),
@@ -179,7 +192,9 @@ impl<F: GpuFamily> FamilySlot<F> {
                 source: TimingSource::Wall,
             },
         };
-        self.family.read(cx, targets, frame)?;
+        if let Some(frame) = frame {
+            self.family.read(cx, targets, frame)?;
+        }
         Ok(timing)
     }
 }

@@ -28,4 +28,4 @@ pub mod shaders;
 mod timestamps;
 
 pub use context::{GpuContext, GpuError, list_adapters};
-pub use renderer::GpuRenderer;
+pub use renderer::{GpuFrame, GpuRenderer};

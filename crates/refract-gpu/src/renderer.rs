@@ -137,7 +137,63 @@ impl Renderer for GpuRenderer {
             params: method,
             outputs,
             timestamps: self.timestamps.as_ref(),
+            readback: true,
         };
-        self.families.render(&cx, method, frame)
+        self.families.render(&cx, method, Some(frame))
+    }
+}
+
+/// A colour-only frame left on the GPU by [`GpuRenderer::render_on_gpu`].
+pub struct GpuFrame<'a> {
+    /// How long it took: the GPU's timestamps of its passes plus its CPU part, or the wall
+    /// clock from encoding to the queue's completion.
+    pub timing: FrameTiming,
+    /// Its colour: one `vec4<f32>` per pixel (linear RGB radiance, A unused), row-major from the
+    /// top, `width × height` of the camera; `STORAGE` usage, valid until the next frame.
+    pub color: &'a wgpu::Buffer,
+}
+
+impl GpuRenderer {
+    /// Renders a colour-only frame of `method` seen by `camera` and leaves it on the GPU: no
+    /// copy to a readback buffer and no wait for a map, for a consumer on the same device (the
+    /// viewer draws it into its window). [`Renderer::render`] is the same frame read back.
+    pub fn render_on_gpu(
+        &mut self,
+        camera: &Camera,
+        method: &MethodParams,
+    ) -> Result<GpuFrame<'_>, RenderError> {
+        let (scene, gpu_scene) = self
+            .scene
+            .as_ref()
+            .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
+        let id = method.id();
+        refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
+        let cx = GpuFrameCx {
+            context: &self.context,
+            raster: &self.raster,
+            scene,
+            gpu_scene,
+            camera,
+            method: id,
+            params: method,
+            outputs: FrameOutputs::Color,
+            timestamps: self.timestamps.as_ref(),
+            readback: false,
+        };
+        let timing = self.families.render(&cx, method, None)?;
+        let color = self
+            .families
+            .color(method)
+            .ok_or(RenderError::Unsupported {
+                backend: BackendId::Gpu,
+                method: id,
+            })?;
+        Ok(GpuFrame { timing, color })
+    }
+
+    /// The colour buffer of the last frame of `method`'s family (as [`GpuFrame::color`]),
+    /// `None` before its first frame.
+    pub fn last_color(&self, method: &MethodParams) -> Option<&wgpu::Buffer> {
+        self.families.color(method)
     }
 }

@@ -25,7 +25,7 @@ use refract_eval::metrics::evaluate_method;
 use refract_gpu::{GpuContext, GpuRenderer};
 use refract_scene::registry::ParamKind;
 use refract_scene::tonemap::to_srgb8;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene};
+use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TimingSource};
 use refract_trace::ReferenceRenderer;
 use winit::application::ApplicationHandler;
 
@@ -62,6 +62,10 @@ pub struct ViewArgs {
     /// metrics go beside it as `.json`.
     #[arg(long, default_value = "refract-view.png")]
     pub screenshot: PathBuf,
+    /// Read every GPU frame back to the CPU and upload it to the window again (the viewer's
+    /// path before frames stayed on the GPU), to measure what the readback costs.
+    #[arg(long)]
+    pub readback: bool,
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -176,6 +180,9 @@ struct Display {
     config: wgpu::SurfaceConfiguration,
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    /// Draws a GPU frame's colour buffer straight into the window (no readback).
+    frame_pipeline: wgpu::RenderPipeline,
+    frame_layout: wgpu::BindGroupLayout,
     texture_format: wgpu::TextureFormat,
     copy_src: bool,
     egui: egui::Context,
@@ -210,6 +217,15 @@ struct Viewer {
     frame: Frame,
     frames_done: u32,
     last_ms: f64,
+    /// The GPU's own time of the last frame (its passes' timestamps plus the CPU part of the
+    /// frame), when the adapter has timestamp queries and the frame ran there.
+    gpu_ms: Option<f64>,
+    /// The last frame was drawn from the GPU's colour buffer: `frame` is not it.
+    shown_from_gpu: bool,
+    /// Every frame's time from the start of its redraw to its presentation (the render, the
+    /// readback, tonemapping and upload where there are, the window's pass), for the
+    /// unattended run's summary.
+    frame_ms: Vec<f64>,
     drag: Option<(MouseButton, f64, f64)>,
     cursor: (f64, f64),
     display: Option<Display>,
@@ -249,6 +265,24 @@ enum ErrorView {
 
 /// The display pass: the frame's texture drawn texel for texel (`shaders/display.wgsl`).
 const SHADER: &str = include_str!("../shaders/display.wgsl");
+const FRAME_SHADER: &str = include_str!("../shaders/display_frame.wgsl");
+
+/// What a frame shows: pixels tonemapped on the CPU (the CPU backend, the split view, the
+/// error maps), or the GPU backend's colour buffer of `method`, drawn without a readback.
+enum Source<'a> {
+    Pixels(&'a [u8]),
+    Gpu(&'a MethodParams),
+}
+
+/// The uniform of `display_frame.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FrameDisplay {
+    width: u32,
+    height: u32,
+    srgb_surface: u32,
+    _padding: u32,
+}
 
 impl Viewer {
     fn params(&self) -> MethodParams {
@@ -270,6 +304,16 @@ impl Viewer {
         let mut split = self.split;
         let mut error_view = self.error_view;
         let (ms, methods, has_gpu) = (self.last_ms, &self.methods, self.gpu.is_some());
+        let gpu_passes = self
+            .gpu_ms
+            .map_or_else(String::new, |ms| format!("GPU passes {ms:.1} ms; "));
+        let readback = if self.use_gpu && !self.shown_from_gpu {
+            "read back to the CPU"
+        } else if self.use_gpu {
+            "drawn on the GPU, no readback"
+        } else {
+            "CPU frame"
+        };
         let output = display.egui.run_ui(raw, |ui| {
             egui::Window::new("refract")
                 .default_pos([8.0, 8.0])
@@ -279,6 +323,7 @@ impl Viewer {
                         "{ms:.1} ms / frame ({:.0} fps)",
                         1e3 / ms.max(1e-3)
                     ));
+                    ui.label(format!("{gpu_passes}{readback}"));
                     egui::ComboBox::from_label("method (m/n)")
                         .selected_text(methods[method].name())
                         .show_ui(ui, |ui| {
@@ -488,6 +533,62 @@ impl Viewer {
             multiview_mask: None,
             cache: None,
         });
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("view frame"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let frame_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("view frame"),
+            source: wgpu::ShaderSource::Wgsl(FRAME_SHADER.into()),
+        });
+        let frame_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("view frame"),
+                bind_group_layouts: &[Some(&frame_layout)],
+                immediate_size: 0,
+            });
+        let frame_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("view frame"),
+            layout: Some(&frame_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &frame_module,
+                entry_point: Some("vs"),
+                buffers: &[],
+                compilation_options: Default::default(),
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &frame_module,
+                entry_point: Some("fs"),
+                targets: &[Some(format.into())],
+                compilation_options: Default::default(),
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
         // The frame's bytes are sRGB-encoded: an sRGB surface gets them through an sRGB
         // texture (decoded, then encoded again), a linear one as they are.
         let texture_format = if format.is_srgb() {
@@ -516,6 +617,8 @@ impl Viewer {
             config,
             pipeline,
             layout,
+            frame_pipeline,
+            frame_layout,
             texture_format,
             copy_src,
             egui: egui_ctx,
@@ -543,8 +646,16 @@ impl Viewer {
             ErrorView::Flip => " — FLIP map",
             ErrorView::T2 => " — T2 error map (0–20°)",
         };
+        let passes = self
+            .gpu_ms
+            .map_or_else(String::new, |ms| format!(", GPU passes {ms:.1} ms"));
+        let readback = if self.use_gpu && !self.shown_from_gpu {
+            ", read back"
+        } else {
+            ""
+        };
         format!(
-            "refract view — {} — {} ({}) on {} — IOR {} — {:.1} ms ({:.0} fps){view}{reference} — h panel, m/n method, b backend, v split, e error map, i/k IOR, t TIR, r reset, p screenshot, q quit",
+            "refract view — {} — {} ({}) on {} — IOR {} — {:.1} ms ({:.0} fps{passes}{readback}){view}{reference} — h panel, m/n method, b backend, v split, e error map, i/k IOR, t TIR, r reset, p screenshot, q quit",
             self.scene.name,
             self.methods[self.method],
             self.params().describe(),
@@ -618,13 +729,30 @@ impl Viewer {
         if let Some(ior) = self.pending_ior.take() {
             self.set_ior(ior)?;
         }
+        let begun = Instant::now();
         let camera = self.camera(width, height)?;
         let params = self.params();
+        let composed = self.split || self.error_view != ErrorView::Off;
+        let on_gpu = self.use_gpu && !composed && !self.args.readback;
+        if let (Some(gpu), true) = (&mut self.gpu, on_gpu) {
+            // The GPU's frame goes to the window on the GPU: no readback, no upload.
+            let start = Instant::now();
+            let shown = gpu.render_on_gpu(&camera, &params)?;
+            self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+            self.gpu_ms =
+                (shown.timing.source == TimingSource::GpuTimestamps).then_some(shown.timing.ms);
+            self.shown_from_gpu = true;
+            self.present(Source::Gpu(&params), width, height, panel)?;
+            return self.after_present(begun);
+        }
         let mut frame = std::mem::take(&mut self.frame);
         let start = Instant::now();
-        self.renderer()
+        let timing = self
+            .renderer()
             .render(&camera, &params, FrameOutputs::Color, &mut frame)?;
         self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.gpu_ms = (timing.source == TimingSource::GpuTimestamps).then_some(timing.ms);
+        self.shown_from_gpu = false;
         self.frame = frame;
         let mut pixels: Vec<u8> = self
             .frame
@@ -644,8 +772,15 @@ impl Viewer {
         if self.split {
             self.compose_split(&mut pixels, width, height);
         }
-        self.present(&pixels, width, height, panel)?;
+        self.present(Source::Pixels(&pixels), width, height, panel)?;
+        self.after_present(begun)
+    }
+
+    /// Counts the frame, titles the window and, for unattended runs, ends with the screenshot;
+    /// returns whether to go on.
+    fn after_present(&mut self, begun: Instant) -> anyhow::Result<bool> {
         self.frames_done += 1;
+        self.frame_ms.push(begun.elapsed().as_secs_f64() * 1e3);
         if let Some(display) = &self.display {
             display.window.set_title(&self.title());
         }
@@ -654,6 +789,7 @@ impl Viewer {
         let waiting = (self.split || self.error_view != ErrorView::Off)
             && !self.reference_level.as_ref().is_some_and(|l| l.full);
         if self.args.frames.is_some_and(|n| self.frames_done >= n) && !waiting {
+            eprintln!("{}", self.frame_summary());
             self.screenshot()?;
             return Ok(false);
         }
@@ -738,7 +874,7 @@ impl Viewer {
 
     fn present(
         &mut self,
-        pixels: &[u8],
+        source: Source<'_>,
         width: u32,
         height: u32,
         mut panel: Option<PanelFrame>,
@@ -774,35 +910,77 @@ impl Viewer {
             height,
             depth_or_array_layers: 1,
         };
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("view frame"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: display.texture_format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        queue.write_texture(
-            texture.as_image_copy(),
-            pixels,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * width),
-                rows_per_image: Some(height),
-            },
-            size,
-        );
-        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("view frame"),
-            layout: &display.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&view),
-            }],
-        });
+        let (pipeline, group) = match source {
+            Source::Pixels(pixels) => {
+                let texture = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("view frame"),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: display.texture_format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                    view_formats: &[],
+                });
+                queue.write_texture(
+                    texture.as_image_copy(),
+                    pixels,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(4 * width),
+                        rows_per_image: Some(height),
+                    },
+                    size,
+                );
+                let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("view frame"),
+                    layout: &display.layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    }],
+                });
+                (&display.pipeline, group)
+            }
+            Source::Gpu(params) => {
+                let color = gpu
+                    .last_color(params)
+                    .context("the GPU frame's colour buffer is gone")?;
+                let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("view frame size"),
+                    size: std::mem::size_of::<FrameDisplay>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let srgb_surface = u32::from(display.config.format.is_srgb());
+                queue.write_buffer(
+                    &uniform,
+                    0,
+                    bytemuck::bytes_of(&FrameDisplay {
+                        width,
+                        height,
+                        srgb_surface,
+                        _padding: 0,
+                    }),
+                );
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("view frame"),
+                    layout: &display.frame_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: color.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: uniform.as_entire_binding(),
+                        },
+                    ],
+                });
+                (&display.frame_pipeline, group)
+            }
+        };
         let output = match display.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -855,7 +1033,7 @@ impl Viewer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&display.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.draw(0..3, 0..1);
             if let Some(panel) = &panel {
@@ -919,8 +1097,37 @@ impl Viewer {
         Ok(())
     }
 
+    /// The unattended run's frame times: the median after the first frame (which compiles and
+    /// allocates), how the last frame reached the window.
+    fn frame_summary(&self) -> String {
+        let mut ms: Vec<f64> = self.frame_ms.iter().skip(1).copied().collect();
+        ms.sort_by(f64::total_cmp);
+        let median = ms.get(ms.len() / 2).copied().unwrap_or(f64::NAN);
+        let path = match (self.use_gpu, self.shown_from_gpu) {
+            (true, true) => "GPU frames drawn into the window on the GPU, no readback",
+            (true, false) => "GPU frames read back and uploaded to the window",
+            (false, _) => "CPU frames uploaded to the window",
+        };
+        format!(
+            "frames: {}, median {median:.2} ms a frame from redraw to present after the first ({path})",
+            self.frames_done
+        )
+    }
+
     /// Writes the last frame as PNG and its metrics against the exact reference as JSON.
     fn screenshot(&mut self) -> anyhow::Result<()> {
+        if self.shown_from_gpu {
+            // The frame never left the GPU: read it back once, for the file and the metrics.
+            if let Some(display) = &self.display {
+                let (width, height) = (display.config.width, display.config.height);
+                let camera = self.camera(width, height)?;
+                let params = self.params();
+                let mut frame = std::mem::take(&mut self.frame);
+                self.renderer()
+                    .render(&camera, &params, FrameOutputs::Color, &mut frame)?;
+                self.frame = frame;
+            }
+        }
         let (width, height) = (self.frame.width, self.frame.height);
         if width == 0 {
             return Ok(());
@@ -1130,6 +1337,9 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         frame: Frame::default(),
         frames_done: 0,
         last_ms: 0.0,
+        gpu_ms: None,
+        shown_from_gpu: false,
+        frame_ms: Vec::new(),
         drag: None,
         cursor: (0.0, 0.0),
         display: None,

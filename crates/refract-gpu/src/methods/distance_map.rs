@@ -197,6 +197,10 @@ impl GpuFamily for DistanceMapPipelines {
         Ok(targets.encode(cx, self, params, encoder)?)
     }
 
+    fn color<'t>(&self, targets: &'t Self::Targets) -> &'t wgpu::Buffer {
+        &targets.outputs.outputs[0]
+    }
+
     fn read(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -491,7 +495,9 @@ impl DistanceMapTargets {
             FrameOutputs::ColorAndAovs => 3,
             FrameOutputs::Color => 1,
         };
-        self.outputs.copy(encoder, copies);
+        if cx.readback {
+            self.outputs.copy(encoder, copies);
+        }
         Ok(())
     }
 

@@ -90,6 +90,10 @@ impl GpuFamily for EnginePipelines {
         Ok(())
     }
 
+    fn color<'t>(&self, targets: &'t Self::Targets) -> &'t wgpu::Buffer {
+        &targets.outputs.outputs[0]
+    }
+
     fn read(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -215,7 +219,9 @@ impl EngineTargets {
             FrameOutputs::ColorAndAovs => 6,
             FrameOutputs::Color => 1,
         };
-        self.outputs.copy(encoder, copies);
+        if cx.readback {
+            self.outputs.copy(encoder, copies);
+        }
     }
 
     /// Reads the last submitted frame into `frame` (the colour and the registry row's AOVs).

@@ -80,6 +80,10 @@ impl GpuFamily for ImageSpacePipelines {
         Ok(())
     }
 
+    fn color<'t>(&self, targets: &'t Self::Targets) -> &'t wgpu::Buffer {
+        &targets.outputs.outputs[0]
+    }
+
     fn read(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -415,7 +419,9 @@ impl ImageSpaceTargets {
             FrameOutputs::ColorAndAovs => 4,
             FrameOutputs::Color => 1,
         };
-        self.outputs.copy(encoder, copies);
+        if cx.readback {
+            self.outputs.copy(encoder, copies);
+        }
     }
 
     /// Reads the outputs of the last submitted frame into `frame`: the colour and, with

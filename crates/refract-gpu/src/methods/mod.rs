@@ -53,7 +53,7 @@ impl Families {
         &mut self,
         cx: &GpuFrameCx<'_>,
         method: &MethodParams,
-        frame: &mut Frame,
+        frame: Option<&mut Frame>,
     ) -> Result<FrameTiming, RenderError> {
         match method {
             MethodParams::Reference(_) => Err(RenderError::Unsupported {
@@ -65,6 +65,19 @@ impl Families {
             MethodParams::DistanceMap(p) => self.distance_map.run_frame(cx, p, frame),
             MethodParams::Pvrr(p) => self.pvrr.run_frame(cx, p, frame),
             MethodParams::Engine(p) => self.engine.run_frame(cx, p, frame),
+        }
+    }
+
+    /// The colour buffer of the last frame of `method`'s family, `None` before its first
+    /// frame (and for the reference, which has no GPU family).
+    pub(crate) fn color(&self, method: &MethodParams) -> Option<&wgpu::Buffer> {
+        match method {
+            MethodParams::Reference(_) => None,
+            MethodParams::ImageSpace(_) => self.image_space.color(),
+            MethodParams::NearbyGeometry(_) => self.nearby.color(),
+            MethodParams::DistanceMap(_) => self.distance_map.color(),
+            MethodParams::Pvrr(_) => self.pvrr.color(),
+            MethodParams::Engine(_) => self.engine.color(),
         }
     }
 }

@@ -300,6 +300,10 @@ impl GpuFamily for PvrrFamily {
         Ok(targets.encode(cx, &self.pipelines, self.planner.last(), encoder)?)
     }
 
+    fn color<'t>(&self, targets: &'t Self::Targets) -> &'t wgpu::Buffer {
+        &targets.outputs.outputs[0]
+    }
+
     fn read(
         &self,
         cx: &GpuFrameCx<'_>,
@@ -606,7 +610,9 @@ impl PvrrTargets {
             FrameOutputs::ColorAndAovs => 2,
             FrameOutputs::Color => 1,
         };
-        self.outputs.copy(encoder, copies);
+        if cx.readback {
+            self.outputs.copy(encoder, copies);
+        }
         Ok(())
     }
 
