@@ -83,6 +83,18 @@ pub enum GeometryError {
         /// The limit.
         limit: f32,
     },
+    /// A BVH deeper than a GPU traversal's stack.
+    #[error(
+        "{source_name}: its BVH is {depth} levels deep; the GPU traversal's stack holds {limit} (a mesh of many coincident triangles? weld or clean it)"
+    )]
+    BvhTooDeep {
+        /// The mesh.
+        source_name: String,
+        /// The tree's depth.
+        depth: u32,
+        /// The stack size.
+        limit: u32,
+    },
     /// Attribute arrays of different lengths.
     #[error("{source_name}: {attribute} has {found} entries for {vertex_count} vertices")]
     AttributeLength {

@@ -16,6 +16,7 @@
 //! driver). `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` choose the adapter.
 
 mod bindings;
+pub mod bvh;
 pub mod conformance;
 pub mod context;
 mod family;

@@ -42,6 +42,8 @@ pub const DISTANCE_SEARCH: WgslFile = (
     "distance_search.wgsl",
     include_str!("../../../shaders/distance_search.wgsl"),
 );
+/// Closest hits against a flattened BVH (the exact reference's traversal, issue 32).
+pub const BVH: WgslFile = ("bvh.wgsl", include_str!("../../../shaders/bvh.wgsl"));
 /// The conformance harness's entry points.
 pub const CONFORMANCE: WgslFile = (
     "conformance.wgsl",
@@ -82,9 +84,15 @@ pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
     files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
 };
 
+/// Closest-hit queries against a flattened BVH (`refract_gpu::bvh`).
+pub const BVH_MODULE: ShaderModule = ShaderModule {
+    name: "bvh",
+    files: &[BVH],
+};
+
 /// Every module the backend compiles: the shared ones, then each family's.
 pub fn modules() -> Vec<ShaderModule> {
-    let mut modules = vec![RASTER_MODULE, CONFORMANCE_MODULE];
+    let mut modules = vec![RASTER_MODULE, CONFORMANCE_MODULE, BVH_MODULE];
     modules.extend(crate::methods::SHADERS);
     modules
 }
