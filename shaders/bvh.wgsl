@@ -36,8 +36,9 @@ const BVH_STACK: u32 = 64u;
 const EDGE_TOLERANCE: f32 = 1e-5;
 const BVH_INF: f32 = 3.4028235e38;
 
-@group(0) @binding(0) var<storage, read> bvh_nodes: array<BvhNode>;
-@group(0) @binding(1) var<storage, read> bvh_triangles: array<BvhTriangle>;
+// Group 1: a module's own bindings are in group 0.
+@group(1) @binding(0) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(1) @binding(1) var<storage, read> bvh_triangles: array<BvhTriangle>;
 
 // refract-geometry's `intersect`: the ray parameter of the hit in [t_min, t_max], or BVH_INF.
 fn intersect_triangle(tri: BvhTriangle, origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> f32 {
@@ -145,19 +146,4 @@ fn bvh_closest_hit(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) ->
         node_index = next;
     }
     return hit;
-}
-
-// The conformance kernel: one closest hit per ray of `bvh_rays`, written as (t, triangle bits).
-@group(0) @binding(2) var<storage, read> bvh_rays: array<BvhRay>;
-@group(0) @binding(3) var<storage, read_write> bvh_hits: array<vec2<u32>>;
-
-@compute @workgroup_size(64)
-fn trace_closest(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= arrayLength(&bvh_rays) {
-        return;
-    }
-    let ray = bvh_rays[i];
-    let hit = bvh_closest_hit(ray.origin.xyz, ray.dir.xyz, ray.origin.w, ray.dir.w);
-    bvh_hits[i] = vec2<u32>(bitcast<u32>(hit.t), hit.triangle);
 }

@@ -58,6 +58,28 @@ impl GpuBvh {
         })
     }
 
+    /// The bind group of `bvh.wgsl`'s group 1 ([`bvh_layout`]).
+    pub(crate) fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bvh"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.nodes.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: self.triangles.as_entire_binding(),
+                },
+            ],
+        })
+    }
+
     /// The closest hit of every ray with `t ∈ [t_min, t_max]` (unit directions), traced by
     /// `trace_closest` in `shaders/bvh.wgsl`; `None` for a miss.
     pub fn closest_hits(
@@ -77,17 +99,13 @@ impl GpuBvh {
                 source: wgpu::ShaderSource::Wgsl(BVH_MODULE.source().into()),
             });
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("bvh"),
-                entries: &[
-                    storage_entry(0, true),
-                    storage_entry(1, true),
-                    storage_entry(2, true),
-                    storage_entry(3, false),
-                ],
+                label: Some("bvh rays"),
+                entries: &[storage_entry(0, true), storage_entry(1, false)],
             });
+            let bvh_layout = bvh_layout(device);
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("bvh"),
-                bind_group_layouts: &[Some(&layout)],
+                bind_group_layouts: &[Some(&layout), Some(&bvh_layout)],
                 immediate_size: 0,
             });
             let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -98,8 +116,9 @@ impl GpuBvh {
                 compilation_options: Default::default(),
                 cache: None,
             });
-            (pipeline, layout)
+            (pipeline, (layout, bvh_layout))
         })?;
+        let (layout, bvh_layout) = layout;
         let packed: Vec<[f32; 8]> = rays
             .iter()
             .map(|r| {
@@ -130,20 +149,21 @@ impl GpuBvh {
             )
         })?;
         let group = context.checked(|| {
-            let buffers = [&self.nodes, &self.triangles, &input, &output];
-            let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-                .iter()
-                .zip(0u32..)
-                .map(|(buffer, binding)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("bvh"),
+            let rays = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("bvh rays"),
                 layout: &layout,
-                entries: &entries,
-            })
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: input.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: output.as_entire_binding(),
+                    },
+                ],
+            });
+            (rays, self.bind_group(device, &bvh_layout))
         })?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("trace_closest"),
@@ -154,7 +174,8 @@ impl GpuBvh {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_bind_group(0, &group.0, &[]);
+            pass.set_bind_group(1, &group.1, &[]);
             pass.dispatch_workgroups((rays.len() as u32).div_ceil(64), 1, 1);
         }
         encoder.copy_buffer_to_buffer(&output, 0, &read, 0, size);
@@ -171,4 +192,12 @@ impl GpuBvh {
             })
             .collect())
     }
+}
+
+/// The layout of `bvh.wgsl`'s group 1: the nodes and the triangles.
+pub(crate) fn bvh_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("bvh"),
+        entries: &[storage_entry(0, true), storage_entry(1, true)],
+    })
 }

@@ -23,6 +23,7 @@ mod family;
 mod frame_uniforms;
 mod methods;
 mod passes;
+pub mod reference;
 pub mod renderer;
 mod scene_buffers;
 pub mod shaders;

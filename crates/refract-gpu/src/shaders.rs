@@ -44,6 +44,16 @@ pub const DISTANCE_SEARCH: WgslFile = (
 );
 /// Closest hits against a flattened BVH (the exact reference's traversal, issue 32).
 pub const BVH: WgslFile = ("bvh.wgsl", include_str!("../../../shaders/bvh.wgsl"));
+/// The exact reference's transmission path (`refract_gpu::reference`).
+pub const REFERENCE: WgslFile = (
+    "reference.wgsl",
+    include_str!("../../../shaders/reference.wgsl"),
+);
+/// The BVH's batch kernel (`refract_gpu::bvh::GpuBvh::closest_hits`).
+pub const BVH_TRACE: WgslFile = (
+    "bvh_trace.wgsl",
+    include_str!("../../../shaders/bvh_trace.wgsl"),
+);
 /// The conformance harness's entry points.
 pub const CONFORMANCE: WgslFile = (
     "conformance.wgsl",
@@ -87,12 +97,31 @@ pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
 /// Closest-hit queries against a flattened BVH (`refract_gpu::bvh`).
 pub const BVH_MODULE: ShaderModule = ShaderModule {
     name: "bvh",
-    files: &[BVH],
+    files: &[BVH, BVH_TRACE],
+};
+
+/// The exact reference on the GPU (`refract_gpu::reference`).
+pub const REFERENCE_MODULE: ShaderModule = ShaderModule {
+    name: "reference",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        BVH,
+        REFERENCE,
+    ],
 };
 
 /// Every module the backend compiles: the shared ones, then each family's.
 pub fn modules() -> Vec<ShaderModule> {
-    let mut modules = vec![RASTER_MODULE, CONFORMANCE_MODULE, BVH_MODULE];
+    let mut modules = vec![
+        RASTER_MODULE,
+        CONFORMANCE_MODULE,
+        BVH_MODULE,
+        REFERENCE_MODULE,
+    ];
     modules.extend(crate::methods::SHADERS);
     modules
 }

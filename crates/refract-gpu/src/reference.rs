@@ -1,0 +1,382 @@
+//! The exact reference's transmission mode on the GPU (issue 32, first version):
+//! `shaders/reference.wgsl`, the twin of `refract_trace::Tracer::transmission_path`, over one
+//! BVH of the whole scene ([`crate::bvh`]; each triangle tagged with its mesh). It writes the
+//! colour and every AOV layer of the `reference` row (the ground truth of the pixel-centre
+//! path), as the CPU reference does; `tests/tests/gpu_reference.rs` holds it to the CPU's.
+//!
+//! Not yet a backend of the `reference` method (`--reference-backend`, the registry): a library
+//! entry point. Transmission mode at one sample per pixel only; `mode=full` and `spp > 1` are
+//! refused with a message.
+
+use glam::{Vec2, Vec3};
+use refract_core::TirPolicy;
+use refract_core::{Camera, gpu::FrameUniforms};
+use refract_geometry::{FlatBvh, Mesh};
+use refract_scene::{
+    Aov, Frame, InterfaceRule, Layer, RenderError, Scene, TraceMode, TraceSettings,
+};
+use wgpu::util::DeviceExt;
+
+use crate::bindings::{storage_entry, uniform_entry};
+use crate::bvh::{GpuBvh, bvh_layout};
+use crate::context::{GpuContext, GpuError};
+use crate::frame_uniforms::frame_uniforms;
+use crate::scene_buffers::GpuScene;
+use crate::shaders::REFERENCE_MODULE;
+
+/// `struct TraceTriangle` of `shaders/reference.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct TraceTriangle {
+    n0: [f32; 4],
+    n1: [f32; 4],
+    n2: [f32; 4],
+    uv01: [f32; 4],
+    uv2: [f32; 4],
+}
+
+/// `struct TraceUniforms` of `shaders/reference.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct TraceUniforms {
+    light_direction: [f32; 4],
+    light_radiance: [f32; 4],
+    light_ambient: [f32; 4],
+    refractor_eta: [f32; 4],
+    refractor_k: [f32; 4],
+    ior: f32,
+    max_depth: u32,
+    interface_rule: u32,
+    refractor_conductor: u32,
+}
+
+/// `struct ObjectConductor` of `shaders/reference.wgsl` (`eta.w` = 1 for a conductor).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct ObjectConductor {
+    eta: [f32; 4],
+    k: [f32; 4],
+}
+
+/// The vec4 records per pixel (`out_record`): eight vectors and the flags.
+const RECORD_VEC4S: u64 = 9;
+
+/// A scene uploaded for the GPU reference.
+pub struct GpuReference {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    bvh_group: wgpu::BindGroup,
+    scene: GpuScene,
+    triangles: wgpu::Buffer,
+    conductors: wgpu::Buffer,
+    uniforms: TraceUniforms,
+}
+
+impl GpuReference {
+    /// Uploads `scene`: one BVH over the refractor and every object, the triangles' normals,
+    /// texture coordinates and meshes, the objects' materials and conductors, the environment.
+    pub fn new(context: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
+        let (combined, attributes) = combined_mesh(scene);
+        let flat = FlatBvh::build(&combined)
+            .map_err(|err| RenderError::Parameter(format!("GPU reference: {err}")))?;
+        let ordered: Vec<TraceTriangle> = if flat.original.is_empty() {
+            vec![TraceTriangle::default()]
+        } else {
+            flat.original
+                .iter()
+                .map(|&i| attributes[i as usize])
+                .collect()
+        };
+        let mut conductors: Vec<ObjectConductor> = scene
+            .objects
+            .iter()
+            .map(|o| match o.conductor() {
+                Some(c) => ObjectConductor {
+                    eta: c.eta.extend(1.0).to_array(),
+                    k: c.k.extend(0.0).to_array(),
+                },
+                None => ObjectConductor::default(),
+            })
+            .collect();
+        if conductors.is_empty() {
+            conductors.push(ObjectConductor::default());
+        }
+        let refractor = scene.refractor.conductor();
+        let light = &scene.light;
+        let uniforms = TraceUniforms {
+            light_direction: light.direction.extend(0.0).to_array(),
+            light_radiance: light.radiance.extend(0.0).to_array(),
+            light_ambient: light.ambient.extend(0.0).to_array(),
+            refractor_eta: refractor.map_or([0.0; 4], |c| c.eta.extend(0.0).to_array()),
+            refractor_k: refractor.map_or([0.0; 4], |c| c.k.extend(0.0).to_array()),
+            ior: scene.refractor.ior(),
+            max_depth: 0,
+            interface_rule: 0,
+            refractor_conductor: u32::from(refractor.is_some()),
+        };
+        let device = &context.device;
+        let bvh = GpuBvh::upload(context, &flat)?;
+        Ok(context.checked(|| {
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("reference"),
+                entries: &[
+                    uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                    uniform_entry(1, wgpu::ShaderStages::COMPUTE),
+                    storage_entry(2, true),
+                    storage_entry(3, true),
+                    storage_entry(4, true),
+                    storage_entry(5, true),
+                    storage_entry(6, false),
+                    storage_entry(7, false),
+                ],
+            });
+            let bvh_layout = bvh_layout(device);
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("reference.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(REFERENCE_MODULE.source().into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("reference"),
+                bind_group_layouts: &[Some(&layout), Some(&bvh_layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("trace_transmission"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("trace_transmission"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            Self {
+                pipeline,
+                layout,
+                bvh_group: bvh.bind_group(device, &bvh_layout),
+                scene: GpuScene::new(device, scene),
+                triangles: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("reference triangles"),
+                    contents: bytemuck::cast_slice(&ordered),
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+                conductors: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("reference conductors"),
+                    contents: bytemuck::cast_slice(&conductors),
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+                uniforms,
+            }
+        })?)
+    }
+
+    /// Renders `camera`'s frame with `settings` into `frame`: the colour and every layer of the
+    /// `reference` row (`Covered`, `P1` … `PGeom`, `Interfaces`, `Tir`, `TirFirstExit`; NaN where
+    /// a quantity does not exist, as on the CPU). `frame.rays` is 0 (the GPU does not count).
+    pub fn render(
+        &self,
+        context: &GpuContext,
+        camera: &Camera,
+        settings: &TraceSettings,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        if settings.mode != TraceMode::Transmission || settings.spp != 1 {
+            return Err(RenderError::Parameter(
+                "the GPU reference traces transmission mode at one sample per pixel only so far (mode=full and spp > 1 run on the CPU)".into(),
+            ));
+        }
+        let (width, height) = (camera.width(), camera.height());
+        let pixels = u64::from(width) * u64::from(height);
+        let frame_uniforms: FrameUniforms = frame_uniforms(
+            camera,
+            &self.scene.environment,
+            self.uniforms.ior,
+            TirPolicy::default(),
+        );
+        let trace = TraceUniforms {
+            max_depth: settings.max_depth,
+            interface_rule: match settings.interface {
+                InterfaceRule::ShadingNormal => 0,
+                InterfaceRule::GeometricNormal => 1,
+            },
+            ..self.uniforms
+        };
+        let device = &context.device;
+        let limit = u64::from(device.limits().max_storage_buffer_binding_size);
+        if pixels * 16 * RECORD_VEC4S > limit {
+            return Err(GpuError::ResolutionTooLarge {
+                width,
+                height,
+                adapter: context.info.name.clone(),
+                limit: format!(
+                    "max storage buffer binding size {limit} bytes ({} bytes of path records a pixel)",
+                    16 * RECORD_VEC4S
+                ),
+            }
+            .into());
+        }
+        let buffers = context.checked(|| {
+            let storage = |label: &str, size: u64| {
+                let output = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (output, read)
+            };
+            let uniform = |label: &str, bytes: &[u8]| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytes,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                })
+            };
+            (
+                uniform("reference frame", bytemuck::bytes_of(&frame_uniforms)),
+                uniform("reference trace", bytemuck::bytes_of(&trace)),
+                storage("reference colour", pixels * 16),
+                storage("reference records", pixels * 16 * RECORD_VEC4S),
+            )
+        });
+        let (frame_buffer, trace_buffer, color, record) = buffers?;
+        let group = context.checked(|| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("reference"),
+                layout: &self.layout,
+                entries: &[
+                    entry(0, &frame_buffer),
+                    entry(1, &trace_buffer),
+                    entry(2, &self.scene.materials),
+                    entry(3, &self.conductors),
+                    entry(4, &self.scene.environment_texels),
+                    entry(5, &self.triangles),
+                    entry(6, &color.0),
+                    entry(7, &record.0),
+                ],
+            })
+        })?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("reference"),
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("trace_transmission"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.set_bind_group(1, &self.bvh_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
+        encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+        context.checked(|| context.queue.submit([encoder.finish()]))?;
+        let colors = context.read_buffer(&color.1)?;
+        let records = context.read_buffer(&record.1)?;
+        write_frame(
+            frame,
+            width,
+            height,
+            bytemuck::cast_slice(&colors),
+            bytemuck::cast_slice(&records),
+        );
+        Ok(())
+    }
+}
+
+/// The colour and the reference row's layers from the kernel's outputs.
+fn write_frame(
+    frame: &mut Frame,
+    width: u32,
+    height: u32,
+    colors: &[[f32; 4]],
+    records: &[[f32; 4]],
+) {
+    let n = (width * height) as usize;
+    frame.reset(width, height);
+    frame.color = colors[..n]
+        .iter()
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    let vector = |k: usize| -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let v = records[9 * i + k];
+                if v[3] == 0.0 {
+                    Vec3::NAN
+                } else {
+                    Vec3::new(v[0], v[1], v[2])
+                }
+            })
+            .collect()
+    };
+    let vectors = [
+        Aov::P1,
+        Aov::N1,
+        Aov::T1,
+        Aov::P2,
+        Aov::N2,
+        Aov::T2,
+        Aov::TOut,
+        Aov::PGeom,
+    ];
+    for (k, aov) in vectors.into_iter().enumerate() {
+        frame.insert_layer(aov, Layer::Vec3(vector(k)));
+    }
+    let flags = |c: usize| -> Vec<bool> { (0..n).map(|i| records[9 * i + 8][c] != 0.0).collect() };
+    frame.insert_layer(Aov::Covered, Layer::Flag(flags(0)));
+    frame.insert_layer(Aov::Tir, Layer::Flag(flags(1)));
+    frame.insert_layer(Aov::TirFirstExit, Layer::Flag(flags(2)));
+    frame.insert_layer(
+        Aov::Interfaces,
+        Layer::Count((0..n).map(|i| records[9 * i + 8][3] as u32).collect()),
+    );
+    frame.rays = 0;
+}
+
+/// The refractor (mesh 0) and every object (mesh 1 + k) as one mesh for the BVH, and each
+/// triangle's attributes in that order.
+fn combined_mesh(scene: &Scene) -> (Mesh, Vec<TraceTriangle>) {
+    let mut combined = Mesh {
+        name: "scene (refractor and objects)".into(),
+        positions: Vec::new(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        triangles: Vec::new(),
+    };
+    let mut attributes = Vec::new();
+    let meshes =
+        core::iter::once(scene.refractor.mesh()).chain(scene.objects.iter().map(|o| o.mesh()));
+    for (id, mesh) in meshes.enumerate() {
+        let base = combined.positions.len() as u32;
+        combined.positions.extend_from_slice(&mesh.positions);
+        combined.normals.extend_from_slice(&mesh.normals);
+        for t in &mesh.triangles {
+            combined.triangles.push(t.map(|v| v + base));
+            let n = |k: usize, w: f32| mesh.normals[t[k] as usize].extend(w).to_array();
+            let uv = |k: usize| mesh.uvs.get(t[k] as usize).copied().unwrap_or(Vec2::ZERO);
+            let (uv0, uv1, uv2) = (uv(0), uv(1), uv(2));
+            attributes.push(TraceTriangle {
+                n0: n(0, id as f32),
+                n1: n(1, 0.0),
+                n2: n(2, 0.0),
+                uv01: [uv0.x, uv0.y, uv1.x, uv1.y],
+                uv2: [uv2.x, uv2.y, 0.0, 0.0],
+            });
+        }
+    }
+    (combined, attributes)
+}
+
+/// A whole-buffer binding.
+fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}

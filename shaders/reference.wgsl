@@ -1,0 +1,294 @@
+// The exact reference's transmission mode in WGSL (issue 32): the twin of
+// refract_trace::Tracer::transmission_path over the whole scene's BVH (bvh.wgsl, group 1; the
+// refractor and every object in one tree, each triangle tagged with its mesh). Snell at every
+// refractor interface with the interpolated shading normal (TIR reflects), conductors reflect
+// with the exact conductor Fresnel reflectance per channel, diffuse objects are shaded under the
+// scene light, rays that leave the scene read the environment (WGSL's atan2, no polynomial).
+// One pixel per invocation, through the pixel centre; the colour and the ground truth of the
+// path (refract_trace::PathRecord) are written per pixel.
+
+// The per-triangle attributes the hit needs, in the BVH's leaf order.
+struct TraceTriangle {
+    // Vertex normals; n0.w is the mesh: 0 the refractor, 1 + k object k.
+    n0: vec4<f32>,
+    n1: vec4<f32>,
+    n2: vec4<f32>,
+    // Texture coordinates of the three corners (uv0.xy, uv1.xy), (uv2.xy, _).
+    uv01: vec4<f32>,
+    uv2: vec4<f32>,
+}
+
+// refract_trace::TraceSettings and the scene's light and refractor (refract_gpu::reference).
+struct TraceUniforms {
+    light_direction: vec4<f32>,
+    light_radiance: vec4<f32>,
+    light_ambient: vec4<f32>,
+    // The refractor's conductor (eta, k per channel) when refractor_conductor is 1.
+    refractor_eta: vec4<f32>,
+    refractor_k: vec4<f32>,
+    ior: f32,
+    max_depth: u32,
+    // 0: Mitsuba's shading-normal rule, 1: the geometric rule.
+    interface_rule: u32,
+    refractor_conductor: u32,
+}
+
+// An object's conductor (flag 1) or none: exact Fresnel needs eta and k, not the GPU
+// material's F_p.
+struct ObjectConductor {
+    eta: vec4<f32>,
+    k: vec4<f32>,
+}
+
+@group(0) @binding(1) var<uniform> trace: TraceUniforms;
+@group(0) @binding(2) var<storage, read> trace_materials: array<Material>;
+@group(0) @binding(3) var<storage, read> trace_conductors: array<ObjectConductor>;
+@group(0) @binding(5) var<storage, read> trace_triangles: array<TraceTriangle>;
+@group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
+// Nine vec4 per pixel: p1, n1, t1, p2, n2, t2, t_out, p_geom (w = 1 where set), then
+// (covered, tir, tir_first_exit, interfaces).
+@group(0) @binding(7) var<storage, read_write> out_record: array<vec4<f32>>;
+
+// refract_trace's OFFSET: secondary rays start ε (1 + max|pᵢ|) off the surface.
+const TRACE_OFFSET: f32 = 4e-6;
+
+// refract_core::fresnel::fresnel_conductor.
+fn fresnel_conductor_exact(cos_i: f32, n: f32, k: f32) -> f32 {
+    let c = clamp(cos_i, 0.0, 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let n2 = n * n;
+    let k2 = k * k;
+    let t0 = n2 - k2 - s2;
+    let a2b2 = sqrt(max(t0 * t0 + 4.0 * n2 * k2, 0.0));
+    let a = sqrt(max(0.5 * (a2b2 + t0), 0.0));
+    let t1 = a2b2 + c2;
+    let t2 = 2.0 * c * a;
+    var r_s = 1.0;
+    if t1 + t2 > 0.0 {
+        r_s = (t1 - t2) / (t1 + t2);
+    }
+    let t3 = c2 * a2b2 + s2 * s2;
+    let t4 = t2 * s2;
+    var r_p = r_s;
+    if t3 + t4 > 0.0 {
+        r_p = r_s * (t3 - t4) / (t3 + t4);
+    }
+    return clamp(0.5 * (r_s + r_p), 0.0, 1.0);
+}
+
+// A hit with what the path needs (refract_geometry's MeshBvh::hit_details).
+struct SceneHit {
+    found: bool,
+    p: vec3<f32>,
+    mesh: u32,
+    geometric: vec3<f32>,
+    shading: vec3<f32>,
+    uv: vec2<f32>,
+}
+
+fn scene_hit(origin: vec3<f32>, dir: vec3<f32>) -> SceneHit {
+    var h: SceneHit;
+    let closest = bvh_closest_hit(origin, dir, 0.0, BVH_INF);
+    h.found = closest.triangle != BVH_MISS;
+    if !h.found {
+        return h;
+    }
+    let tri = bvh_triangles[closest.triangle];
+    let attributes = trace_triangles[closest.triangle];
+    let e1 = tri.v1.xyz - tri.v0.xyz;
+    let e2 = tri.v2.xyz - tri.v0.xyz;
+    let face = cross(e1, e2);
+    let p = origin + dir * closest.t;
+    let inv_area2 = 1.0 / dot(face, face);
+    let b1 = dot(cross(p - tri.v0.xyz, e2), face) * inv_area2;
+    let b2 = dot(cross(e1, p - tri.v0.xyz), face) * inv_area2;
+    let b0 = 1.0 - b1 - b2;
+    h.p = p;
+    h.mesh = u32(attributes.n0.w);
+    h.geometric = normalize_or_zero(face);
+    let shading = b0 * attributes.n0.xyz + b1 * attributes.n1.xyz + b2 * attributes.n2.xyz;
+    let length2 = dot(shading, shading);
+    if length2 > 0.0 && length2 < BVH_INF {
+        h.shading = shading / sqrt(length2);
+    } else {
+        h.shading = h.geometric;
+    }
+    h.uv = b0 * attributes.uv01.xy + b1 * attributes.uv01.zw + b2 * attributes.uv2.xy;
+    return h;
+}
+
+// Tracer::continue_ray: the next ray's origin, pushed off to the side `dir` goes to.
+fn continue_origin(h: SceneHit, dir: vec3<f32>) -> vec3<f32> {
+    var side = -1.0;
+    if dot(dir, h.geometric) >= 0.0 {
+        side = 1.0;
+    }
+    let a = abs(h.p);
+    let offset = TRACE_OFFSET * (1.0 + max(max(a.x, a.y), a.z));
+    return h.p + side * offset * h.geometric;
+}
+
+// Whether mesh `mesh` is a conductor, and its (eta, k).
+fn conductor_of(mesh: u32) -> array<vec4<f32>, 3> {
+    if mesh == 0u {
+        return array<vec4<f32>, 3>(
+            vec4<f32>(f32(trace.refractor_conductor)),
+            trace.refractor_eta,
+            trace.refractor_k,
+        );
+    }
+    let c = trace_conductors[mesh - 1u];
+    return array<vec4<f32>, 3>(vec4<f32>(c.eta.w), c.eta, c.k);
+}
+
+fn shade_object(mesh: u32, h: SceneHit) -> vec3<f32> {
+    let m = trace_materials[mesh - 1u];
+    var uv = h.uv;
+    if m.world_uv != 0u {
+        uv = h.p.xz;
+    }
+    let a = albedo(m, uv);
+    return a * (trace.light_ambient.xyz
+        + abs(dot(h.shading, trace.light_direction.xyz)) * trace.light_radiance.xyz);
+}
+
+struct PathOut {
+    radiance: vec3<f32>,
+    p1: vec4<f32>,
+    n1: vec4<f32>,
+    t1: vec4<f32>,
+    p2: vec4<f32>,
+    n2: vec4<f32>,
+    t2: vec4<f32>,
+    t_out: vec4<f32>,
+    p_geom: vec4<f32>,
+    tir: bool,
+    tir_first_exit: bool,
+    interfaces: u32,
+}
+
+// Tracer::transmission_path.
+fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
+    var out: PathOut;
+    var origin = origin_in;
+    var dir = dir_in;
+    var depth = 0u;
+    var scale = vec3<f32>(1.0);
+    loop {
+        let h = scene_hit(origin, dir);
+        if !h.found {
+            if out.p1.w != 0.0 {
+                out.t_out = vec4<f32>(dir, 1.0);
+            }
+            out.radiance = scale * environment_radiance(dir);
+            return out;
+        }
+        let conductor = conductor_of(h.mesh);
+        if conductor[0].x != 0.0 {
+            if depth == trace.max_depth {
+                out.radiance = vec3<f32>(0.0);
+                return out;
+            }
+            depth += 1u;
+            var oriented = -h.shading;
+            if dot(dir, h.geometric) < 0.0 {
+                oriented = h.shading;
+            }
+            let facing = face_forward_shading_normal(oriented, dir);
+            let next = normalize(reflect_dir(dir, facing));
+            let cos_i = -dot(dir, facing);
+            scale *= vec3<f32>(
+                fresnel_conductor_exact(cos_i, conductor[1].x, conductor[2].x),
+                fresnel_conductor_exact(cos_i, conductor[1].y, conductor[2].y),
+                fresnel_conductor_exact(cos_i, conductor[1].z, conductor[2].z),
+            );
+            if out.p1.w == 0.0 && h.mesh == 0u {
+                out.p1 = vec4<f32>(h.p, 1.0);
+                out.n1 = vec4<f32>(h.shading, 1.0);
+                out.t1 = vec4<f32>(next, 1.0);
+            }
+            origin = continue_origin(h, next);
+            dir = next;
+            continue;
+        }
+        if h.mesh != 0u {
+            if out.p1.w != 0.0 {
+                out.t_out = vec4<f32>(dir, 1.0);
+                out.p_geom = vec4<f32>(h.p, 1.0);
+            }
+            out.radiance = scale * shade_object(h.mesh, h);
+            return out;
+        }
+        if depth == trace.max_depth {
+            out.radiance = vec3<f32>(0.0);
+            return out;
+        }
+        depth += 1u;
+        // Interface::at.
+        var entering: bool;
+        var facing: vec3<f32>;
+        var transmitted = 1.0;
+        if trace.interface_rule == 0u {
+            entering = -dot(dir, h.shading) >= 0.0;
+            facing = select(-h.shading, h.shading, entering);
+        } else {
+            entering = dot(dir, h.geometric) < 0.0;
+            facing = face_forward_shading_normal(select(-h.shading, h.shading, entering), dir);
+        }
+        let eta = select(trace.ior, 1.0 / trace.ior, entering);
+        if trace.interface_rule == 0u {
+            transmitted = eta * eta;
+        }
+        let refracted = refract_dir(dir, facing, eta);
+        let tir = all(refracted == vec3<f32>(0.0));
+        var next: vec3<f32>;
+        if tir {
+            next = normalize(reflect_dir(dir, facing));
+        } else {
+            scale *= transmitted;
+            next = normalize(refracted);
+        }
+        if out.p1.w == 0.0 {
+            out.p1 = vec4<f32>(h.p, 1.0);
+            out.n1 = vec4<f32>(h.shading, 1.0);
+            out.t1 = vec4<f32>(next, 1.0);
+        } else if out.p2.w == 0.0 && !entering {
+            out.p2 = vec4<f32>(h.p, 1.0);
+            out.n2 = vec4<f32>(h.shading, 1.0);
+            out.t2 = vec4<f32>(next, 1.0);
+            out.tir_first_exit = tir;
+        }
+        out.tir = out.tir || tir;
+        out.interfaces += select(1u, 0u, tir);
+        origin = continue_origin(h, next);
+        dir = next;
+    }
+    return out;
+}
+
+@compute @workgroup_size(8, 8)
+fn trace_transmission(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.width || id.y >= frame.height {
+        return;
+    }
+    let i = id.y * frame.width + id.x;
+    let dir = pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5));
+    let path = transmission_path(frame.eye.xyz, dir);
+    out_color[i] = vec4<f32>(path.radiance, 1.0);
+    let r = 9u * i;
+    out_record[r] = path.p1;
+    out_record[r + 1u] = path.n1;
+    out_record[r + 2u] = path.t1;
+    out_record[r + 3u] = path.p2;
+    out_record[r + 4u] = path.n2;
+    out_record[r + 5u] = path.t2;
+    out_record[r + 6u] = path.t_out;
+    out_record[r + 7u] = path.p_geom;
+    out_record[r + 8u] = vec4<f32>(
+        path.p1.w,
+        select(0.0, 1.0, path.tir),
+        select(0.0, 1.0, path.tir_first_exit),
+        f32(path.interfaces),
+    );
+}
