@@ -10,7 +10,7 @@ use refract_core::TirPolicy;
 use refract_lab::backends::{self, GpuPolicy};
 use refract_lab::jobs::CompareOptions;
 use refract_lab::{Note, Progress};
-use refract_scene::MethodId;
+use refract_scene::{BackendId, MethodId};
 
 use crate::errors::{detached, value_error};
 
@@ -134,6 +134,7 @@ pub fn compare(
             )?,
             res,
             spp,
+            reference_backend: BackendId::Trace,
             frames,
             out,
         };

@@ -21,7 +21,7 @@ pub struct Origin {
     pub camera: CameraDesc,
     /// The method and its parameters.
     pub method: MethodParams,
-    /// The backend that ran it (`trace` for the reference).
+    /// The backend that ran it (`trace` for the reference on the CPU tracer).
     pub backend: BackendId,
     /// Its time, as the renderer measured it.
     pub timing: FrameTiming,
@@ -165,7 +165,7 @@ impl Frame {
         self.origin.as_ref().map(|o| o.method.id().name())
     }
 
-    /// The backend that rendered it: `cpu`, `gpu` or `trace` (the reference).
+    /// The backend that rendered it: `cpu`, `gpu` or `trace` (the reference on the CPU tracer).
     #[getter]
     fn backend(&self) -> Option<&'static str> {
         self.origin.as_ref().map(|o| o.backend.id())

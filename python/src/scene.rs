@@ -216,7 +216,8 @@ impl Scene {
     }
 
     /// Renders one frame of `method` (a registry id, or `"reference"`) on `backend` (`"cpu"`
-    /// or `"gpu"`; the reference runs on the CPU tracer) at `res = (width, height)`, with
+    /// or `"gpu"`; the reference runs on the CPU tracer, or with `"gpu"` on the GPU's in
+    /// transmission mode at one sample per pixel) at `res = (width, height)`, with
     /// `params` (names and values as `refract.methods()` lists them) applied to the method's
     /// defaults; `aovs=True` also computes the method's AOV layers (needed by
     /// `refract.metrics`). The GIL is released while rendering.
@@ -266,7 +267,7 @@ impl Scene {
             let timing = renders.render(&request, &mut frame)?;
             Ok((frame, timing))
         })?;
-        let backend = if id == MethodId::Reference {
+        let backend = if id == MethodId::Reference && backend == BackendId::Cpu {
             BackendId::Trace
         } else {
             backend

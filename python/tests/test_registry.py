@@ -16,7 +16,7 @@ def test_methods_are_the_registry():
     assert set(wyman.backends) == {"cpu", "gpu"}
     assert "T2" in wyman.aovs and "covered" in wyman.aovs
     reference = methods[0]
-    assert reference.backends == ("trace",)
+    assert reference.backends == ("trace", "gpu")
 
 
 def test_parameters_carry_ranges_and_defaults():

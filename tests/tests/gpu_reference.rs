@@ -8,16 +8,20 @@ use glam::Vec3;
 use refract_eval::load_scene;
 use refract_gpu::GpuContext;
 use refract_gpu::reference::GpuReference;
-use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene, TraceSettings};
+use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Scene, TraceSettings};
 
 const RES: u32 = 96;
 
 fn vectors(frame: &Frame, aov: Aov) -> &[Vec3] {
-    frame.vec3(aov).unwrap_or_else(|| panic!("no {aov:?} layer"))
+    frame
+        .vec3(aov)
+        .unwrap_or_else(|| panic!("no {aov:?} layer"))
 }
 
 fn flags(frame: &Frame, aov: Aov) -> &[bool] {
-    frame.flag(aov).unwrap_or_else(|| panic!("no {aov:?} layer"))
+    frame
+        .flag(aov)
+        .unwrap_or_else(|| panic!("no {aov:?} layer"))
 }
 
 /// Two points are the same hit: both absent (NaN), or within 10⁻⁴ of the scene's scale.
@@ -34,7 +38,13 @@ fn compare(name: &str, scene: &Arc<Scene>, context: &GpuContext) -> (f64, f64, f
     let mut gpu = Frame::default();
     GpuReference::new(context, scene)
         .expect("upload")
-        .render(context, &camera, &settings, &mut gpu)
+        .render(
+            context,
+            &camera,
+            &settings,
+            FrameOutputs::ColorAndAovs,
+            &mut gpu,
+        )
         .expect("GPU reference");
     // Exactly the layers of the reference row, as the CPU writes them.
     let mut expected: Vec<Aov> = MethodId::Reference.info().aovs.to_vec();
@@ -113,7 +123,13 @@ fn full_mode_and_supersampling_are_refused_with_a_message() {
             unreachable!()
         };
         let err = reference
-            .render(&context, &camera, &settings, &mut Frame::default())
+            .render(
+                &context,
+                &camera,
+                &settings,
+                FrameOutputs::Color,
+                &mut Frame::default(),
+            )
             .expect_err("refused");
         assert!(err.to_string().contains("transmission mode"), "{err}");
     }

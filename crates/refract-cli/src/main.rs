@@ -10,7 +10,7 @@ use refract_eval::BUILTIN_SCENES;
 use refract_lab::backends::{self, GpuPolicy};
 use refract_lab::{bench, claims, compare, sweep, sweep_report};
 use refract_scene::registry::ParamKind;
-use refract_scene::{MethodId, REGISTRY};
+use refract_scene::{BackendId, MethodId, REGISTRY};
 
 mod cleanup;
 mod export;
@@ -58,6 +58,15 @@ enum Command {
     Info(info::InfoArgs),
 }
 
+/// Where the reference of a comparison is traced.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ReferenceBackendArg {
+    /// The CPU tracer (every mode and sample count).
+    Cpu,
+    /// The GPU tracer (`shaders/reference.wgsl`): transmission mode, one sample per pixel.
+    Gpu,
+}
+
 /// Second-interface total-internal-reflection policy.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TirArg {
@@ -96,6 +105,10 @@ struct CompareArgs {
     /// Reference samples per pixel.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
     spp: u32,
+    /// Where the reference is traced: cpu (the CPU tracer) or gpu (transmission mode, one
+    /// sample per pixel; docs/reference.md).
+    #[arg(long, value_enum, default_value = "cpu")]
+    reference_backend: ReferenceBackendArg,
     /// Timed frames per method (median reported, after 2 warm-up frames).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
     frames: u32,
@@ -146,6 +159,10 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<refract_lab::jobs::Compa
         methods: compare::method_params(&ids, args.tir.into(), &assignments, "--param")?,
         res: args.res,
         spp: args.spp,
+        reference_backend: match args.reference_backend {
+            ReferenceBackendArg::Cpu => BackendId::Trace,
+            ReferenceBackendArg::Gpu => BackendId::Gpu,
+        },
         frames: args.frames,
         out: args.out,
     })

@@ -15,6 +15,66 @@ fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// `compare --reference-backend gpu` judges the methods against the GPU's reference: the same
+/// verdicts and metrics as against the CPU tracer, within the two references' f32 differences.
+#[test]
+fn compare_against_the_gpu_reference_gives_the_cpu_reference_metrics() {
+    if std::env::var("REFRACT_REQUIRE_GPU").is_err() && refract_gpu::GpuContext::new().is_err() {
+        println!("skipped: no GPU adapter");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let metrics = |reference: &str| -> Vec<serde_json::Value> {
+        let out = format!("cmp-{reference}");
+        let output = refract(
+            &[
+                "compare",
+                "sphere",
+                "--methods",
+                "wyman,single,iterative-seeded",
+                "--backends",
+                "cpu",
+                "--res",
+                "64",
+                "--frames",
+                "1",
+                "--reference-backend",
+                reference,
+                "--out",
+                &out,
+            ],
+            dir.path(),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        let text =
+            std::fs::read_to_string(dir.path().join(out).join("metrics.json")).expect("metrics");
+        serde_json::from_str::<serde_json::Value>(&text)
+            .expect("json")
+            .as_array()
+            .expect("records")
+            .clone()
+    };
+    let (cpu, gpu) = (metrics("cpu"), metrics("gpu"));
+    assert_eq!(cpu.len(), gpu.len());
+    assert_eq!(cpu[0]["backend"], "trace");
+    assert_eq!(gpu[0]["backend"], "gpu");
+    for (c, g) in cpu.iter().zip(&gpu).skip(1) {
+        assert_eq!(c["method"], g["method"]);
+        for field in ["flip_mean", "t2_angle_deg_mean", "p2_error_rel_mean"] {
+            let (a, b) = (c[field].as_f64(), g[field].as_f64());
+            let (Some(a), Some(b)) = (a, b) else {
+                assert_eq!(a, b, "{}: {field}", c["method"]);
+                continue;
+            };
+            assert!(
+                (a - b).abs() <= 1e-3 * (1.0 + a.abs()),
+                "{} {field}: {a} (CPU reference) vs {b} (GPU reference)",
+                c["method"]
+            );
+        }
+    }
+}
+
 #[test]
 fn compare_writes_metrics_images_and_reports() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -188,7 +248,7 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
     let cases: [(&[&str], &str); 14] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
         // The backend a user names runs, or the command says why not (before: the reference
-        // ran on the CPU tracer in silence).
+        // ran on the CPU tracer in silence; now the GPU traces transmission mode only).
         (
             &[
                 "render",
@@ -197,12 +257,18 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
                 "reference",
                 "--backend",
                 "gpu",
+                "--param",
+                "mode=full",
                 "--res",
                 "8",
                 "--out",
                 "x.png",
             ],
-            "CPU tracer only",
+            if refract_gpu::GpuContext::new().is_ok() {
+                "transmission mode"
+            } else {
+                "adapter"
+            },
         ),
         (
             &[

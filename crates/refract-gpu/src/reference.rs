@@ -4,16 +4,16 @@
 //! colour and every AOV layer of the `reference` row (the ground truth of the pixel-centre
 //! path), as the CPU reference does; `tests/tests/gpu_reference.rs` holds it to the CPU's.
 //!
-//! Not yet a backend of the `reference` method (`--reference-backend`, the registry): a library
-//! entry point. Transmission mode at one sample per pixel only; `mode=full` and `spp > 1` are
-//! refused with a message.
+//! [`crate::GpuRenderer`] renders the `reference` method with it (`render --method reference
+//! --backend gpu`, `compare --reference-backend gpu`). Transmission mode at one sample per
+//! pixel only; `mode=full` and `spp > 1` are refused with a message.
 
 use glam::{Vec2, Vec3};
 use refract_core::TirPolicy;
 use refract_core::{Camera, gpu::FrameUniforms};
 use refract_geometry::{FlatBvh, Mesh};
 use refract_scene::{
-    Aov, Frame, InterfaceRule, Layer, RenderError, Scene, TraceMode, TraceSettings,
+    Aov, Frame, FrameOutputs, InterfaceRule, Layer, RenderError, Scene, TraceMode, TraceSettings,
 };
 use wgpu::util::DeviceExt;
 
@@ -176,6 +176,7 @@ impl GpuReference {
         context: &GpuContext,
         camera: &Camera,
         settings: &TraceSettings,
+        outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
         if settings.mode != TraceMode::Transmission || settings.spp != 1 {
@@ -200,7 +201,7 @@ impl GpuReference {
             ..self.uniforms
         };
         let device = &context.device;
-        let limit = u64::from(device.limits().max_storage_buffer_binding_size);
+        let limit = device.limits().max_storage_buffer_binding_size;
         if pixels * 16 * RECORD_VEC4S > limit {
             return Err(GpuError::ResolutionTooLarge {
                 width,
@@ -283,7 +284,7 @@ impl GpuReference {
             width,
             height,
             bytemuck::cast_slice(&colors),
-            bytemuck::cast_slice(&records),
+            (outputs == FrameOutputs::ColorAndAovs).then(|| bytemuck::cast_slice(&records)),
         );
         Ok(())
     }
@@ -295,7 +296,7 @@ fn write_frame(
     width: u32,
     height: u32,
     colors: &[[f32; 4]],
-    records: &[[f32; 4]],
+    records: Option<&[[f32; 4]]>,
 ) {
     let n = (width * height) as usize;
     frame.reset(width, height);
@@ -303,6 +304,10 @@ fn write_frame(
         .iter()
         .map(|c| Vec3::new(c[0], c[1], c[2]))
         .collect();
+    frame.rays = 0;
+    let Some(records) = records else {
+        return;
+    };
     let vector = |k: usize| -> Vec<Vec3> {
         (0..n)
             .map(|i| {
@@ -336,7 +341,6 @@ fn write_frame(
         Aov::Interfaces,
         Layer::Count((0..n).map(|i| records[9 * i + 8][3] as u32).collect()),
     );
-    frame.rays = 0;
 }
 
 /// The refractor (mesh 0) and every object (mesh 1 + k) as one mesh for the BVH, and each

@@ -4,11 +4,12 @@
 //! encode, submit, read back, time) is `family::FamilySlot::run_frame`, written once.
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use refract_core::Camera;
 use refract_scene::{
     BackendId, Frame, FrameOutputs, FrameTiming, MethodParams, RenderError, Renderer, Scene,
-    SceneMesh, SurfaceTexel,
+    SceneMesh, SurfaceTexel, TimingSource,
 };
 
 use crate::context::{GpuContext, GpuError};
@@ -16,6 +17,7 @@ use crate::family::GpuFrameCx;
 use crate::methods::Families;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
+use crate::reference::GpuReference;
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
 
@@ -33,6 +35,8 @@ pub struct GpuRenderer {
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     families: Families,
+    /// The exact reference of the prepared scene, uploaded at its first frame.
+    reference: Option<GpuReference>,
 }
 
 impl GpuRenderer {
@@ -55,6 +59,7 @@ impl GpuRenderer {
             timestamps,
             scene: None,
             families,
+            reference: None,
         })
     }
 
@@ -111,6 +116,7 @@ impl Renderer for GpuRenderer {
             .checked(|| GpuScene::new(&self.context.device, scene))?;
         self.families.prepare(scene);
         self.scene = Some((Arc::clone(scene), uploaded));
+        self.reference = None;
         Ok(())
     }
 
@@ -127,6 +133,18 @@ impl Renderer for GpuRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let id = method.id();
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
+        if let MethodParams::Reference(settings) = method {
+            let start = Instant::now();
+            let reference = match &mut self.reference {
+                Some(reference) => reference,
+                empty => empty.insert(GpuReference::new(&self.context, scene)?),
+            };
+            reference.render(&self.context, camera, settings, outputs, frame)?;
+            return Ok(FrameTiming {
+                ms: start.elapsed().as_secs_f64() * 1e3,
+                source: TimingSource::Wall,
+            });
+        }
         let cx = GpuFrameCx {
             context: &self.context,
             raster: &self.raster,

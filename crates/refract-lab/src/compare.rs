@@ -65,6 +65,7 @@ pub fn default_options() -> crate::Result<CompareOptions> {
         methods: method_params(&ids, TirPolicy::ClampToCritical, &[], "default job")?,
         res: 512,
         spp: 1,
+        reference_backend: BackendId::Trace,
         frames: 5,
         out: PathBuf::from("out"),
     })
@@ -112,7 +113,17 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     }
     let mut renderers = backends::open(&options.backends, options.gpu_policy, progress)?;
     backends::check_supported(&renderers, &options.methods)?;
-    let mut reference = ReferenceRenderer::new();
+    let mut reference: Box<dyn Renderer> = match options.reference_backend {
+        BackendId::Gpu => {
+            crate::ensure!(
+                options.spp == 1,
+                "--reference-backend gpu traces one sample per pixel; --spp {} runs on the CPU tracer",
+                options.spp
+            );
+            Box::new(refract_gpu::GpuRenderer::new()?)
+        }
+        _ => Box::new(ReferenceRenderer::new()),
+    };
     let settings = MethodParams::Reference(TraceSettings {
         spp: options.spp,
         ..TraceSettings::default()
@@ -155,6 +166,8 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         )?;
         let mut row = reference_record(&truth, timing.ms);
         row.scene.clone_from(&scene.name);
+        // "trace" for the CPU tracer, "gpu" for the GPU's.
+        reference.backend().id().clone_into(&mut row.backend);
         row.params = settings.describe();
         records.push(row);
 

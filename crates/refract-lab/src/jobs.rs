@@ -25,6 +25,9 @@ pub struct CompareOptions {
     pub res: u32,
     /// Reference samples per pixel.
     pub spp: u32,
+    /// Where the reference is traced: [`BackendId::Trace`] (the CPU tracer, the default) or
+    /// [`BackendId::Gpu`] (`refract_gpu::reference`: transmission mode, one sample per pixel).
+    pub reference_backend: BackendId,
     /// Timed frames per method (after 2 warm-up frames).
     pub frames: u32,
     /// Output directory.

@@ -61,12 +61,12 @@ impl Renders {
             );
             return Ok(request.backend);
         }
-        crate::ensure!(
-            request.backend != BackendId::Gpu,
-            "method `reference` on backend `gpu`: the exact reference runs on the CPU tracer \
-             only; ask for backend cpu"
-        );
-        Ok(BackendId::Trace)
+        // The reference runs on the tracer (asked for as cpu) or on the GPU (transmission mode,
+        // one sample per pixel: refract_gpu::reference; other settings are refused there).
+        Ok(match request.backend {
+            BackendId::Gpu => BackendId::Gpu,
+            _ => BackendId::Trace,
+        })
     }
 
     /// The prepared renderer of `backend`, opened and prepared on first use.

@@ -349,7 +349,7 @@ quantity does not exist. TIR masks show TIR pixels in magenta; missed-object mas
 fn job_results(records: &[MetricsRecord], scenes: &[SceneImages], res: u32) -> Vec<JobResult> {
     records
         .iter()
-        .filter(|r| r.backend != "trace")
+        .filter(|r| r.method != "reference")
         .enumerate()
         .map(|(index, r)| {
             let stem = format!("{}-{}", r.method, r.backend);

@@ -27,6 +27,7 @@ fn a_comparison_runs_as_a_library_call() {
         methods,
         res: 16,
         spp: 1,
+        reference_backend: BackendId::Trace,
         frames: 1,
         out: dir.path().join("out"),
     };

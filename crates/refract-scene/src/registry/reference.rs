@@ -130,7 +130,8 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     defaults: || MethodParams::Reference(TraceSettings::DEFAULT),
     renders_conductors: true,
     memory: MemoryModel::per_pixel(118, 239),
-    backends: &[BackendId::Trace],
+    // The GPU traces transmission mode at one sample per pixel (refract_gpu::reference).
+    backends: &[BackendId::Trace, BackendId::Gpu],
 }];
 
 impl FamilyParams for TraceSettings {
