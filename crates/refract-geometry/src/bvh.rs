@@ -61,18 +61,7 @@ impl MeshBvh {
     /// [`MeshBvh::build`] for meshes of any scale: an error, not a panic inside obvhs, when a
     /// coordinate's magnitude reaches [`MAX_BVH_COORDINATE`].
     pub fn try_build(mesh: &Mesh) -> Result<Self, GeometryError> {
-        let magnitude = mesh
-            .positions
-            .iter()
-            .map(|p| p.abs().max_element())
-            .fold(0.0f32, f32::max);
-        if magnitude >= MAX_BVH_COORDINATE || magnitude.is_nan() {
-            return Err(GeometryError::CoordinatesTooLarge {
-                source_name: mesh.name.clone(),
-                magnitude,
-                limit: MAX_BVH_COORDINATE,
-            });
-        }
+        check_coordinates(mesh)?;
         Ok(Self::build(mesh))
     }
 
@@ -83,12 +72,7 @@ impl MeshBvh {
     /// Inside obvhs when a coordinate's magnitude is [`MAX_BVH_COORDINATE`] or more: use
     /// [`MeshBvh::try_build`] for meshes of unknown scale.
     pub fn build(mesh: &Mesh) -> Self {
-        let triangles: Vec<Triangle> = (0..mesh.triangles.len())
-            .map(|i| {
-                let [v0, v1, v2] = mesh.triangle_positions(i).map(Vec3A::from);
-                Triangle { v0, v1, v2 }
-            })
-            .collect();
+        let triangles = obvhs_triangles(mesh);
         let mut build_time = Duration::ZERO;
         let mut bvh =
             build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut build_time);
@@ -203,6 +187,34 @@ impl MeshBvh {
             shading_normal: shading.into(),
         }
     }
+}
+
+/// The triangles of `mesh` as obvhs builds them.
+pub(crate) fn obvhs_triangles(mesh: &Mesh) -> Vec<Triangle> {
+    (0..mesh.triangles.len())
+        .map(|i| {
+            let [v0, v1, v2] = mesh.triangle_positions(i).map(Vec3A::from);
+            Triangle { v0, v1, v2 }
+        })
+        .collect()
+}
+
+/// An error when a coordinate of `mesh` has a magnitude of [`MAX_BVH_COORDINATE`] or more (or
+/// is NaN): obvhs's builders panic there.
+pub(crate) fn check_coordinates(mesh: &Mesh) -> Result<(), GeometryError> {
+    let magnitude = mesh
+        .positions
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0f32, f32::max);
+    if magnitude >= MAX_BVH_COORDINATE || magnitude.is_nan() {
+        return Err(GeometryError::CoordinatesTooLarge {
+            source_name: mesh.name.clone(),
+            magnitude,
+            limit: MAX_BVH_COORDINATE,
+        });
+    }
+    Ok(())
 }
 
 /// The obvhs ray. `−0.0` direction components become `+0.0`: obvhs picks slab bounds by

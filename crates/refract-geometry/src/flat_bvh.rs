@@ -12,7 +12,6 @@ use std::time::Duration;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
-use obvhs::triangle::Triangle;
 
 use crate::error::GeometryError;
 use crate::mesh::Mesh;
@@ -68,27 +67,11 @@ impl FlatBvh {
     /// [`crate::bvh::MAX_BVH_COORDINATE`] (obvhs panics there) or when the tree is deeper than
     /// [`FLAT_BVH_MAX_DEPTH`].
     pub fn build(mesh: &Mesh) -> Result<Self, GeometryError> {
-        let magnitude = mesh
-            .positions
-            .iter()
-            .map(|p| p.abs().max_element())
-            .fold(0.0f32, f32::max);
-        if magnitude >= crate::bvh::MAX_BVH_COORDINATE || magnitude.is_nan() {
-            return Err(GeometryError::CoordinatesTooLarge {
-                source_name: mesh.name.clone(),
-                magnitude,
-                limit: crate::bvh::MAX_BVH_COORDINATE,
-            });
-        }
+        crate::bvh::check_coordinates(mesh)?;
         if mesh.triangles.is_empty() {
             return Ok(Self::default());
         }
-        let triangles: Vec<Triangle> = (0..mesh.triangles.len())
-            .map(|i| {
-                let [v0, v1, v2] = mesh.triangle_positions(i).map(Vec3A::from);
-                Triangle { v0, v1, v2 }
-            })
-            .collect();
+        let triangles = crate::bvh::obvhs_triangles(mesh);
         let mut build_time = Duration::ZERO;
         let bvh = build_bvh2_from_tris(&triangles, BvhBuildParams::medium_build(), &mut build_time);
         let corner = |v: Vec3A| [v.x, v.y, v.z, 0.0];
