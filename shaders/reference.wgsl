@@ -31,6 +31,8 @@ struct TraceUniforms {
     // 0: Mitsuba's shading-normal rule, 1: the geometric rule.
     interface_rule: u32,
     refractor_conductor: u32,
+    // 1: write the path records (the AOV layers); 0: the colour only (a 4-byte record buffer).
+    write_records: u32,
 }
 
 // An object's conductor (flag 1) or none: exact Fresnel needs eta and k, not the GPU
@@ -45,9 +47,10 @@ struct ObjectConductor {
 @group(0) @binding(3) var<storage, read> trace_conductors: array<ObjectConductor>;
 @group(0) @binding(5) var<storage, read> trace_triangles: array<TraceTriangle>;
 @group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
-// Nine vec4 per pixel: p1, n1, t1, p2, n2, t2, t_out, p_geom (w = 1 where set), then
-// (covered, tir, tir_first_exit, interfaces).
-@group(0) @binding(7) var<storage, read_write> out_record: array<vec4<f32>>;
+// RECORD_WORDS words per pixel: p1, n1, t1, p2, n2, t2, t_out, p_geom (xyz, as f32 bits), then
+// a mask (bit k: vector k exists; bit 8 covered, 9 tir, 10 tir_first_exit), then interfaces.
+@group(0) @binding(7) var<storage, read_write> out_record: array<u32>;
+const RECORD_WORDS: u32 = 26u;
 
 // refract_trace's OFFSET: secondary rays start ε (1 + max|pᵢ|) off the surface.
 const TRACE_OFFSET: f32 = 4e-6;
@@ -166,6 +169,8 @@ struct PathOut {
     tir: bool,
     tir_first_exit: bool,
     interfaces: u32,
+    // Closest-hit queries traced (the frame's ray count).
+    rays: u32,
 }
 
 // Tracer::transmission_path.
@@ -177,6 +182,7 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
     var scale = vec3<f32>(1.0);
     loop {
         let h = scene_hit(origin, dir);
+        out.rays += 1u;
         if !h.found {
             if out.p1.w != 0.0 {
                 out.t_out = vec4<f32>(dir, 1.0);
@@ -275,20 +281,26 @@ fn trace_transmission(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.y * frame.width + id.x;
     let dir = pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5));
     let path = transmission_path(frame.eye.xyz, dir);
-    out_color[i] = vec4<f32>(path.radiance, 1.0);
-    let r = 9u * i;
-    out_record[r] = path.p1;
-    out_record[r + 1u] = path.n1;
-    out_record[r + 2u] = path.t1;
-    out_record[r + 3u] = path.p2;
-    out_record[r + 4u] = path.n2;
-    out_record[r + 5u] = path.t2;
-    out_record[r + 6u] = path.t_out;
-    out_record[r + 7u] = path.p_geom;
-    out_record[r + 8u] = vec4<f32>(
-        path.p1.w,
-        select(0.0, 1.0, path.tir),
-        select(0.0, 1.0, path.tir_first_exit),
-        f32(path.interfaces),
+    // w: the rays traced (exact in f32 up to 2^24).
+    out_color[i] = vec4<f32>(path.radiance, f32(path.rays));
+    if trace.write_records == 0u {
+        return;
+    }
+    let vectors = array<vec4<f32>, 8>(
+        path.p1, path.n1, path.t1, path.p2, path.n2, path.t2, path.t_out, path.p_geom,
     );
+    let r = RECORD_WORDS * i;
+    var mask = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        let v = vectors[k];
+        out_record[r + 3u * k] = bitcast<u32>(v.x);
+        out_record[r + 3u * k + 1u] = bitcast<u32>(v.y);
+        out_record[r + 3u * k + 2u] = bitcast<u32>(v.z);
+        mask |= select(0u, 1u << k, v.w != 0.0);
+    }
+    mask |= select(0u, 1u << 8u, path.p1.w != 0.0);
+    mask |= select(0u, 1u << 9u, path.tir);
+    mask |= select(0u, 1u << 10u, path.tir_first_exit);
+    out_record[r + 24u] = mask;
+    out_record[r + 25u] = path.interfaces;
 }

@@ -52,6 +52,13 @@ fn compare(name: &str, scene: &Arc<Scene>, context: &GpuContext) -> (f64, f64, f
     expected.sort();
     written.sort();
     assert_eq!(written, expected, "{name}");
+    // The same rays traced: one per closest-hit query, counted on both.
+    assert!(
+        gpu.rays.abs_diff(cpu.rays) * 1000 <= cpu.rays,
+        "{name}: {} rays on the GPU, {} on the CPU",
+        gpu.rays,
+        cpu.rays
+    );
     let n = (RES * RES) as usize;
     let (cpu_p1, gpu_p1) = (vectors(&cpu, Aov::P1), vectors(&gpu, Aov::P1));
     let (cpu_cov, gpu_cov) = (flags(&cpu, Aov::Covered), flags(&gpu, Aov::Covered));

@@ -472,6 +472,62 @@ fn bench_quick_writes_table_one() {
     );
 }
 
+/// `refract bench --table reference --quick`: the reference on the CPU tracer and the GPU, both
+/// modes, with rays per second; the GPU's full-mode rows say it does not trace them.
+#[test]
+fn bench_reference_table_times_both_backends() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let output = refract(
+        &[
+            "bench",
+            "--table",
+            "reference",
+            "--quick",
+            "--data",
+            data,
+            "--out",
+            "b",
+        ],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let rows: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("b/bench-reference.json")).expect("json"),
+    )
+    .expect("json");
+    let rows = rows.as_array().expect("rows");
+    let find = |backend: &str, mode: &str| {
+        rows.iter()
+            .find(|r| r["backend"] == backend && r["mode"] == mode && r["scene"] == "sphere")
+            .cloned()
+    };
+    for mode in ["transmission", "full"] {
+        let row = find("trace", mode).expect("the CPU tracer's row");
+        assert!(row["seconds"].as_f64().is_some_and(|s| s > 0.0), "{row}");
+        // At least one ray per pixel of the 64² frame.
+        assert!(row["rays"].as_u64().is_some_and(|r| r >= 64 * 64), "{row}");
+    }
+    if std::env::var("REFRACT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+        let transmission = find("gpu", "transmission").expect("the GPU's row");
+        // The GPU traces the same rays as the CPU tracer (a path through a shared edge may
+        // differ by a bounce).
+        let gpu_rays = transmission["rays"].as_u64().expect("GPU rays");
+        let cpu_rays = find("trace", "transmission").expect("cpu")["rays"]
+            .as_u64()
+            .expect("CPU rays");
+        assert!(
+            gpu_rays.abs_diff(cpu_rays) * 200 <= cpu_rays,
+            "{gpu_rays} rays on the GPU, {cpu_rays} on the CPU"
+        );
+        let full = find("gpu", "full").expect("the GPU's full row");
+        assert!(full["seconds"].is_null(), "{full}");
+        let md =
+            std::fs::read_to_string(dir.path().join("b/bench-reference.md")).expect("markdown");
+        assert!(md.contains("not traced on the GPU"), "{md}");
+    }
+}
+
 #[test]
 fn info_lists_adapters_and_mesh_facts() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -48,6 +48,8 @@ struct TraceUniforms {
     max_depth: u32,
     interface_rule: u32,
     refractor_conductor: u32,
+    write_records: u32,
+    _padding: [u32; 3],
 }
 
 /// `struct ObjectConductor` of `shaders/reference.wgsl` (`eta.w` = 1 for a conductor).
@@ -58,8 +60,8 @@ struct ObjectConductor {
     k: [f32; 4],
 }
 
-/// The vec4 records per pixel (`out_record`): eight vectors and the flags.
-const RECORD_VEC4S: u64 = 9;
+/// The words of a pixel's path record (`RECORD_WORDS`): eight vectors, a mask, a count.
+const RECORD_WORDS: usize = 26;
 
 /// A scene uploaded for the GPU reference.
 pub struct GpuReference {
@@ -113,6 +115,8 @@ impl GpuReference {
             max_depth: 0,
             interface_rule: 0,
             refractor_conductor: u32::from(refractor.is_some()),
+            write_records: 0,
+            _padding: [0; 3],
         };
         let device = &context.device;
         let bvh = GpuBvh::upload(context, &flat)?;
@@ -170,7 +174,8 @@ impl GpuReference {
 
     /// Renders `camera`'s frame with `settings` into `frame`: the colour and every layer of the
     /// `reference` row (`Covered`, `P1` … `PGeom`, `Interfaces`, `Tir`, `TirFirstExit`; NaN where
-    /// a quantity does not exist, as on the CPU). `frame.rays` is 0 (the GPU does not count).
+    /// a quantity does not exist, as on the CPU), and `frame.rays`, the closest-hit queries
+    /// traced, counted as the CPU tracer counts them.
     pub fn render(
         &self,
         context: &GpuContext,
@@ -186,6 +191,7 @@ impl GpuReference {
         }
         let (width, height) = (camera.width(), camera.height());
         let pixels = u64::from(width) * u64::from(height);
+        let with_records = outputs == FrameOutputs::ColorAndAovs;
         let frame_uniforms: FrameUniforms = frame_uniforms(
             camera,
             &self.scene.environment,
@@ -198,18 +204,24 @@ impl GpuReference {
                 InterfaceRule::ShadingNormal => 0,
                 InterfaceRule::GeometricNormal => 1,
             },
+            write_records: u32::from(with_records),
             ..self.uniforms
         };
         let device = &context.device;
+        let record_bytes = if with_records {
+            pixels * 4 * RECORD_WORDS as u64
+        } else {
+            4
+        };
         let limit = device.limits().max_storage_buffer_binding_size;
-        if pixels * 16 * RECORD_VEC4S > limit {
+        if pixels * 16 > limit || record_bytes > limit {
             return Err(GpuError::ResolutionTooLarge {
                 width,
                 height,
                 adapter: context.info.name.clone(),
                 limit: format!(
-                    "max storage buffer binding size {limit} bytes ({} bytes of path records a pixel)",
-                    16 * RECORD_VEC4S
+                    "max storage buffer binding size {limit} bytes (16 bytes of colour a pixel, {} of path records with the AOV layers)",
+                    4 * RECORD_WORDS
                 ),
             }
             .into());
@@ -241,7 +253,7 @@ impl GpuReference {
                 uniform("reference frame", bytemuck::bytes_of(&frame_uniforms)),
                 uniform("reference trace", bytemuck::bytes_of(&trace)),
                 storage("reference colour", pixels * 16),
-                storage("reference records", pixels * 16 * RECORD_VEC4S),
+                storage("reference records", record_bytes),
             )
         });
         let (frame_buffer, trace_buffer, color, record) = buffers?;
@@ -275,16 +287,22 @@ impl GpuReference {
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
         }
         encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
-        encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+        if with_records {
+            encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+        }
         context.checked(|| context.queue.submit([encoder.finish()]))?;
         let colors = context.read_buffer(&color.1)?;
-        let records = context.read_buffer(&record.1)?;
+        let records = if with_records {
+            context.read_buffer(&record.1)?
+        } else {
+            Vec::new()
+        };
         write_frame(
             frame,
             width,
             height,
             bytemuck::cast_slice(&colors),
-            (outputs == FrameOutputs::ColorAndAovs).then(|| bytemuck::cast_slice(&records)),
+            with_records.then(|| bytemuck::cast_slice(&records)),
         );
         Ok(())
     }
@@ -296,7 +314,7 @@ fn write_frame(
     width: u32,
     height: u32,
     colors: &[[f32; 4]],
-    records: Option<&[[f32; 4]]>,
+    records: Option<&[u32]>,
 ) {
     let n = (width * height) as usize;
     frame.reset(width, height);
@@ -304,18 +322,21 @@ fn write_frame(
         .iter()
         .map(|c| Vec3::new(c[0], c[1], c[2]))
         .collect();
-    frame.rays = 0;
+    // Each pixel's closest-hit queries, counted by the kernel (colour's w).
+    frame.rays = colors[..n].iter().map(|c| c[3] as u64).sum();
     let Some(records) = records else {
         return;
     };
+    let record = |i: usize| &records[RECORD_WORDS * i..][..RECORD_WORDS];
+    let mask = |i: usize| record(i)[24];
     let vector = |k: usize| -> Vec<Vec3> {
         (0..n)
             .map(|i| {
-                let v = records[9 * i + k];
-                if v[3] == 0.0 {
+                let r = record(i);
+                if mask(i) & (1 << k) == 0 {
                     Vec3::NAN
                 } else {
-                    Vec3::new(v[0], v[1], v[2])
+                    Vec3::from_array([0, 1, 2].map(|c| f32::from_bits(r[3 * k + c])))
                 }
             })
             .collect()
@@ -333,13 +354,13 @@ fn write_frame(
     for (k, aov) in vectors.into_iter().enumerate() {
         frame.insert_layer(aov, Layer::Vec3(vector(k)));
     }
-    let flags = |c: usize| -> Vec<bool> { (0..n).map(|i| records[9 * i + 8][c] != 0.0).collect() };
-    frame.insert_layer(Aov::Covered, Layer::Flag(flags(0)));
-    frame.insert_layer(Aov::Tir, Layer::Flag(flags(1)));
-    frame.insert_layer(Aov::TirFirstExit, Layer::Flag(flags(2)));
+    let flag = |bit: u32| -> Vec<bool> { (0..n).map(|i| mask(i) & (1 << bit) != 0).collect() };
+    frame.insert_layer(Aov::Covered, Layer::Flag(flag(8)));
+    frame.insert_layer(Aov::Tir, Layer::Flag(flag(9)));
+    frame.insert_layer(Aov::TirFirstExit, Layer::Flag(flag(10)));
     frame.insert_layer(
         Aov::Interfaces,
-        Layer::Count((0..n).map(|i| records[9 * i + 8][3] as u32).collect()),
+        Layer::Count((0..n).map(|i| record(i)[25]).collect()),
     );
 }
 

@@ -15,8 +15,8 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::{LoadOptions, load_mesh};
 use refract_geometry::{Mesh, builtin};
 use refract_scene::{
-    Environment, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Refractor, Renderer,
-    Scene, TraceSettings,
+    BackendId, Environment, Frame, FrameOutputs, MethodId, MethodParams, PvrrParams, Refractor,
+    Renderer, Scene, TraceMode, TraceSettings,
 };
 use serde::Serialize;
 
@@ -67,9 +67,12 @@ pub struct BenchArgs {
     /// 64² and 128², the sphere row only).
     #[cfg_attr(feature = "clap", arg(long))]
     pub quick: bool,
-    /// Which table: `image-space` (Wyman 2005a Table 1) or `nearby` (Wyman 2005b Table 1:
+    /// Which table: `image-space` (Wyman 2005a Table 1), `nearby` (Wyman 2005b Table 1:
     /// `iterative-seeded` on the paper's four scenes, our models mapped by size, at 1024² and
-    /// 512²; `--scenes`, `--methods` and `--res` do not apply).
+    /// 512²; `--scenes`, `--methods` and `--res` do not apply), `distance-map` (Umenhoffer et al.
+    /// §17.4), `pvrr` (Kakimoto et al. §5), `engine` (the engine methods beside `wyman`) or
+    /// `reference` (the exact reference on the CPU tracer and the GPU at 512² and 1024²,
+    /// transmission and full, rays per second; `--scenes` applies).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = Table::ImageSpace))]
     pub table: Table,
 }
@@ -89,6 +92,9 @@ pub enum Table {
     Pvrr,
     /// The engine methods beside `wyman` on the sphere and the cow at 1024², both backends.
     Engine,
+    /// The exact reference on the CPU tracer and on the GPU: the Table 1 models at 512² and
+    /// 1024², transmission and `full`, seconds a frame and rays per second.
+    Reference,
 }
 
 /// One row of `bench.json`.
@@ -412,6 +418,139 @@ fn run_pvrr(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> 
     Ok(md)
 }
 
+/// One row of the reference table.
+struct ReferenceRow {
+    scene: String,
+    triangles: usize,
+    res: u32,
+    mode: &'static str,
+    backend: String,
+    /// Seconds a frame (median), rays a frame; `None` where the backend does not trace the mode.
+    measured: Option<(f64, u64)>,
+}
+
+/// Runs the reference table: every model of `--scenes` at 512² and 1024² (`--quick`: sphere and
+/// cow at 64² and 128²), `transmission` and `full` (1 sample per pixel, depth 8), on the CPU
+/// tracer and, with an adapter, on the GPU (which traces transmission only: the `full` rows say
+/// so); the median of up to 3 frames after one warm-up, colour only, wall clock.
+fn run_reference(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
+    let (resolutions, scenes, frames): (&[u32], Vec<String>, u32) = if args.quick {
+        (&[64, 128], vec!["sphere".into(), "cow".into()], 1)
+    } else {
+        (&[512, 1024], args.scenes.clone(), args.frames.min(3))
+    };
+    crate::output_dirs::create_dir(&args.out)
+        .with_context(|| format!("{}: cannot create the output directory", args.out.display()))?;
+    let backend_ids = backends::parse_backends(&args.backends)?;
+    let mut renderers: Vec<Box<dyn Renderer>> =
+        vec![Box::new(refract_trace::ReferenceRenderer::new())];
+    if backend_ids.contains(&BackendId::Gpu) {
+        for renderer in backends::open(&[BackendId::Gpu], GpuPolicy::IfAvailable, progress)? {
+            renderers.push(renderer);
+        }
+    }
+    let mut rows = Vec::new();
+    let mut frame = Frame::default();
+    for name in &scenes {
+        let Some((mesh, ior)) = load_model(name, &args.data, progress)? else {
+            continue;
+        };
+        let triangles = mesh.triangles.len();
+        let scene = Arc::new(Scene::new(
+            name.as_str(),
+            Refractor::new(mesh, ior)?,
+            Environment::Procedural,
+        ));
+        for renderer in &mut renderers {
+            renderer.prepare(&scene)?;
+        }
+        for &res in resolutions {
+            let camera = scene.camera(res, res)?;
+            for (mode, trace_mode) in [
+                ("transmission", TraceMode::Transmission),
+                ("full", TraceMode::Full),
+            ] {
+                let method = MethodParams::Reference(TraceSettings {
+                    mode: trace_mode,
+                    ..TraceSettings::default()
+                });
+                for renderer in &mut renderers {
+                    let backend = renderer.backend().id().to_owned();
+                    let gpu_full =
+                        renderer.backend() == BackendId::Gpu && trace_mode == TraceMode::Full;
+                    let measured = if gpu_full {
+                        None
+                    } else {
+                        let mut seconds = Vec::new();
+                        for k in 0..=frames {
+                            let start = Instant::now();
+                            renderer.render(&camera, &method, FrameOutputs::Color, &mut frame)?;
+                            if k > 0 {
+                                seconds.push(start.elapsed().as_secs_f64());
+                            }
+                        }
+                        seconds.sort_by(f64::total_cmp);
+                        Some((seconds[seconds.len() / 2], frame.rays))
+                    };
+                    if let Some((s, rays)) = measured {
+                        progress.note(Note::Row(format!(
+                            "{name:<8} {res:>5}² {mode:<12} {backend:<5} {s:>8.3} s {:>8.2} Mrays/s",
+                            rays as f64 / s / 1e6
+                        )));
+                    }
+                    rows.push(ReferenceRow {
+                        scene: name.clone(),
+                        triangles,
+                        res,
+                        mode,
+                        backend,
+                        measured,
+                    });
+                }
+            }
+        }
+    }
+    let json: Vec<serde_json::Value> = rows
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "scene": r.scene,
+                "triangles": r.triangles,
+                "res": r.res,
+                "mode": r.mode,
+                "backend": r.backend,
+                "seconds": r.measured.map(|m| m.0),
+                "rays": r.measured.map(|m| m.1),
+            })
+        })
+        .collect();
+    let text = serde_json::to_string_pretty(&json).context("serialising bench records")?;
+    write(&args.out.join("bench-reference.json"), &text)?;
+    let mut md = format!(
+        "# The exact reference on both backends
+
+1 sample per pixel, depth 8, colour only, the median \
+         of {frames} frame(s) after one warm-up, wall clock (the GPU's includes the readback of \
+         the colour). `trace` is the CPU tracer (rayon over rows); `gpu` is \
+         `shaders/reference.wgsl`, which traces transmission mode only. Rays are closest-hit \
+         queries (a camera ray and every continuation), counted on both.\n\n\
+         | model | triangles | res | mode | backend | s / frame | Mrays / s |\n|---|---|---|---|---|---|---|\n"
+    );
+    for r in &rows {
+        let (seconds, rate) = match r.measured {
+            Some((s, rays)) => (format!("{s:.3}"), format!("{:.2}", rays as f64 / s / 1e6)),
+            None => ("not traced on the GPU".to_owned(), "–".to_owned()),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {}² | {} | {} | {seconds} | {rate} |",
+            r.scene, r.triangles, r.res, r.mode, r.backend
+        );
+    }
+    write(&args.out.join("bench-reference.md"), &md)?;
+    Ok(md)
+}
+
 /// The map sizes of `plan` (views 1..), `w×h` each, comma-separated; `-` without maps.
 fn map_sizes(plan: &refract_scene::pvrr::PvrrPlan) -> String {
     let sizes: Vec<String> = plan.views[1..]
@@ -639,6 +778,9 @@ pub fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     }
     if args.table == Table::Engine {
         return run_engine(args, progress);
+    }
+    if args.table == Table::Reference {
+        return run_reference(args, progress);
     }
     let (res, frames) = if args.quick {
         (128, 3)
