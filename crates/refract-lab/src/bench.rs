@@ -130,6 +130,21 @@ const MODELS: [(&str, &str, f32); 5] = [
     ("horse", "horse.obj", 1.2),
 ];
 
+/// The Table 1 scene of model `name` (the model alone in the procedural environment) and its
+/// triangle count; `None` (after a note) when its mesh file is missing.
+fn model_scene(
+    name: &str,
+    data: &std::path::Path,
+    progress: &dyn Progress,
+) -> crate::Result<Option<(Arc<Scene>, usize)>> {
+    let Some((mesh, ior)) = load_model(name, data, progress)? else {
+        return Ok(None);
+    };
+    let triangles = mesh.triangles.len();
+    let scene = Scene::new(name, Refractor::new(mesh, ior)?, Environment::Procedural);
+    Ok(Some((Arc::new(scene), triangles)))
+}
+
 fn load_model(
     name: &str,
     data: &std::path::Path,
@@ -452,15 +467,9 @@ fn run_reference(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Str
     let mut rows = Vec::new();
     let mut frame = Frame::default();
     for name in &scenes {
-        let Some((mesh, ior)) = load_model(name, &args.data, progress)? else {
+        let Some((scene, triangles)) = model_scene(name, &args.data, progress)? else {
             continue;
         };
-        let triangles = mesh.triangles.len();
-        let scene = Arc::new(Scene::new(
-            name.as_str(),
-            Refractor::new(mesh, ior)?,
-            Environment::Procedural,
-        ));
         for renderer in &mut renderers {
             renderer.prepare(&scene)?;
         }
@@ -810,15 +819,9 @@ pub fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<String> {
     let mut reference_seconds = Vec::new();
     let mut frame = Frame::default();
     for name in &scenes {
-        let Some((mesh, ior)) = load_model(name, &args.data, progress)? else {
+        let Some((scene, triangles)) = model_scene(name, &args.data, progress)? else {
             continue;
         };
-        let triangles = mesh.triangles.len();
-        let scene = Arc::new(Scene::new(
-            name.as_str(),
-            Refractor::new(mesh, ior)?,
-            Environment::Procedural,
-        ));
         let camera = scene.camera(res, res)?;
         let start = Instant::now();
         refract_trace::render(&scene, &camera, &TraceSettings::default());
