@@ -429,3 +429,62 @@ fn the_report_names_missing_images() {
         "two thumbnails marked twice"
     );
 }
+
+/// `reference_backend = "gpu"` in a sweep file: the references are traced on the GPU, cached
+/// apart from the CPU tracer's, and give the same metrics within the two references' f32
+/// differences; bad values are refused naming the key.
+#[test]
+fn sweeps_trace_their_references_on_the_gpu_when_asked() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let sweep = |backend: &str, spp: u32| {
+        format!(
+            "scenes = [\"sphere\"]\nmethods = [\"wyman\", \"single\"]\nres = [32]\nframes = 1\nimages = false\nspp = {spp}\nreference_backend = \"{backend}\"\n"
+        )
+    };
+    for (backend, spp, expected) in [("tpu", 1, "reference_backend"), ("gpu", 4, "spp = 4")] {
+        std::fs::write(dir.path().join("bad.toml"), sweep(backend, spp)).expect("write");
+        let out = refract(&["sweep", "bad.toml", "--out", "bad"], dir.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(expected), "{err}");
+    }
+    if std::env::var("REFRACT_REQUIRE_GPU").is_err() && refract_gpu::GpuContext::new().is_err() {
+        println!("skipped: no GPU adapter");
+        return;
+    }
+    let flips = |backend: &str| -> Vec<f64> {
+        let file = format!("{backend}.toml");
+        std::fs::write(dir.path().join(&file), sweep(backend, 1)).expect("write");
+        ok(&refract(
+            &["sweep", &file, "--cache", "cache", "--out", backend],
+            dir.path(),
+        ));
+        let mut jobs: Vec<_> = std::fs::read_dir(dir.path().join(backend).join("jobs"))
+            .expect("jobs")
+            .map(|e| e.expect("entry").path())
+            .collect();
+        jobs.sort();
+        jobs.iter()
+            .map(|path| {
+                let text = std::fs::read_to_string(path).expect("job");
+                let job: serde_json::Value = serde_json::from_str(&text).expect("json");
+                job["metrics"]["flip_mean"].as_f64().expect("flip")
+            })
+            .collect()
+    };
+    let (cpu, gpu) = (flips("cpu"), flips("gpu"));
+    assert_eq!(cpu.len(), 2);
+    for (c, g) in cpu.iter().zip(&gpu) {
+        assert!(
+            (c - g).abs() <= 1e-3 * (1.0 + c),
+            "FLIP {c} (CPU) vs {g} (GPU)"
+        );
+    }
+    let cached = std::fs::read_dir(dir.path().join("cache"))
+        .expect("cache")
+        .filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "exr"))
+        })
+        .count();
+    assert_eq!(cached, 2, "one reference per backend in the cache");
+}

@@ -17,7 +17,7 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::load_scene;
 use refract_eval::metrics::{MetricsRecord, evaluate_method};
 use refract_scene::{
-    Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
+    Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
 };
 use refract_trace::ReferenceRenderer;
 use serde::Deserialize;
@@ -90,6 +90,10 @@ struct SweepFile {
     ior: Vec<f32>,
     #[serde(default = "one")]
     spp: u32,
+    /// Where the references are traced: `cpu` (the CPU tracer) or `gpu` (transmission mode, one
+    /// sample per pixel).
+    #[serde(default = "default_reference_backend")]
+    reference_backend: String,
     #[serde(default = "three")]
     frames: u32,
     /// Method parameter axes (`seeds = [3, 7, 15]`), applied to the methods that have them.
@@ -106,6 +110,9 @@ struct SweepFile {
 
 fn default_backends() -> Vec<String> {
     vec!["cpu".to_owned()]
+}
+fn default_reference_backend() -> String {
+    "cpu".to_owned()
 }
 fn default_res() -> Vec<u32> {
     vec![256]
@@ -125,6 +132,8 @@ pub struct Sweep {
     /// Every job, in order.
     pub jobs: Vec<Job>,
     spp: u32,
+    /// [`BackendId::Trace`] or [`BackendId::Gpu`].
+    reference_backend: BackendId,
     frames: u32,
     images: bool,
     base: PathBuf,
@@ -191,6 +200,20 @@ impl Sweep {
             "{origin}: frames = {}: expected 1 to 1000",
             file.frames
         );
+        let reference_backend = match file.reference_backend.as_str() {
+            "cpu" => BackendId::Trace,
+            "gpu" => {
+                crate::ensure!(
+                    file.spp == 1,
+                    "{origin}: reference_backend = \"gpu\" traces one sample per pixel; spp = {} runs on the CPU tracer (reference_backend = \"cpu\")",
+                    file.spp
+                );
+                BackendId::Gpu
+            }
+            other => {
+                crate::bail!("{origin}: reference_backend = {other:?}: expected \"cpu\" or \"gpu\"")
+            }
+        };
         backends::parse_backends(&file.backends).with_context(|| format!("{origin}: backends"))?;
         let methods: Vec<MethodId> = file
             .methods
@@ -297,6 +320,7 @@ impl Sweep {
         Ok(Self {
             jobs,
             spp: file.spp,
+            reference_backend,
             frames: file.frames,
             images: file.images,
             base,
@@ -540,13 +564,36 @@ fn reference_key(sweep: &Sweep, job: &Job, settings: &MethodParams) -> crate::Re
     } else {
         format!("builtin {spec}")
     };
+    // The GPU's references are cached apart from the CPU tracer's (the CPU's key is unchanged).
+    let backend = match sweep.reference_backend {
+        BackendId::Gpu => "\nreference gpu",
+        _ => "",
+    };
     Ok(format!(
-        "{scene_text}\nior {:?}\nres {}\n{}\nrefract {}",
+        "{scene_text}\nior {:?}\nres {}\n{}\nrefract {}{backend}",
         job.ior,
         job.res,
         settings.describe(),
         env!("CARGO_PKG_VERSION")
     ))
+}
+
+/// The jobs' renderer of `backend` (keyed by its id), opened on first use.
+fn renderer_of<'a>(
+    renderers: &'a mut HashMap<String, Box<dyn Renderer>>,
+    backend: BackendId,
+    progress: &dyn Progress,
+) -> crate::Result<&'a mut Box<dyn Renderer>> {
+    Ok(match renderers.entry(backend.id().to_owned()) {
+        Entry::Occupied(entry) => entry.into_mut(),
+        Entry::Vacant(slot) => {
+            let opened = backends::open(&[backend], GpuPolicy::Required, progress)?;
+            let renderer = opened.into_iter().next().ok_or_else(|| {
+                crate::LabError::invalid(format_args!("no {backend} renderer opened"))
+            })?;
+            slot.insert(renderer)
+        }
+    })
 }
 
 #[allow(clippy::type_complexity)]
@@ -583,10 +630,31 @@ fn run_job(
             let truth = match cached.as_ref().filter(|p| p.is_file()) {
                 Some(path) => Frame::read_exr(path)?,
                 None => {
-                    let mut reference = ReferenceRenderer::new();
-                    reference.prepare(&scene)?;
                     let mut truth = Frame::default();
-                    reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
+                    match sweep.reference_backend {
+                        BackendId::Gpu => {
+                            // The jobs' GPU renderer traces it, prepared for this job's scene.
+                            let renderer = renderer_of(renderers, BackendId::Gpu, progress)?;
+                            renderer.prepare(&scene)?;
+                            prepared_for.insert(BackendId::Gpu.id().to_owned(), key.clone());
+                            renderer.render(
+                                &camera,
+                                &settings,
+                                FrameOutputs::ColorAndAovs,
+                                &mut truth,
+                            )?;
+                        }
+                        _ => {
+                            let mut reference = ReferenceRenderer::new();
+                            reference.prepare(&scene)?;
+                            reference.render(
+                                &camera,
+                                &settings,
+                                FrameOutputs::ColorAndAovs,
+                                &mut truth,
+                            )?;
+                        }
+                    }
                     if let Some(path) = &cached {
                         truth.write_exr(path)?;
                     }
@@ -622,16 +690,7 @@ fn run_job(
     };
 
     let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
-    let renderer = match renderers.entry(job.backend.clone()) {
-        Entry::Occupied(entry) => entry.into_mut(),
-        Entry::Vacant(slot) => {
-            let opened = backends::open(&[backend], GpuPolicy::Required, progress)?;
-            let renderer = opened.into_iter().next().ok_or_else(|| {
-                crate::LabError::invalid(format_args!("no {backend} renderer opened"))
-            })?;
-            slot.insert(renderer)
-        }
-    };
+    let renderer = renderer_of(renderers, backend, progress)?;
     if prepared_for.get(&job.backend) != Some(&key) {
         renderer.prepare(&p.scene)?;
         prepared_for.insert(job.backend.clone(), key.clone());
