@@ -45,6 +45,15 @@ fn test_fresnel(@builtin(global_invocation_id) id: vec3<u32>) {
     );
 }
 
+// a = (cos_i, n, k, _) -> (fresnel_conductor, _, _, _)
+@compute @workgroup_size(64)
+fn test_fresnel_conductor(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let a = in_a[i];
+    out_v[i] = vec4<f32>(fresnel_conductor(a.x, a.y, a.z), 0.0, 0.0, 0.0);
+}
+
 // a = (theta_i, theta_t, eta, d_v), b = (d_n, mode, _, _) -> (angle_ratio, approximate_distance, _, _)
 @compute @workgroup_size(64)
 fn test_distance(@builtin(global_invocation_id) id: vec3<u32>) {

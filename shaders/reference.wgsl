@@ -55,31 +55,6 @@ const RECORD_WORDS: u32 = 26u;
 // refract_trace's OFFSET: secondary rays start ε (1 + max|pᵢ|) off the surface.
 const TRACE_OFFSET: f32 = 4e-6;
 
-// refract_core::fresnel::fresnel_conductor.
-fn fresnel_conductor_exact(cos_i: f32, n: f32, k: f32) -> f32 {
-    let c = clamp(cos_i, 0.0, 1.0);
-    let c2 = c * c;
-    let s2 = 1.0 - c2;
-    let n2 = n * n;
-    let k2 = k * k;
-    let t0 = n2 - k2 - s2;
-    let a2b2 = sqrt(max(t0 * t0 + 4.0 * n2 * k2, 0.0));
-    let a = sqrt(max(0.5 * (a2b2 + t0), 0.0));
-    let t1 = a2b2 + c2;
-    let t2 = 2.0 * c * a;
-    var r_s = 1.0;
-    if t1 + t2 > 0.0 {
-        r_s = (t1 - t2) / (t1 + t2);
-    }
-    let t3 = c2 * a2b2 + s2 * s2;
-    let t4 = t2 * s2;
-    var r_p = r_s;
-    if t3 + t4 > 0.0 {
-        r_p = r_s * (t3 - t4) / (t3 + t4);
-    }
-    return clamp(0.5 * (r_s + r_p), 0.0, 1.0);
-}
-
 // A hit with what the path needs (refract_geometry's MeshBvh::hit_details).
 struct SceneHit {
     found: bool,
@@ -205,9 +180,9 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
             let next = normalize(reflect_dir(dir, facing));
             let cos_i = -dot(dir, facing);
             scale *= vec3<f32>(
-                fresnel_conductor_exact(cos_i, conductor[1].x, conductor[2].x),
-                fresnel_conductor_exact(cos_i, conductor[1].y, conductor[2].y),
-                fresnel_conductor_exact(cos_i, conductor[1].z, conductor[2].z),
+                fresnel_conductor(cos_i, conductor[1].x, conductor[2].x),
+                fresnel_conductor(cos_i, conductor[1].y, conductor[2].y),
+                fresnel_conductor(cos_i, conductor[1].z, conductor[2].z),
             );
             if out.p1.w == 0.0 && h.mesh == 0u {
                 out.p1 = vec4<f32>(h.p, 1.0);

@@ -127,6 +127,31 @@ fn schlick_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return schlick(sqrt(1.0 - sin2_t), f0);
 }
 
+// fresnel.rs: fresnel_conductor (exact, per channel; the reference's conductors).
+fn fresnel_conductor(cos_i: f32, n: f32, k: f32) -> f32 {
+    let c = clamp(cos_i, 0.0, 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let n2 = n * n;
+    let k2 = k * k;
+    let t0 = n2 - k2 - s2;
+    let a2b2 = sqrt(max(t0 * t0 + 4.0 * n2 * k2, 0.0));
+    let a = sqrt(max(0.5 * (a2b2 + t0), 0.0));
+    let t1 = a2b2 + c2;
+    let t2 = 2.0 * c * a;
+    var r_s = 1.0;
+    if t1 + t2 > 0.0 {
+        r_s = (t1 - t2) / (t1 + t2);
+    }
+    let t3 = c2 * a2b2 + s2 * s2;
+    let t4 = t2 * s2;
+    var r_p = r_s;
+    if t3 + t4 > 0.0 {
+        r_p = r_s * (t3 - t4) / (t3 + t4);
+    }
+    return clamp(0.5 * (r_s + r_p), 0.0, 1.0);
+}
+
 // fresnel.rs: schlick_conductor.
 fn schlick_conductor(cos_i: f32, n: f32, k: f32) -> f32 {
     return schlick(cos_i, f0_conductor(n, k));

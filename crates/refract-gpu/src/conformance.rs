@@ -9,11 +9,12 @@ use crate::context::{GpuContext, GpuError};
 use crate::shaders::CONFORMANCE_MODULE;
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 15] = [
+pub const ENTRY_POINTS: [&str; 16] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
     "test_fresnel",
+    "test_fresnel_conductor",
     "test_distance",
     "test_exit",
     "test_exit_normal",

@@ -8,6 +8,8 @@
 //! --backend gpu`, `compare --reference-backend gpu`). Transmission mode at one sample per
 //! pixel only; `mode=full` and `spp > 1` are refused with a message.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
 use refract_core::TirPolicy;
 use refract_core::{Camera, gpu::FrameUniforms};
@@ -21,7 +23,7 @@ use crate::bindings::{storage_entry, uniform_entry};
 use crate::bvh::{GpuBvh, bvh_layout};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
-use crate::scene_buffers::GpuScene;
+use crate::scene_buffers::{EnvironmentUniforms, GpuScene};
 use crate::shaders::REFERENCE_MODULE;
 
 /// `struct TraceTriangle` of `shaders/reference.wgsl`.
@@ -63,21 +65,90 @@ struct ObjectConductor {
 /// The words of a pixel's path record (`RECORD_WORDS`): eight vectors, a mask, a count.
 const RECORD_WORDS: usize = 26;
 
-/// A scene uploaded for the GPU reference.
-pub struct GpuReference {
+/// The reference's compute pipeline and layouts, compiled once per device and shared by every
+/// scene uploaded on it.
+pub struct ReferencePipeline {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    bvh_layout: wgpu::BindGroupLayout,
+}
+
+impl ReferencePipeline {
+    /// Compiles `shaders/reference.wgsl` on `context`'s device.
+    pub fn new(context: &GpuContext) -> Result<Self, GpuError> {
+        let device = &context.device;
+        context.checked(|| {
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("reference"),
+                entries: &[
+                    uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                    uniform_entry(1, wgpu::ShaderStages::COMPUTE),
+                    storage_entry(2, true),
+                    storage_entry(3, true),
+                    storage_entry(4, true),
+                    storage_entry(5, true),
+                    storage_entry(6, false),
+                    storage_entry(7, false),
+                ],
+            });
+            let bvh_layout = bvh_layout(device);
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("reference.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(REFERENCE_MODULE.source().into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("reference"),
+                bind_group_layouts: &[Some(&layout), Some(&bvh_layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("trace_transmission"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("trace_transmission"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            Self {
+                pipeline,
+                layout,
+                bvh_layout,
+            }
+        })
+    }
+}
+
+/// A scene uploaded for the GPU reference.
+pub struct GpuReference {
+    pipeline: Arc<ReferencePipeline>,
     bvh_group: wgpu::BindGroup,
-    scene: GpuScene,
+    /// The objects' materials (`GpuScene`'s buffer), the environment's texels and uniforms.
+    materials: wgpu::Buffer,
+    environment_texels: wgpu::Buffer,
+    environment: EnvironmentUniforms,
     triangles: wgpu::Buffer,
     conductors: wgpu::Buffer,
     uniforms: TraceUniforms,
 }
 
 impl GpuReference {
-    /// Uploads `scene`: one BVH over the refractor and every object, the triangles' normals,
-    /// texture coordinates and meshes, the objects' materials and conductors, the environment.
+    /// Compiles the pipeline and uploads `scene`: one BVH over the refractor and every object,
+    /// the triangles' normals, texture coordinates and meshes, the objects' materials and
+    /// conductors, the environment. [`crate::GpuRenderer`] compiles the pipeline once and
+    /// reuses its own upload of the materials and the environment.
     pub fn new(context: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
+        let pipeline = Arc::new(ReferencePipeline::new(context)?);
+        let uploaded = context.checked(|| GpuScene::new(&context.device, scene))?;
+        Self::upload(context, pipeline, scene, &uploaded)
+    }
+
+    /// Uploads `scene` for `pipeline`, sharing `uploaded`'s materials and environment buffers.
+    pub(crate) fn upload(
+        context: &GpuContext,
+        pipeline: Arc<ReferencePipeline>,
+        scene: &Scene,
+        uploaded: &GpuScene,
+    ) -> Result<Self, RenderError> {
         let (combined, attributes) = combined_mesh(scene);
         let flat = FlatBvh::build(&combined)
             .map_err(|err| RenderError::Parameter(format!("GPU reference: {err}")))?;
@@ -120,55 +191,23 @@ impl GpuReference {
         };
         let device = &context.device;
         let bvh = GpuBvh::upload(context, &flat)?;
-        Ok(context.checked(|| {
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("reference"),
-                entries: &[
-                    uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                    uniform_entry(1, wgpu::ShaderStages::COMPUTE),
-                    storage_entry(2, true),
-                    storage_entry(3, true),
-                    storage_entry(4, true),
-                    storage_entry(5, true),
-                    storage_entry(6, false),
-                    storage_entry(7, false),
-                ],
-            });
-            let bvh_layout = bvh_layout(device);
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("reference.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(REFERENCE_MODULE.source().into()),
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("reference"),
-                bind_group_layouts: &[Some(&layout), Some(&bvh_layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("trace_transmission"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("trace_transmission"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            Self {
-                pipeline,
-                layout,
-                bvh_group: bvh.bind_group(device, &bvh_layout),
-                scene: GpuScene::new(device, scene),
-                triangles: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("reference triangles"),
-                    contents: bytemuck::cast_slice(&ordered),
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-                conductors: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("reference conductors"),
-                    contents: bytemuck::cast_slice(&conductors),
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-                uniforms,
-            }
+        Ok(context.checked(|| Self {
+            bvh_group: bvh.bind_group(device, &pipeline.bvh_layout),
+            pipeline,
+            materials: uploaded.materials.clone(),
+            environment_texels: uploaded.environment_texels.clone(),
+            environment: uploaded.environment,
+            triangles: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference triangles"),
+                contents: bytemuck::cast_slice(&ordered),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+            conductors: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference conductors"),
+                contents: bytemuck::cast_slice(&conductors),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+            uniforms,
         })?)
     }
 
@@ -194,7 +233,7 @@ impl GpuReference {
         let with_records = outputs == FrameOutputs::ColorAndAovs;
         let frame_uniforms: FrameUniforms = frame_uniforms(
             camera,
-            &self.scene.environment,
+            &self.environment,
             self.uniforms.ior,
             TirPolicy::default(),
         );
@@ -260,13 +299,13 @@ impl GpuReference {
         let group = context.checked(|| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("reference"),
-                layout: &self.layout,
+                layout: &self.pipeline.layout,
                 entries: &[
                     entry(0, &frame_buffer),
                     entry(1, &trace_buffer),
-                    entry(2, &self.scene.materials),
+                    entry(2, &self.materials),
                     entry(3, &self.conductors),
-                    entry(4, &self.scene.environment_texels),
+                    entry(4, &self.environment_texels),
                     entry(5, &self.triangles),
                     entry(6, &color.0),
                     entry(7, &record.0),
@@ -281,7 +320,7 @@ impl GpuReference {
                 label: Some("trace_transmission"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&self.pipeline.pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.set_bind_group(1, &self.bvh_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);

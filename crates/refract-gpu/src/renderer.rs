@@ -17,7 +17,7 @@ use crate::family::GpuFrameCx;
 use crate::methods::Families;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
-use crate::reference::GpuReference;
+use crate::reference::{GpuReference, ReferencePipeline};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::Timestamps;
 
@@ -35,6 +35,8 @@ pub struct GpuRenderer {
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     families: Families,
+    /// The exact reference's pipeline, compiled at the first reference frame.
+    reference_pipeline: Option<Arc<ReferencePipeline>>,
     /// The exact reference of the prepared scene, uploaded at its first frame.
     reference: Option<GpuReference>,
 }
@@ -59,6 +61,7 @@ impl GpuRenderer {
             timestamps,
             scene: None,
             families,
+            reference_pipeline: None,
             reference: None,
         })
     }
@@ -137,7 +140,21 @@ impl Renderer for GpuRenderer {
             let start = Instant::now();
             let reference = match &mut self.reference {
                 Some(reference) => reference,
-                empty => empty.insert(GpuReference::new(&self.context, scene)?),
+                empty => {
+                    let pipeline = match &self.reference_pipeline {
+                        Some(pipeline) => Arc::clone(pipeline),
+                        None => Arc::clone(
+                            self.reference_pipeline
+                                .insert(Arc::new(ReferencePipeline::new(&self.context)?)),
+                        ),
+                    };
+                    empty.insert(GpuReference::upload(
+                        &self.context,
+                        pipeline,
+                        scene,
+                        gpu_scene,
+                    )?)
+                }
             };
             reference.render(&self.context, camera, settings, outputs, frame)?;
             return Ok(FrameTiming {
