@@ -1,11 +1,14 @@
-// The exact reference's transmission mode in WGSL (issue 32): the twin of
-// refract_trace::Tracer::transmission_path over the whole scene's BVH (bvh.wgsl, group 1; the
-// refractor and every object in one tree, each triangle tagged with its mesh). Snell at every
-// refractor interface with the interpolated shading normal (TIR reflects), conductors reflect
-// with the exact conductor Fresnel reflectance per channel, diffuse objects are shaded under the
-// scene light, rays that leave the scene read the environment (WGSL's atan2, no polynomial).
-// One pixel per invocation, through the pixel centre; the colour and the ground truth of the
-// path (refract_trace::PathRecord) are written per pixel.
+// The exact reference in WGSL (issue 32): the twin of refract_trace::Tracer over the whole
+// scene's BVH (bvh.wgsl, group 1; the refractor and every object in one tree, each triangle
+// tagged with its mesh). Snell at every refractor interface with the interpolated shading normal,
+// conductors reflect with the exact conductor Fresnel reflectance per channel, diffuse objects
+// are shaded under the scene light, rays that leave the scene read the environment (WGSL's atan2,
+// no polynomial). Both modes: `transmission` (the refracted path, TIR reflects:
+// Tracer::transmission_path) and `full` (deterministic Fresnel splitting at every interface:
+// Tracer::full_radiance, its recursion as an explicit stack). One pixel per invocation; the
+// samples of refract_trace::sampling::pixel_sample, a range of them per dispatch (the sum is
+// carried in the colour buffer between dispatches); the ground truth of the pixel-centre path
+// (refract_trace::PathRecord) written per pixel.
 
 // The per-triangle attributes the hit needs, in the BVH's leaf order.
 struct TraceTriangle {
@@ -33,6 +36,16 @@ struct TraceUniforms {
     refractor_conductor: u32,
     // 1: write the path records (the AOV layers); 0: the colour only (a 4-byte record buffer).
     write_records: u32,
+    // 0: transmission, 1: full (TraceMode).
+    mode: u32,
+    // Samples per pixel (TraceSettings::spp, 1..=4096).
+    spp: u32,
+    // This dispatch traces samples [sample_first, sample_end) of spp; the first one starts the
+    // sum (and writes the records), the last one divides by spp.
+    sample_first: u32,
+    sample_end: u32,
+    // Full mode drops branches whose throughput falls below this.
+    throughput_cutoff: f32,
 }
 
 // An object's conductor (flag 1) or none: exact Fresnel needs eta and k, not the GPU
@@ -148,6 +161,33 @@ struct PathOut {
     rays: u32,
 }
 
+// Tracer's Interface::at: the side of the interface the ray is on (by the settings' rule), the
+// shading normal facing the ray, n_i / n_t and the radiance factor of a refraction (η² under
+// the shading rule, 1 under the geometric one).
+struct Interface {
+    entering: bool,
+    facing: vec3<f32>,
+    eta: f32,
+    transmitted_radiance: f32,
+}
+
+fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
+    var i: Interface;
+    if trace.interface_rule == 0u {
+        i.entering = -dot(dir, h.shading) >= 0.0;
+        i.facing = select(-h.shading, h.shading, i.entering);
+    } else {
+        i.entering = dot(dir, h.geometric) < 0.0;
+        i.facing = face_forward_shading_normal(select(-h.shading, h.shading, i.entering), dir);
+    }
+    i.eta = select(trace.ior, 1.0 / trace.ior, i.entering);
+    i.transmitted_radiance = 1.0;
+    if trace.interface_rule == 0u {
+        i.transmitted_radiance = i.eta * i.eta;
+    }
+    return i;
+}
+
 // Tracer::transmission_path.
 fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
     var out: PathOut;
@@ -206,21 +246,11 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
             return out;
         }
         depth += 1u;
-        // Interface::at.
-        var entering: bool;
-        var facing: vec3<f32>;
-        var transmitted = 1.0;
-        if trace.interface_rule == 0u {
-            entering = -dot(dir, h.shading) >= 0.0;
-            facing = select(-h.shading, h.shading, entering);
-        } else {
-            entering = dot(dir, h.geometric) < 0.0;
-            facing = face_forward_shading_normal(select(-h.shading, h.shading, entering), dir);
-        }
-        let eta = select(trace.ior, 1.0 / trace.ior, entering);
-        if trace.interface_rule == 0u {
-            transmitted = eta * eta;
-        }
+        let side = interface_at(dir, h);
+        let entering = side.entering;
+        let facing = side.facing;
+        let eta = side.eta;
+        let transmitted = side.transmitted_radiance;
         let refracted = refract_dir(dir, facing, eta);
         let tir = all(refracted == vec3<f32>(0.0));
         var next: vec3<f32>;
@@ -248,16 +278,176 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
     return out;
 }
 
+// refract_trace::sampling::hash: lowbias32 (Chris Wellons).
+fn sample_hash(x_in: u32) -> u32 {
+    var x = x_in;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+// refract_trace::sampling::pixel_sample: the offset in [0, 1)² of sample `index` of `count` in
+// pixel (x, y): the centre for one sample, else a Hammersley set ((i + ½)/N, φ₂(i)) under a
+// hashed per-pixel Cranley–Patterson rotation.
+fn pixel_sample(x: u32, y: u32, index: u32, count: u32) -> vec2<f32> {
+    if count <= 1u {
+        return vec2<f32>(0.5);
+    }
+    let h = sample_hash((x * 0x9E3779B9u) ^ sample_hash(y));
+    let shift = vec2<f32>(f32(h & 0xFFFFu) / 65536.0, f32(h >> 16u) / 65536.0);
+    // φ₂(i) = reverseBits(i) / 2³² (the scale is a power of two: exact).
+    let p = vec2<f32>((f32(index) + 0.5) / f32(count), f32(reverseBits(index)) * 2.3283064365386963e-10);
+    return fract(p + shift);
+}
+
+// A pending branch of the full mode's splitting tree: where it starts, its depth (specular
+// interactions so far), the scalar throughput the cutoff tests and the colour weight it carries
+// to the pixel (the product of the reflectances, transmittances and η² factors above it).
+struct Branch {
+    origin: vec3<f32>,
+    depth: u32,
+    dir: vec3<f32>,
+    throughput: f32,
+    weight: vec3<f32>,
+}
+
+// Pending branches never outnumber the depth limit (their depths strictly increase from the
+// bottom of the stack, each at most max_depth), so the parameter's maximum bounds the stack.
+const FULL_STACK: u32 = 64u;
+
+// Tracer::full_radiance: radiance along the ray with Fresnel splitting at every refractor
+// interface (the reflected branch pushed, the transmitted one followed), conductors reflecting
+// with their exact reflectance, branches under the throughput cutoff or past the depth limit
+// dropped. Returns the radiance and (w) the closest-hit queries traced.
+fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
+    var stack: array<Branch, FULL_STACK>;
+    var top = 0u;
+    var radiance = vec3<f32>(0.0);
+    var rays = 0u;
+    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0));
+    let cutoff = trace.throughput_cutoff;
+    loop {
+        let h = scene_hit(b.origin, b.dir);
+        rays += 1u;
+        // Whether the branch ended here (its contribution, if any, added).
+        var ended = true;
+        if !h.found {
+            radiance += b.weight * environment_radiance(b.dir);
+        } else {
+            let conductor = conductor_of(h.mesh);
+            if conductor[0].x != 0.0 {
+                if b.depth < trace.max_depth {
+                    var oriented = -h.shading;
+                    if dot(b.dir, h.geometric) < 0.0 {
+                        oriented = h.shading;
+                    }
+                    let facing = face_forward_shading_normal(oriented, b.dir);
+                    let next = normalize(reflect_dir(b.dir, facing));
+                    let cos_i = -dot(b.dir, facing);
+                    let reflectance = vec3<f32>(
+                        fresnel_conductor(cos_i, conductor[1].x, conductor[2].x),
+                        fresnel_conductor(cos_i, conductor[1].y, conductor[2].y),
+                        fresnel_conductor(cos_i, conductor[1].z, conductor[2].z),
+                    );
+                    let throughput = b.throughput * max(max(reflectance.x, reflectance.y), reflectance.z);
+                    if throughput > cutoff {
+                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance);
+                        ended = false;
+                    }
+                }
+            } else if h.mesh != 0u {
+                radiance += b.weight * shade_object(h.mesh, h);
+            } else if b.depth < trace.max_depth {
+                let i = interface_at(b.dir, h);
+                let refracted = refract_dir(b.dir, i.facing, i.eta);
+                var reflectance = fresnel_dielectric(-dot(b.dir, i.facing), i.eta);
+                if all(refracted == vec3<f32>(0.0)) {
+                    reflectance = 1.0;
+                }
+                let transmittance = 1.0 - reflectance;
+                let reflected = reflectance * b.throughput > cutoff;
+                let transmitted = transmittance * b.throughput > cutoff;
+                let depth = b.depth + 1u;
+                if reflected {
+                    let next = normalize(reflect_dir(b.dir, i.facing));
+                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance);
+                    // (The stack cannot be full: see FULL_STACK.)
+                    if transmitted && top < FULL_STACK {
+                        stack[top] = branch;
+                        top += 1u;
+                    } else {
+                        b = branch;
+                        ended = false;
+                    }
+                }
+                if transmitted {
+                    let next = normalize(refracted);
+                    b = Branch(
+                        continue_origin(h, next),
+                        depth,
+                        next,
+                        b.throughput * transmittance,
+                        b.weight * (transmittance * i.transmitted_radiance),
+                    );
+                    ended = false;
+                }
+            }
+        }
+        if ended {
+            if top == 0u {
+                break;
+            }
+            top -= 1u;
+            b = stack[top];
+        }
+    }
+    return vec4<f32>(radiance, f32(rays));
+}
+
 @compute @workgroup_size(8, 8)
-fn trace_transmission(@builtin(global_invocation_id) id: vec3<u32>) {
+fn trace_reference(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.width || id.y >= frame.height {
         return;
     }
     let i = id.y * frame.width + id.x;
-    let dir = pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5));
-    let path = transmission_path(frame.eye.xyz, dir);
-    // w: the rays traced (exact in f32 up to 2^24).
-    out_color[i] = vec4<f32>(path.radiance, f32(path.rays));
+    // Tracer::pixel: the sum of the samples so far (xyz) and the rays traced (w: exact in f32
+    // up to 2^24 a pixel).
+    var sum = vec4<f32>(0.0);
+    if trace.sample_first > 0u {
+        sum = out_color[i];
+    } else {
+        let centre_is_colour = trace.mode == 0u && trace.spp == 1u;
+        if centre_is_colour || trace.write_records != 0u {
+            let path = transmission_path(frame.eye.xyz, pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5)));
+            write_record(i, path);
+            if centre_is_colour {
+                out_color[i] = vec4<f32>(path.radiance, f32(path.rays));
+                return;
+            }
+            sum.w = f32(path.rays);
+        }
+    }
+    for (var s = trace.sample_first; s < trace.sample_end; s++) {
+        let offset = pixel_sample(id.x, id.y, s, trace.spp);
+        let dir = pixel_ray_dir(vec2<f32>(f32(id.x), f32(id.y)) + offset);
+        if trace.mode == 0u {
+            let path = transmission_path(frame.eye.xyz, dir);
+            sum += vec4<f32>(path.radiance, f32(path.rays));
+        } else {
+            sum += full_radiance(frame.eye.xyz, dir);
+        }
+    }
+    if trace.sample_end == trace.spp {
+        sum = vec4<f32>(sum.xyz / f32(trace.spp), sum.w);
+    }
+    out_color[i] = sum;
+}
+
+// The pixel's path record (RECORD_WORDS words), when the records are asked for.
+fn write_record(i: u32, path: PathOut) {
     if trace.write_records == 0u {
         return;
     }

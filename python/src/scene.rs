@@ -216,8 +216,7 @@ impl Scene {
     }
 
     /// Renders one frame of `method` (a registry id, or `"reference"`) on `backend` (`"cpu"`
-    /// or `"gpu"`; the reference runs on the CPU tracer, or with `"gpu"` on the GPU's in
-    /// transmission mode at one sample per pixel) at `res = (width, height)`, with
+    /// or `"gpu"`; the reference runs on the CPU tracer, or with `"gpu"` on the GPU's) at `res = (width, height)`, with
     /// `params` (names and values as `refract.methods()` lists them) applied to the method's
     /// defaults; `aovs=True` also computes the method's AOV layers (needed by
     /// `refract.metrics`). The GIL is released while rendering.

@@ -61,9 +61,9 @@ enum Command {
 /// Where the reference of a comparison is traced.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum ReferenceBackendArg {
-    /// The CPU tracer (every mode and sample count).
+    /// The CPU tracer.
     Cpu,
-    /// The GPU tracer (`shaders/reference.wgsl`): transmission mode, one sample per pixel.
+    /// The GPU tracer (`shaders/reference.wgsl`; docs/reference.md).
     Gpu,
 }
 
@@ -105,8 +105,8 @@ struct CompareArgs {
     /// Reference samples per pixel.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
     spp: u32,
-    /// Where the reference is traced: cpu (the CPU tracer) or gpu (transmission mode, one
-    /// sample per pixel; docs/reference.md).
+    /// Where the reference is traced: cpu (the CPU tracer) or gpu (the WGSL tracer;
+    /// docs/reference.md).
     #[arg(long, value_enum, default_value = "cpu")]
     reference_backend: ReferenceBackendArg,
     /// Timed frames per method (median reported, after 2 warm-up frames).

@@ -260,16 +260,16 @@ fn without_a_display_the_viewer_says_so() {
 }
 
 /// `v` splits the window: the method on the left, the exact reference (refined in the
-/// background until complete) on the right, each matching its offline render.
+/// background until complete) on the right, each matching its offline render. The method runs
+/// on the GPU, so the reference is traced there too (issue 32), and its half matches the CPU
+/// tracer's render; with `--backend cpu` the CPU tracer traces it.
 #[test]
 fn the_split_view_shows_the_reference_on_the_right() {
     let Some(x) = xvfb() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("keys.txt"), "key h\nkey v\nwait\n").expect("script");
-    let run = |args: &[&str]| {
-        refract(dir.path(), &x.display, args);
-    };
-    run(&[
+    let run = |args: &[&str]| refract(dir.path(), &x.display, args);
+    let log = run(&[
         "view",
         "chart",
         "--method",
@@ -305,6 +305,30 @@ fn the_split_view_shows_the_reference_on_the_right() {
         "--out",
         "method.png",
     ]);
+    assert!(
+        log.contains("split-view reference traced on the GPU"),
+        "{log}"
+    );
+    let cpu_log = run(&[
+        "view",
+        "chart",
+        "--method",
+        "ray-plane",
+        "--backend",
+        "cpu",
+        "--size",
+        "96x64",
+        "--frames",
+        "2",
+        "--script",
+        "keys.txt",
+        "--screenshot",
+        "split-cpu.png",
+    ]);
+    assert!(
+        cpu_log.contains("split-view reference traced on the CPU tracer"),
+        "{cpu_log}"
+    );
     let (w, h, split) = rgb(&dir.path().join("split.png"));
     let (_, _, reference) = rgb(&dir.path().join("ref.png"));
     let (_, _, method) = rgb(&dir.path().join("method.png"));

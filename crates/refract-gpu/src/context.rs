@@ -45,7 +45,10 @@ pub enum GpuError {
     Ior(#[from] refract_core::kernel::InvalidIor),
 }
 
-/// A device and its queue, plus what the adapter can do.
+/// A device and its queue, plus what the adapter can do. A clone is another handle onto the
+/// same device and queue (wgpu's handles are reference-counted; error scopes are per thread),
+/// for work on another thread such as the viewer's background reference.
+#[derive(Clone)]
 pub struct GpuContext {
     /// The device.
     pub device: wgpu::Device,

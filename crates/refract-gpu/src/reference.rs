@@ -1,12 +1,17 @@
-//! The exact reference's transmission mode on the GPU (issue 32, first version):
-//! `shaders/reference.wgsl`, the twin of `refract_trace::Tracer::transmission_path`, over one
-//! BVH of the whole scene ([`crate::bvh`]; each triangle tagged with its mesh). It writes the
-//! colour and every AOV layer of the `reference` row (the ground truth of the pixel-centre
-//! path), as the CPU reference does; `tests/tests/gpu_reference.rs` holds it to the CPU's.
+//! The exact reference on the GPU (issue 32): `shaders/reference.wgsl`, the twin of
+//! `refract_trace::Tracer` (both modes: `transmission` and `full`'s Fresnel splitting, any
+//! `spp` with the CPU's sample positions) over one BVH of the whole scene ([`crate::bvh`]; each
+//! triangle tagged with its mesh). It writes the colour and every AOV layer of the `reference`
+//! row (the ground truth of the pixel-centre path), as the CPU reference does;
+//! `tests/tests/gpu_reference.rs` holds it to the CPU's.
+//!
+//! Samples are traced a batch per dispatch ([`GpuReference::set_samples_per_dispatch`]; by
+//! default about 2²¹ pixel samples), so that no single dispatch of a converged `full` render
+//! runs long enough for a desktop GPU's watchdog; the running sum stays on the GPU between
+//! dispatches.
 //!
 //! [`crate::GpuRenderer`] renders the `reference` method with it (`render --method reference
-//! --backend gpu`, `compare --reference-backend gpu`). Transmission mode at one sample per
-//! pixel only; `mode=full` and `spp > 1` are refused with a message.
+//! --backend gpu`, `compare --reference-backend gpu`).
 
 use std::sync::Arc;
 
@@ -51,7 +56,12 @@ struct TraceUniforms {
     interface_rule: u32,
     refractor_conductor: u32,
     write_records: u32,
-    _padding: [u32; 3],
+    mode: u32,
+    spp: u32,
+    sample_first: u32,
+    sample_end: u32,
+    throughput_cutoff: f32,
+    _padding: [u32; 2],
 }
 
 /// `struct ObjectConductor` of `shaders/reference.wgsl` (`eta.w` = 1 for a conductor).
@@ -64,6 +74,10 @@ struct ObjectConductor {
 
 /// The words of a pixel's path record (`RECORD_WORDS`): eight vectors, a mask, a count.
 const RECORD_WORDS: usize = 26;
+
+/// Pixel samples traced per dispatch by default: about two million (1024² at two samples, 96²
+/// at 227), a few hundred milliseconds of `full` mode on a desktop GPU.
+const DEFAULT_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 21;
 
 /// The reference's compute pipeline and layouts, compiled once per device and shared by every
 /// scene uploaded on it.
@@ -102,10 +116,10 @@ impl ReferencePipeline {
                 immediate_size: 0,
             });
             let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("trace_transmission"),
+                label: Some("trace_reference"),
                 layout: Some(&pipeline_layout),
                 module: &module,
-                entry_point: Some("trace_transmission"),
+                entry_point: Some("trace_reference"),
                 compilation_options: Default::default(),
                 cache: None,
             });
@@ -129,6 +143,23 @@ pub struct GpuReference {
     triangles: wgpu::Buffer,
     conductors: wgpu::Buffer,
     uniforms: TraceUniforms,
+    /// Samples per dispatch, `None`: [`DEFAULT_PIXEL_SAMPLES_PER_DISPATCH`] over the pixels.
+    samples_per_dispatch: Option<u32>,
+    /// The last frame's buffers, reused while the resolution and outputs stay.
+    outputs: Option<OutputBuffers>,
+}
+
+/// A frame's buffers: the uniforms, the colour (the running sum between dispatches) and the
+/// path records, each with its readback twin, and the bind group over them.
+struct OutputBuffers {
+    width: u32,
+    height: u32,
+    with_records: bool,
+    frame: wgpu::Buffer,
+    trace: wgpu::Buffer,
+    color: (wgpu::Buffer, wgpu::Buffer),
+    record: (wgpu::Buffer, wgpu::Buffer),
+    group: wgpu::BindGroup,
 }
 
 impl GpuReference {
@@ -137,7 +168,16 @@ impl GpuReference {
     /// conductors, the environment. [`crate::GpuRenderer`] compiles the pipeline once and
     /// reuses its own upload of the materials and the environment.
     pub fn new(context: &GpuContext, scene: &Scene) -> Result<Self, RenderError> {
-        let pipeline = Arc::new(ReferencePipeline::new(context)?);
+        Self::with_pipeline(context, Arc::new(ReferencePipeline::new(context)?), scene)
+    }
+
+    /// Uploads `scene` for a pipeline compiled before (on `context`'s device), so that a new
+    /// scene (another IOR, say) does not compile the shader again.
+    pub fn with_pipeline(
+        context: &GpuContext,
+        pipeline: Arc<ReferencePipeline>,
+        scene: &Scene,
+    ) -> Result<Self, RenderError> {
         let uploaded = context.checked(|| GpuScene::new(&context.device, scene))?;
         Self::upload(context, pipeline, scene, &uploaded)
     }
@@ -187,7 +227,12 @@ impl GpuReference {
             interface_rule: 0,
             refractor_conductor: u32::from(refractor.is_some()),
             write_records: 0,
-            _padding: [0; 3],
+            mode: 0,
+            spp: 1,
+            sample_first: 0,
+            sample_end: 1,
+            throughput_cutoff: 0.0,
+            _padding: [0; 2],
         };
         let device = &context.device;
         let bvh = GpuBvh::upload(context, &flat)?;
@@ -208,7 +253,16 @@ impl GpuReference {
                 usage: wgpu::BufferUsages::STORAGE,
             }),
             uniforms,
+            samples_per_dispatch: None,
+            outputs: None,
         })?)
+    }
+
+    /// Traces at most `samples` samples of every pixel per dispatch (`None`: about 2²¹ pixel
+    /// samples a dispatch). The image does not depend on it: the sum is carried between
+    /// dispatches in the order the CPU adds the samples.
+    pub fn set_samples_per_dispatch(&mut self, samples: Option<u32>) {
+        self.samples_per_dispatch = samples.map(|s| s.max(1));
     }
 
     /// Renders `camera`'s frame with `settings` into `frame`: the colour and every layer of the
@@ -216,18 +270,13 @@ impl GpuReference {
     /// a quantity does not exist, as on the CPU), and `frame.rays`, the closest-hit queries
     /// traced, counted as the CPU tracer counts them.
     pub fn render(
-        &self,
+        &mut self,
         context: &GpuContext,
         camera: &Camera,
         settings: &TraceSettings,
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
-        if settings.mode != TraceMode::Transmission || settings.spp != 1 {
-            return Err(RenderError::Parameter(
-                "the GPU reference traces transmission mode at one sample per pixel only so far (mode=full and spp > 1 run on the CPU)".into(),
-            ));
-        }
         let (width, height) = (camera.width(), camera.height());
         let pixels = u64::from(width) * u64::from(height);
         let with_records = outputs == FrameOutputs::ColorAndAovs;
@@ -237,16 +286,101 @@ impl GpuReference {
             self.uniforms.ior,
             TirPolicy::default(),
         );
-        let trace = TraceUniforms {
+        let spp = settings.spp.max(1);
+        let mut trace = TraceUniforms {
             max_depth: settings.max_depth,
             interface_rule: match settings.interface {
                 InterfaceRule::ShadingNormal => 0,
                 InterfaceRule::GeometricNormal => 1,
             },
             write_records: u32::from(with_records),
+            mode: match settings.mode {
+                TraceMode::Transmission => 0,
+                TraceMode::Full => 1,
+            },
+            spp,
+            throughput_cutoff: settings.throughput_cutoff,
             ..self.uniforms
         };
+        let batch = self.samples_per_dispatch.unwrap_or_else(|| {
+            (DEFAULT_PIXEL_SAMPLES_PER_DISPATCH / pixels.max(1)).clamp(1, u64::from(spp)) as u32
+        });
+        let buffers = self.take_output_buffers(context, width, height, with_records)?;
         let device = &context.device;
+        let queue = &context.queue;
+        queue.write_buffer(&buffers.frame, 0, bytemuck::bytes_of(&frame_uniforms));
+        // The centre path alone when it is the colour (transmission at one sample), else the
+        // samples in batches.
+        let mut first = 0;
+        loop {
+            trace.sample_first = first;
+            trace.sample_end = if trace.mode == 0 && spp == 1 {
+                0
+            } else {
+                (first + batch).min(spp)
+            };
+            queue.write_buffer(&buffers.trace, 0, bytemuck::bytes_of(&trace));
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("reference"),
+            });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace_reference"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.pipeline.pipeline);
+                pass.set_bind_group(0, &buffers.group, &[]);
+                pass.set_bind_group(1, &self.bvh_group, &[]);
+                pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            }
+            let last = trace.sample_end == 0 || trace.sample_end == spp;
+            if last {
+                let (color, record) = (&buffers.color, &buffers.record);
+                encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
+                if with_records {
+                    encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+                }
+            }
+            context.checked(|| queue.submit([encoder.finish()]))?;
+            if last {
+                break;
+            }
+            first = trace.sample_end;
+        }
+        let colors = context.read_buffer(&buffers.color.1)?;
+        let records = if with_records {
+            context.read_buffer(&buffers.record.1)?
+        } else {
+            Vec::new()
+        };
+        write_frame(
+            frame,
+            width,
+            height,
+            bytemuck::cast_slice(&colors),
+            with_records.then(|| bytemuck::cast_slice(&records)),
+        );
+        self.outputs = Some(buffers);
+        Ok(())
+    }
+
+    /// The buffers of a `width × height` frame: the last frame's when it had that size and
+    /// outputs (the caller puts them back), else new ones; refused with the adapter's limit
+    /// when a binding would exceed it.
+    fn take_output_buffers(
+        &mut self,
+        context: &GpuContext,
+        width: u32,
+        height: u32,
+        with_records: bool,
+    ) -> Result<OutputBuffers, RenderError> {
+        if let Some(o) = self.outputs.take()
+            && (o.width, o.height, o.with_records) == (width, height, with_records)
+        {
+            return Ok(o);
+        }
+        let device = &context.device;
+        let pixels = u64::from(width) * u64::from(height);
         let record_bytes = if with_records {
             pixels * 4 * RECORD_WORDS as u64
         } else {
@@ -265,7 +399,7 @@ impl GpuReference {
             }
             .into());
         }
-        let buffers = context.checked(|| {
+        let made = context.checked(|| {
             let storage = |label: &str, size: u64| {
                 let output = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
@@ -281,28 +415,24 @@ impl GpuReference {
                 });
                 (output, read)
             };
-            let uniform = |label: &str, bytes: &[u8]| {
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            let uniform = |label: &str, size: usize| {
+                device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
-                    contents: bytes,
-                    usage: wgpu::BufferUsages::UNIFORM,
+                    size: size as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
                 })
             };
-            (
-                uniform("reference frame", bytemuck::bytes_of(&frame_uniforms)),
-                uniform("reference trace", bytemuck::bytes_of(&trace)),
-                storage("reference colour", pixels * 16),
-                storage("reference records", record_bytes),
-            )
-        });
-        let (frame_buffer, trace_buffer, color, record) = buffers?;
-        let group = context.checked(|| {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
+            let frame = uniform("reference frame", size_of::<FrameUniforms>());
+            let trace = uniform("reference trace", size_of::<TraceUniforms>());
+            let color = storage("reference colour", pixels * 16);
+            let record = storage("reference records", record_bytes);
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("reference"),
                 layout: &self.pipeline.layout,
                 entries: &[
-                    entry(0, &frame_buffer),
-                    entry(1, &trace_buffer),
+                    entry(0, &frame),
+                    entry(1, &trace),
                     entry(2, &self.materials),
                     entry(3, &self.conductors),
                     entry(4, &self.environment_texels),
@@ -310,40 +440,19 @@ impl GpuReference {
                     entry(6, &color.0),
                     entry(7, &record.0),
                 ],
-            })
-        })?;
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("reference"),
-        });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("trace_transmission"),
-                timestamp_writes: None,
             });
-            pass.set_pipeline(&self.pipeline.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.set_bind_group(1, &self.bvh_group, &[]);
-            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
-        }
-        encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
-        if with_records {
-            encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
-        }
-        context.checked(|| context.queue.submit([encoder.finish()]))?;
-        let colors = context.read_buffer(&color.1)?;
-        let records = if with_records {
-            context.read_buffer(&record.1)?
-        } else {
-            Vec::new()
-        };
-        write_frame(
-            frame,
-            width,
-            height,
-            bytemuck::cast_slice(&colors),
-            with_records.then(|| bytemuck::cast_slice(&records)),
-        );
-        Ok(())
+            OutputBuffers {
+                width,
+                height,
+                with_records,
+                frame,
+                trace,
+                color,
+                record,
+                group,
+            }
+        })?;
+        Ok(made)
     }
 }
 

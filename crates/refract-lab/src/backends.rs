@@ -4,6 +4,7 @@
 use refract_cpu::CpuRenderer;
 use refract_gpu::GpuRenderer;
 use refract_scene::{BackendId, MethodParams, Renderer};
+use refract_trace::ReferenceRenderer;
 
 use crate::progress::{Note, Progress};
 
@@ -59,6 +60,36 @@ pub fn open(
         }
     }
     Ok(renderers)
+}
+
+/// Where a command traces its references.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum ReferenceBackend {
+    /// The CPU tracer (`refract_trace`), the default.
+    #[default]
+    Cpu,
+    /// The WGSL tracer (`refract_gpu::reference`; docs/reference.md).
+    Gpu,
+}
+
+impl ReferenceBackend {
+    /// The backend id the references' frames carry.
+    pub fn id(self) -> BackendId {
+        match self {
+            Self::Cpu => BackendId::Trace,
+            Self::Gpu => BackendId::Gpu,
+        }
+    }
+
+    /// The renderer that traces the references: the CPU tracer, or the GPU (no adapter is an
+    /// error naming why).
+    pub fn renderer(self) -> crate::Result<Box<dyn Renderer>> {
+        Ok(match self {
+            Self::Cpu => Box::new(ReferenceRenderer::new()),
+            Self::Gpu => Box::new(GpuRenderer::new()?),
+        })
+    }
 }
 
 /// Fails, naming the method and backend, when a renderer does not support a method.

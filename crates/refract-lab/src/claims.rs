@@ -5,7 +5,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::backends::ReferenceBackend;
 use crate::error::Context;
+use crate::progress::Progress;
+use crate::timing::{alternating, spread};
 use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
@@ -18,10 +21,6 @@ use refract_scene::{
     Aov, Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
     TraceMode,
 };
-use refract_trace::ReferenceRenderer;
-
-use crate::progress::Progress;
-use crate::timing::{alternating, spread};
 
 mod distance_map;
 mod engine;
@@ -49,6 +48,10 @@ pub struct ClaimsArgs {
     /// Fewer rounds than stated make its verdict inconclusive (a quick run, not a measurement).
     #[cfg_attr(feature = "clap", arg(long, value_parser = clap::value_parser!(u32).range(1..=50)))]
     pub timing_rounds: Option<u32>,
+    /// Where the references are traced: cpu (the CPU tracer) or gpu (the WGSL tracer,
+    /// docs/reference.md). The timing claims run on the CPU backend either way.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "cpu"))]
+    pub reference_backend: ReferenceBackend,
 }
 
 impl ClaimsArgs {
@@ -140,7 +143,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     let (scenes, notes) = scenes(&args.data)?;
     let mut measured = Vec::new();
     let mut cpu = CpuRenderer::new();
-    let mut reference = ReferenceRenderer::new();
+    let mut reference = args.reference_backend.renderer()?;
     let mut cow_times = None;
     for scene in &scenes {
         let camera = scene.camera(args.res, args.res)?;
@@ -222,7 +225,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
 /// The CPU backend and the reference, for the sections that measure methods per scene.
 pub(crate) struct Bench {
     pub cpu: CpuRenderer,
-    reference: ReferenceRenderer,
+    reference: Box<dyn Renderer>,
 }
 
 /// A scene with its reference frame at one resolution.
@@ -233,11 +236,12 @@ pub(crate) struct Truth {
 }
 
 impl Bench {
-    pub fn new() -> Self {
-        Self {
+    /// The CPU backend and `args`' reference backend.
+    pub fn new(args: &ClaimsArgs) -> crate::Result<Self> {
+        Ok(Self {
             cpu: CpuRenderer::new(),
-            reference: ReferenceRenderer::new(),
-        }
+            reference: args.reference_backend.renderer()?,
+        })
     }
 
     /// The reference (default settings) of `scene` at `res`², the CPU prepared for it.
@@ -443,12 +447,16 @@ fn document(
          at the end has a row for every claim of the four papers, and the revisions of a test \
          after it was measured. Timing verdicts come from alternating rounds and are \
          **inconclusive** when the rounds fall on both sides of the bar. Errors against the exact \
-         reference (`transmission`, 1 spp, Mitsuba's interface rule) \
+         reference (`transmission`, 1 spp, Mitsuba's interface rule{tracer}) \
          at {res}², CPU backend, over refractor pixels without TIR at the first exit; T2 is the \
          direction leaving the first exit, P2 the first exit point (`docs/metrics.md`). Scenes: the \
          paper's 1,600-triangle sphere at IOR 1.5 and its cow at IOR 1.2, procedural environment, \
          default camera.\n",
-        res = args.res
+        res = args.res,
+        tracer = match args.reference_backend {
+            ReferenceBackend::Cpu => "",
+            ReferenceBackend::Gpu => "; traced on the GPU, `--reference-backend gpu`",
+        }
     );
     for note in notes {
         let _ = writeln!(md, "Note: {note}\n");

@@ -114,14 +114,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     let mut renderers = backends::open(&options.backends, options.gpu_policy, progress)?;
     backends::check_supported(&renderers, &options.methods)?;
     let mut reference: Box<dyn Renderer> = match options.reference_backend {
-        BackendId::Gpu => {
-            crate::ensure!(
-                options.spp == 1,
-                "--reference-backend gpu traces one sample per pixel; --spp {} runs on the CPU tracer",
-                options.spp
-            );
-            Box::new(refract_gpu::GpuRenderer::new()?)
-        }
+        BackendId::Gpu => Box::new(refract_gpu::GpuRenderer::new()?),
         _ => Box::new(ReferenceRenderer::new()),
     };
     let settings = MethodParams::Reference(TraceSettings {

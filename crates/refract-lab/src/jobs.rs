@@ -26,7 +26,7 @@ pub struct CompareOptions {
     /// Reference samples per pixel.
     pub spp: u32,
     /// Where the reference is traced: [`BackendId::Trace`] (the CPU tracer, the default) or
-    /// [`BackendId::Gpu`] (`refract_gpu::reference`: transmission mode, one sample per pixel).
+    /// [`BackendId::Gpu`] (`refract_gpu::reference`, every mode and sample count).
     pub reference_backend: BackendId,
     /// Timed frames per method (after 2 warm-up frames).
     pub frames: u32,

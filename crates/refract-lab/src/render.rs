@@ -61,8 +61,8 @@ impl Renders {
             );
             return Ok(request.backend);
         }
-        // The reference runs on the tracer (asked for as cpu) or on the GPU (transmission mode,
-        // one sample per pixel: refract_gpu::reference; other settings are refused there).
+        // The reference runs on the tracer (asked for as cpu) or on the GPU
+        // (refract_gpu::reference, every mode and sample count).
         Ok(match request.backend {
             BackendId::Gpu => BackendId::Gpu,
             _ => BackendId::Trace,

@@ -90,8 +90,8 @@ struct SweepFile {
     ior: Vec<f32>,
     #[serde(default = "one")]
     spp: u32,
-    /// Where the references are traced: `cpu` (the CPU tracer) or `gpu` (transmission mode, one
-    /// sample per pixel).
+    /// Where the references are traced: `cpu` (the CPU tracer) or `gpu`
+    /// (`refract_gpu::reference`).
     #[serde(default = "default_reference_backend")]
     reference_backend: String,
     #[serde(default = "three")]
@@ -202,14 +202,7 @@ impl Sweep {
         );
         let reference_backend = match file.reference_backend.as_str() {
             "cpu" => BackendId::Trace,
-            "gpu" => {
-                crate::ensure!(
-                    file.spp == 1,
-                    "{origin}: reference_backend = \"gpu\" traces one sample per pixel; spp = {} runs on the CPU tracer (reference_backend = \"cpu\")",
-                    file.spp
-                );
-                BackendId::Gpu
-            }
+            "gpu" => BackendId::Gpu,
             other => {
                 crate::bail!("{origin}: reference_backend = {other:?}: expected \"cpu\" or \"gpu\"")
             }

@@ -25,7 +25,9 @@ use refract_eval::metrics::evaluate_method;
 use refract_gpu::{GpuContext, GpuRenderer};
 use refract_scene::registry::ParamKind;
 use refract_scene::tonemap::to_srgb8;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TimingSource};
+use refract_scene::{
+    BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TimingSource,
+};
 use refract_trace::ReferenceRenderer;
 use winit::application::ApplicationHandler;
 
@@ -253,6 +255,15 @@ struct Viewer {
     show_panel: bool,
     /// An IOR the panel asked for, applied before the next frame.
     pending_ior: Option<f32>,
+}
+
+/// Where a reference level was traced, for the title and the summary.
+fn reference_origin(level: &Level) -> String {
+    match (&level.backend, &level.gpu_failure) {
+        (BackendId::Gpu, _) => "GPU".to_owned(),
+        (_, Some(why)) => format!("CPU tracer; the GPU failed: {why}"),
+        _ => "CPU tracer".to_owned(),
+    }
 }
 
 /// The method's image or one of its error maps against the full-resolution reference.
@@ -615,11 +626,17 @@ impl Viewer {
         let reference = if self.split || self.error_view != ErrorView::Off {
             match &self.reference_level {
                 None => " — reference: tracing".to_owned(),
-                Some(l) if l.full => " — reference: done".to_owned(),
-                Some(l) => format!(
-                    " — reference: {}×{} (refining)",
-                    l.frame.width, l.frame.height
-                ),
+                Some(l) => {
+                    let traced = reference_origin(l);
+                    if l.full {
+                        format!(" — reference ({traced}): done")
+                    } else {
+                        format!(
+                            " — reference ({traced}): {}×{} (refining)",
+                            l.frame.width, l.frame.height
+                        )
+                    }
+                }
             }
         } else {
             String::new()
@@ -784,7 +801,13 @@ impl Viewer {
     fn refine_reference(&mut self, camera: CameraDesc) {
         let force = self.scene_version != self.reference_scene_version;
         self.reference_scene_version = self.scene_version;
-        let generation = self.reference.request(&self.scene, camera, force);
+        // On the GPU when the method runs there (the viewer's device, another thread).
+        let gpu = self
+            .gpu
+            .as_ref()
+            .filter(|_| self.use_gpu)
+            .map(GpuRenderer::context);
+        let generation = self.reference.request(&self.scene, camera, gpu, force);
         if generation != self.reference_generation {
             self.reference_generation = generation;
             self.reference_level = None;
@@ -1091,8 +1114,18 @@ impl Viewer {
             (true, false) => "GPU frames read back and uploaded to the window",
             (false, _) => "CPU frames uploaded to the window",
         };
+        let reference = self
+            .reference_level
+            .as_ref()
+            .map(|l| {
+                format!(
+                    "; split-view reference traced on the {}",
+                    reference_origin(l)
+                )
+            })
+            .unwrap_or_default();
         format!(
-            "frames: {}, median {median:.2} ms a frame from redraw to present after the first ({path})",
+            "frames: {}, median {median:.2} ms a frame from redraw to present after the first ({path}){reference}",
             self.frames_done
         )
     }
@@ -1126,15 +1159,27 @@ impl Viewer {
         let path = self.args.screenshot.clone();
         write_png_rgb8(&path, width, height, &pixels)?;
         let camera = self.camera(width, height)?;
-        let mut reference = ReferenceRenderer::new();
-        reference.prepare(&self.scene)?;
-        let mut truth = Frame::default();
-        reference.render(
-            &camera,
-            &MethodParams::defaults(MethodId::Reference),
-            FrameOutputs::ColorAndAovs,
-            &mut truth,
-        )?;
+        // The split view's full level when it is of this view, else traced here on the CPU.
+        let level = self.reference_level.take().filter(|l| {
+            l.full
+                && l.generation == self.reference_generation
+                && (l.frame.width, l.frame.height) == (width, height)
+        });
+        let truth = match level {
+            Some(level) => level.frame,
+            None => {
+                let mut reference = ReferenceRenderer::new();
+                reference.prepare(&self.scene)?;
+                let mut truth = Frame::default();
+                reference.render(
+                    &camera,
+                    &MethodParams::defaults(MethodId::Reference),
+                    FrameOutputs::ColorAndAovs,
+                    &mut truth,
+                )?;
+                truth
+            }
+        };
         let params = self.params();
         let mut frame = Frame::default();
         self.renderer()

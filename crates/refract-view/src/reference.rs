@@ -1,13 +1,20 @@
-//! The viewer's exact reference, refined progressively on the CPU in a background thread
-//! while the camera rests: 1/8, 1/4, 1/2, then full resolution (the last with its AOVs, for
-//! the error maps); a newer request (the camera moved) abandons older work between levels.
+//! The viewer's exact reference, refined progressively in a background thread while the camera
+//! rests: 1/8, 1/4, 1/2, then full resolution (the last with its AOVs, for the error maps); a
+//! newer request (the camera moved) abandons older work between levels. It is traced on the GPU
+//! (`refract_gpu::reference`, on the viewer's device) when the method runs there, else by the
+//! CPU tracer; a GPU failure falls back to the CPU and says why in the level.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
-use refract_core::CameraDesc;
-use refract_scene::{Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene};
+use refract_core::{Camera, CameraDesc};
+use refract_gpu::GpuContext;
+use refract_gpu::reference::{GpuReference, ReferencePipeline};
+use refract_scene::{
+    BackendId, Frame, FrameOutputs, MethodId, MethodParams, RenderError, Renderer, Scene,
+    TraceSettings,
+};
 use refract_trace::ReferenceRenderer;
 
 /// One level of a reference: the frame at `scale` of the requested size.
@@ -18,12 +25,18 @@ pub struct Level {
     pub frame: Frame,
     /// Whether this is the full-resolution level.
     pub full: bool,
+    /// Where it was traced: [`BackendId::Gpu`] or [`BackendId::Trace`] (the CPU tracer).
+    pub backend: BackendId,
+    /// Why a GPU request was traced on the CPU instead.
+    pub gpu_failure: Option<String>,
 }
 
 struct Request {
     generation: u64,
     scene: Arc<Scene>,
     camera: CameraDesc,
+    /// The viewer's device when the method runs on the GPU.
+    gpu: Option<GpuContext>,
 }
 
 /// The background worker.
@@ -31,7 +44,99 @@ pub struct ProgressiveReference {
     requests: Sender<Request>,
     levels: Receiver<Level>,
     latest: Arc<AtomicU64>,
-    requested: Option<(CameraDesc, u64)>,
+    /// The last request: its camera, whether on the GPU, its generation.
+    requested: Option<(CameraDesc, bool, u64)>,
+}
+
+/// The worker's GPU tracer: the pipeline compiled once per device, the scene uploaded once per
+/// scene.
+struct GpuTracer {
+    context: GpuContext,
+    pipeline: Arc<ReferencePipeline>,
+    scene: Option<(Arc<Scene>, GpuReference)>,
+}
+
+impl GpuTracer {
+    fn render(
+        &mut self,
+        scene: &Arc<Scene>,
+        camera: &Camera,
+        settings: &TraceSettings,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        let reference = match &mut self.scene {
+            Some((uploaded, reference)) if Arc::ptr_eq(uploaded, scene) => reference,
+            slot => {
+                let reference =
+                    GpuReference::with_pipeline(&self.context, Arc::clone(&self.pipeline), scene)?;
+                &mut slot.insert((Arc::clone(scene), reference)).1
+            }
+        };
+        reference.render(&self.context, camera, settings, outputs, frame)
+    }
+}
+
+/// The tracers of the worker thread.
+struct Tracers {
+    cpu: ReferenceRenderer,
+    cpu_scene: Option<Arc<Scene>>,
+    gpu: Option<GpuTracer>,
+    settings: TraceSettings,
+}
+
+impl Tracers {
+    /// Traces one level on the GPU when `gpu` is given (falling back to the CPU with the
+    /// reason), else on the CPU.
+    fn render(
+        &mut self,
+        request: &Request,
+        camera: &Camera,
+        outputs: FrameOutputs,
+        frame: &mut Frame,
+    ) -> Result<(BackendId, Option<String>), RenderError> {
+        let mut failure = None;
+        if let Some(context) = &request.gpu {
+            let settings = self.settings;
+            let traced = self
+                .gpu_tracer(context)
+                .and_then(|gpu| gpu.render(&request.scene, camera, &settings, outputs, frame));
+            match traced {
+                Ok(()) => return Ok((BackendId::Gpu, None)),
+                Err(err) => failure = Some(refract_scene::full_message(&err)),
+            }
+        }
+        if !self
+            .cpu_scene
+            .as_ref()
+            .is_some_and(|s| Arc::ptr_eq(s, &request.scene))
+        {
+            self.cpu.prepare(&request.scene)?;
+            self.cpu_scene = Some(Arc::clone(&request.scene));
+        }
+        self.cpu.render(
+            camera,
+            &MethodParams::Reference(self.settings),
+            outputs,
+            frame,
+        )?;
+        Ok((BackendId::Trace, failure))
+    }
+
+    /// The GPU tracer on `context`'s device, compiled on first use.
+    fn gpu_tracer(&mut self, context: &GpuContext) -> Result<&mut GpuTracer, RenderError> {
+        if self.gpu.is_none() {
+            let pipeline = Arc::new(ReferencePipeline::new(context)?);
+            self.gpu = Some(GpuTracer {
+                context: context.clone(),
+                pipeline,
+                scene: None,
+            });
+        }
+        self.gpu
+            .as_mut()
+            .ok_or_else(|| RenderError::Parameter("the GPU tracer was not created".into()))
+    }
 }
 
 impl ProgressiveReference {
@@ -42,15 +147,20 @@ impl ProgressiveReference {
         let latest = Arc::new(AtomicU64::new(0));
         let current = Arc::clone(&latest);
         std::thread::spawn(move || {
-            let mut tracer = ReferenceRenderer::new();
-            let settings = MethodParams::defaults(MethodId::Reference);
+            let MethodParams::Reference(settings) = MethodParams::defaults(MethodId::Reference)
+            else {
+                return;
+            };
+            let mut tracers = Tracers {
+                cpu: ReferenceRenderer::new(),
+                cpu_scene: None,
+                gpu: None,
+                settings,
+            };
             while let Ok(mut request) = inbox.recv() {
                 // Only the newest request matters.
                 while let Ok(newer) = inbox.try_recv() {
                     request = newer;
-                }
-                if tracer.prepare(&request.scene).is_err() {
-                    continue;
                 }
                 for divisor in [8u32, 4, 2, 1] {
                     if current.load(Ordering::Relaxed) != request.generation {
@@ -61,7 +171,7 @@ impl ProgressiveReference {
                         height: (request.camera.height / divisor).max(1),
                         ..request.camera
                     };
-                    let Ok(camera) = refract_core::Camera::new(desc) else {
+                    let Ok(camera) = Camera::new(desc) else {
                         break;
                     };
                     let outputs = if divisor == 1 {
@@ -70,16 +180,17 @@ impl ProgressiveReference {
                         FrameOutputs::Color
                     };
                     let mut frame = Frame::default();
-                    if tracer
-                        .render(&camera, &settings, outputs, &mut frame)
-                        .is_err()
-                    {
+                    let Ok((backend, gpu_failure)) =
+                        tracers.render(&request, &camera, outputs, &mut frame)
+                    else {
                         break;
-                    }
+                    };
                     let level = Level {
                         generation: request.generation,
                         frame,
                         full: divisor == 1,
+                        backend,
+                        gpu_failure,
                     };
                     if outbox.send(level).is_err() {
                         return;
@@ -95,21 +206,29 @@ impl ProgressiveReference {
         }
     }
 
-    /// Asks for the reference of `camera` (no-op when it is the one last asked for); returns
-    /// the request's generation.
-    pub fn request(&mut self, scene: &Arc<Scene>, camera: CameraDesc, force: bool) -> u64 {
-        if let Some((previous, generation)) = self.requested
+    /// Asks for the reference of `camera`, traced on `gpu`'s device when given (no-op when it
+    /// is the one last asked for); returns the request's generation.
+    pub fn request(
+        &mut self,
+        scene: &Arc<Scene>,
+        camera: CameraDesc,
+        gpu: Option<&GpuContext>,
+        force: bool,
+    ) -> u64 {
+        if let Some((previous, on_gpu, generation)) = self.requested
             && previous == camera
+            && on_gpu == gpu.is_some()
             && !force
         {
             return generation;
         }
         let generation = self.latest.fetch_add(1, Ordering::Relaxed) + 1;
-        self.requested = Some((camera, generation));
+        self.requested = Some((camera, gpu.is_some(), generation));
         let _ = self.requests.send(Request {
             generation,
             scene: Arc::clone(scene),
             camera,
+            gpu: gpu.cloned(),
         });
         generation
     }

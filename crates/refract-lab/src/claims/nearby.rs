@@ -94,7 +94,7 @@ pub fn section(
     ledger: &mut Ledger,
     progress: &dyn Progress,
 ) -> crate::Result<String> {
-    let mut bench = Bench::new();
+    let mut bench = Bench::new(args)?;
     let mut notes = Vec::new();
     let mut claims = vec![
         inventory.claim("N1")?,

@@ -255,7 +255,7 @@ pub fn section(
     inventory: &Inventory,
     ledger: &mut Ledger,
 ) -> crate::Result<String> {
-    let mut bench = Bench::new();
+    let mut bench = Bench::new(args)?;
     let res = args.res;
     let (mut k1, mut k2, mut k7, mut k4, mut k9, mut k8, mut k15, mut k17) = (
         inventory.claim("K1")?,

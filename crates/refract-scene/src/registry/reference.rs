@@ -130,7 +130,7 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     defaults: || MethodParams::Reference(TraceSettings::DEFAULT),
     renders_conductors: true,
     memory: MemoryModel::per_pixel(118, 239),
-    // The GPU traces transmission mode at one sample per pixel (refract_gpu::reference).
+    // The GPU traces both modes at any sample count (refract_gpu::reference).
     backends: &[BackendId::Trace, BackendId::Gpu],
 }];
 
