@@ -37,9 +37,18 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         println!("GPU adapters     none (the GPU backend needs one; Debian: mesa-vulkan-drivers)");
     }
     for adapter in &adapters {
+        let info = &adapter.info;
+        let driver = if info.driver_info.is_empty() {
+            String::new()
+        } else {
+            format!(", {}", info.driver_info)
+        };
         println!(
-            "GPU adapter      {} ({:?}, {:?})",
-            adapter.name, adapter.backend, adapter.device_type
+            "GPU adapter      {} ({:?}, {:?}{driver}); ray queries: {}",
+            info.name,
+            info.backend,
+            info.device_type,
+            if adapter.ray_queries { "yes" } else { "no" }
         );
     }
     let Some(mesh_spec) = &args.mesh else {

@@ -43,6 +43,36 @@ pub enum GpuError {
     /// Invalid parameters.
     #[error(transparent)]
     Ior(#[from] refract_core::kernel::InvalidIor),
+    /// `REFRACT_RAY_QUERY` is not one of its values, or asks for ray queries an adapter lacks.
+    #[error("REFRACT_RAY_QUERY: {0}")]
+    RayQuery(String),
+}
+
+/// Whether the reference traverses its scene with the adapter's hardware ray queries
+/// (`EXPERIMENTAL_RAY_QUERY`) or the WGSL BVH traversal; from `REFRACT_RAY_QUERY`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RayQueryPolicy {
+    /// Ray queries where the adapter offers them, the WGSL traversal elsewhere (unset or `auto`).
+    #[default]
+    Auto,
+    /// Ray queries; an adapter without them is an error (`on`).
+    On,
+    /// The WGSL traversal even where ray queries exist (`off`).
+    Off,
+}
+
+impl RayQueryPolicy {
+    /// The policy `REFRACT_RAY_QUERY` names: `auto` (or unset), `on`, `off`.
+    pub fn from_env() -> Result<Self, GpuError> {
+        match std::env::var("REFRACT_RAY_QUERY").as_deref() {
+            Err(_) | Ok("auto") => Ok(Self::Auto),
+            Ok("on") => Ok(Self::On),
+            Ok("off") => Ok(Self::Off),
+            Ok(other) => Err(GpuError::RayQuery(format!(
+                "`{other}`: expected auto, on or off"
+            ))),
+        }
+    }
 }
 
 /// A device and its queue, plus what the adapter can do. A clone is another handle onto the
@@ -58,6 +88,9 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether GPU timestamps are available (TIMESTAMP_QUERY).
     pub timestamps: bool,
+    /// Whether the device has hardware ray queries enabled (`EXPERIMENTAL_RAY_QUERY`, by
+    /// [`RayQueryPolicy`]): the reference then traverses its scene with them.
+    pub ray_queries: bool,
     /// The first error no scope caught (wgpu's default handler panics; ours keeps it for the
     /// next [`GpuContext::checked`] or [`GpuContext::wait`] to return).
     uncaught: Arc<Mutex<Option<String>>>,
@@ -72,13 +105,27 @@ impl fmt::Debug for GpuContext {
     }
 }
 
+/// An adapter wgpu can see and what the reference can use of it.
+#[derive(Clone, Debug)]
+pub struct AdapterSummary {
+    /// Name, backend, device type, driver.
+    pub info: wgpu::AdapterInfo,
+    /// Whether it offers hardware ray queries (`EXPERIMENTAL_RAY_QUERY`).
+    pub ray_queries: bool,
+}
+
 /// Every adapter wgpu can see (honouring `WGPU_BACKEND`), for `refract info`.
-pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
+pub fn list_adapters() -> Vec<AdapterSummary> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
         .iter()
-        .map(wgpu::Adapter::get_info)
+        .map(|adapter| AdapterSummary {
+            info: adapter.get_info(),
+            ray_queries: adapter
+                .features()
+                .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
+        })
         .collect()
 }
 
@@ -124,17 +171,36 @@ impl GpuContext {
     async fn from_adapter_async(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let required_features = if timestamps {
-            wgpu::Features::TIMESTAMP_QUERY
+        let has_ray_queries = adapter
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
+        let ray_queries = match RayQueryPolicy::from_env()? {
+            RayQueryPolicy::Auto => has_ray_queries,
+            RayQueryPolicy::Off => false,
+            RayQueryPolicy::On if has_ray_queries => true,
+            RayQueryPolicy::On => {
+                return Err(GpuError::RayQuery(format!(
+                    "on, but {} ({}) has no ray queries (lavapipe has them from Mesa 24.1; docs/reference.md)",
+                    info.name, info.driver_info
+                )));
+            }
+        };
+        let mut required_features = wgpu::Features::empty();
+        if timestamps {
+            required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        let experimental_features = if ray_queries {
+            required_features |= wgpu::Features::EXPERIMENTAL_RAY_QUERY;
+            experimental_ray_queries()
         } else {
-            wgpu::Features::empty()
+            wgpu::ExperimentalFeatures::disabled()
         };
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("refract"),
                 required_features,
                 required_limits: adapter.limits(),
-                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                experimental_features,
                 memory_hints: wgpu::MemoryHints::Performance,
                 trace: wgpu::Trace::Off,
             })
@@ -155,6 +221,7 @@ impl GpuContext {
             queue,
             info,
             timestamps,
+            ray_queries,
             uncaught,
         })
     }
@@ -230,4 +297,15 @@ impl GpuContext {
         self.take_uncaught()?;
         Ok(value)
     }
+}
+
+/// wgpu's token for its experimental features, asked for only to enable
+/// `EXPERIMENTAL_RAY_QUERY` where the adapter offers it and `REFRACT_RAY_QUERY` is not `off`.
+#[allow(unsafe_code)]
+fn experimental_ray_queries() -> wgpu::ExperimentalFeatures {
+    // SAFETY: the token acknowledges that wgpu's experimental ray-query API may still have
+    // bugs. We use it only as wgpu's own example does (one triangle BLAS, one TLAS instance,
+    // `rayQueryProceed` over opaque geometry), the results are held to the WGSL traversal's by
+    // tests/tests/gpu_ray_query.rs, and `REFRACT_RAY_QUERY=off` turns it off.
+    unsafe { wgpu::ExperimentalFeatures::enabled() }
 }

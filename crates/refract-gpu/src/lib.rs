@@ -29,5 +29,5 @@ mod scene_buffers;
 pub mod shaders;
 mod timestamps;
 
-pub use context::{GpuContext, GpuError, list_adapters};
+pub use context::{AdapterSummary, GpuContext, GpuError, list_adapters};
 pub use renderer::{GpuFrame, GpuRenderer};

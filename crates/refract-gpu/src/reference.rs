@@ -29,7 +29,7 @@ use crate::bvh::{GpuBvh, bvh_layout};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::scene_buffers::{EnvironmentUniforms, GpuScene};
-use crate::shaders::REFERENCE_MODULE;
+use crate::shaders::{REFERENCE_MODULE, REFERENCE_RAY_QUERY_MODULE};
 
 /// `struct TraceTriangle` of `shaders/reference.wgsl`.
 #[repr(C)]
@@ -79,18 +79,39 @@ const RECORD_WORDS: usize = 26;
 /// at 227), a few hundred milliseconds of `full` mode on a desktop GPU.
 const DEFAULT_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 21;
 
+/// How the reference finds closest hits on a device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traversal {
+    /// The WGSL traversal of a flattened BVH (`shaders/bvh.wgsl`), on every adapter.
+    Software,
+    /// The adapter's hardware ray queries (`shaders/bvh_ray_query.wgsl`) over an acceleration
+    /// structure of the scene, where the device has them ([`GpuContext::ray_queries`]).
+    RayQuery,
+}
+
 /// The reference's compute pipeline and layouts, compiled once per device and shared by every
 /// scene uploaded on it.
 pub struct ReferencePipeline {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     bvh_layout: wgpu::BindGroupLayout,
+    traversal: Traversal,
 }
 
 impl ReferencePipeline {
-    /// Compiles `shaders/reference.wgsl` on `context`'s device.
+    /// Compiles `shaders/reference.wgsl` on `context`'s device, over its ray queries when the
+    /// device has them enabled, else over the WGSL BVH traversal.
     pub fn new(context: &GpuContext) -> Result<Self, GpuError> {
         let device = &context.device;
+        let traversal = if context.ray_queries {
+            Traversal::RayQuery
+        } else {
+            Traversal::Software
+        };
+        let module_source = match traversal {
+            Traversal::Software => REFERENCE_MODULE.source(),
+            Traversal::RayQuery => REFERENCE_RAY_QUERY_MODULE.source(),
+        };
         context.checked(|| {
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("reference"),
@@ -105,10 +126,13 @@ impl ReferencePipeline {
                     storage_entry(7, false),
                 ],
             });
-            let bvh_layout = bvh_layout(device);
+            let bvh_layout = match traversal {
+                Traversal::Software => bvh_layout(device),
+                Traversal::RayQuery => ray_query_layout(device),
+            };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("reference.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(REFERENCE_MODULE.source().into()),
+                source: wgpu::ShaderSource::Wgsl(module_source.into()),
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("reference"),
@@ -127,7 +151,167 @@ impl ReferencePipeline {
                 pipeline,
                 layout,
                 bvh_layout,
+                traversal,
             }
+        })
+    }
+
+    /// How this pipeline finds closest hits.
+    pub fn traversal(&self) -> Traversal {
+        self.traversal
+    }
+}
+
+impl GpuReference {
+    /// How this reference finds closest hits.
+    pub fn traversal(&self) -> Traversal {
+        self.pipeline.traversal
+    }
+}
+
+/// Group 1 of `bvh_ray_query.wgsl`: the scene's acceleration structure and its triangles.
+fn ray_query_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("reference ray query"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::AccelerationStructure {
+                    vertex_return: false,
+                },
+                count: None,
+            },
+            storage_entry(1, true),
+        ],
+    })
+}
+
+/// The scene's acceleration structure for ray queries: one BLAS over `mesh` (every triangle
+/// opaque, in the mesh's order: a hit's primitive index is the triangle's index), one TLAS
+/// instance with the identity transform; with the triangles' corners for `bvh_triangles`.
+struct SceneAccelerationStructure {
+    tlas: wgpu::Tlas,
+    triangles: wgpu::Buffer,
+    /// Kept alive while the TLAS refers to it.
+    _blas: wgpu::Blas,
+}
+
+impl SceneAccelerationStructure {
+    fn build(context: &GpuContext, mesh: &Mesh) -> Result<Self, RenderError> {
+        let device = &context.device;
+        // An empty scene gets one degenerate triangle, which no ray hits (no empty buffers in
+        // WebGPU; Vulkan ignores zero-area triangles).
+        let (positions, indices): (Vec<[f32; 3]>, Vec<u32>) = if mesh.triangles.is_empty() {
+            (vec![[0.0; 3]; 3], vec![0, 1, 2])
+        } else {
+            (
+                mesh.positions.iter().map(|p| p.to_array()).collect(),
+                mesh.triangles.iter().flatten().copied().collect(),
+            )
+        };
+        let corners: Vec<[[f32; 4]; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| {
+                [0, 1, 2].map(|k| {
+                    Vec3::from_array(positions[t[k] as usize])
+                        .extend(0.0)
+                        .to_array()
+                })
+            })
+            .collect();
+        let limits = device.limits();
+        if corners.len() as u64 > u64::from(limits.max_blas_primitive_count) {
+            return Err(RenderError::Parameter(format!(
+                "GPU reference: {} triangles exceed {}'s acceleration structures ({} primitives); REFRACT_RAY_QUERY=off traces them with the WGSL traversal",
+                corners.len(),
+                context.info.name,
+                limits.max_blas_primitive_count
+            )));
+        }
+        let size = wgpu::BlasTriangleGeometrySizeDescriptor {
+            vertex_format: wgpu::VertexFormat::Float32x3,
+            vertex_count: positions.len() as u32,
+            index_format: Some(wgpu::IndexFormat::Uint32),
+            index_count: Some(indices.len() as u32),
+            flags: wgpu::AccelerationStructureGeometryFlags::OPAQUE,
+        };
+        Ok(context.checked(|| {
+            let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference blas vertices"),
+                contents: bytemuck::cast_slice(&positions),
+                usage: wgpu::BufferUsages::BLAS_INPUT,
+            });
+            let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference blas indices"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::BLAS_INPUT,
+            });
+            let blas = device.create_blas(
+                &wgpu::CreateBlasDescriptor {
+                    label: Some("reference scene"),
+                    flags: wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE,
+                    update_mode: wgpu::AccelerationStructureUpdateMode::Build,
+                },
+                wgpu::BlasGeometrySizeDescriptors::Triangles {
+                    descriptors: vec![size.clone()],
+                },
+            );
+            let mut tlas = device.create_tlas(&wgpu::CreateTlasDescriptor {
+                label: Some("reference scene"),
+                flags: wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE,
+                update_mode: wgpu::AccelerationStructureUpdateMode::Build,
+                max_instances: 1,
+            });
+            let identity = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+            if let Some(slot) = tlas.get_mut_single(0) {
+                *slot = Some(wgpu::TlasInstance::new(&blas, identity, 0, 0xff));
+            }
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("reference acceleration structure"),
+            });
+            encoder.build_acceleration_structures(
+                core::iter::once(&wgpu::BlasBuildEntry {
+                    blas: &blas,
+                    geometry: wgpu::BlasGeometries::TriangleGeometries(vec![
+                        wgpu::BlasTriangleGeometry {
+                            size: &size,
+                            vertex_buffer: &vertices,
+                            first_vertex: 0,
+                            vertex_stride: 12,
+                            index_buffer: Some(&index_buffer),
+                            first_index: Some(0),
+                            transform_buffer: None,
+                            transform_buffer_offset: None,
+                        },
+                    ]),
+                }),
+                core::iter::once(&tlas),
+            );
+            context.queue.submit([encoder.finish()]);
+            Self {
+                tlas,
+                triangles: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("reference triangles (ray query)"),
+                    contents: bytemuck::cast_slice(&corners),
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+                _blas: blas,
+            }
+        })?)
+    }
+
+    fn bind_group(&self, device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("reference ray query"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.tlas.as_binding(),
+                },
+                entry(1, &self.triangles),
+            ],
         })
     }
 }
@@ -136,6 +320,8 @@ impl ReferencePipeline {
 pub struct GpuReference {
     pipeline: Arc<ReferencePipeline>,
     bvh_group: wgpu::BindGroup,
+    /// The scene's acceleration structure when the pipeline traverses with ray queries.
+    _acceleration: Option<SceneAccelerationStructure>,
     /// The objects' materials (`GpuScene`'s buffer), the environment's texels and uniforms.
     materials: wgpu::Buffer,
     environment_texels: wgpu::Buffer,
@@ -190,15 +376,34 @@ impl GpuReference {
         uploaded: &GpuScene,
     ) -> Result<Self, RenderError> {
         let (combined, attributes) = combined_mesh(scene);
-        let flat = FlatBvh::build(&combined)
-            .map_err(|err| RenderError::Parameter(format!("GPU reference: {err}")))?;
-        let ordered: Vec<TraceTriangle> = if flat.original.is_empty() {
+        let device = &context.device;
+        // The triangles' attributes in the order the traversal reports hits: the BVH's leaf
+        // order, or the mesh's own for ray queries.
+        let mut acceleration = None;
+        let (bvh_group, ordered): (wgpu::BindGroup, Vec<TraceTriangle>) = match pipeline.traversal {
+            Traversal::Software => {
+                let flat = FlatBvh::build(&combined)
+                    .map_err(|err| RenderError::Parameter(format!("GPU reference: {err}")))?;
+                let ordered = flat
+                    .original
+                    .iter()
+                    .map(|&i| attributes[i as usize])
+                    .collect();
+                let bvh = GpuBvh::upload(context, &flat)?;
+                (bvh.bind_group(device, &pipeline.bvh_layout), ordered)
+            }
+            Traversal::RayQuery => {
+                let structure = SceneAccelerationStructure::build(context, &combined)?;
+                let group =
+                    context.checked(|| structure.bind_group(device, &pipeline.bvh_layout))?;
+                acceleration = Some(structure);
+                (group, attributes)
+            }
+        };
+        let ordered = if ordered.is_empty() {
             vec![TraceTriangle::default()]
         } else {
-            flat.original
-                .iter()
-                .map(|&i| attributes[i as usize])
-                .collect()
+            ordered
         };
         let mut conductors: Vec<ObjectConductor> = scene
             .objects
@@ -234,10 +439,9 @@ impl GpuReference {
             throughput_cutoff: 0.0,
             _padding: [0; 2],
         };
-        let device = &context.device;
-        let bvh = GpuBvh::upload(context, &flat)?;
         Ok(context.checked(|| Self {
-            bvh_group: bvh.bind_group(device, &pipeline.bvh_layout),
+            bvh_group,
+            _acceleration: acceleration,
             pipeline,
             materials: uploaded.materials.clone(),
             environment_texels: uploaded.environment_texels.clone(),

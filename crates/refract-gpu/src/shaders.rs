@@ -49,6 +49,16 @@ pub const REFERENCE: WgslFile = (
     "reference.wgsl",
     include_str!("../../../shaders/reference.wgsl"),
 );
+/// The ray-query module's enable directive (its first file).
+pub const RAY_QUERY_ENABLE: WgslFile = (
+    "ray_query_enable.wgsl",
+    include_str!("../../../shaders/ray_query_enable.wgsl"),
+);
+/// Closest hits by the adapter's ray queries, `bvh.wgsl`'s interface.
+pub const BVH_RAY_QUERY: WgslFile = (
+    "bvh_ray_query.wgsl",
+    include_str!("../../../shaders/bvh_ray_query.wgsl"),
+);
 /// The BVH's batch kernel (`refract_gpu::bvh::GpuBvh::closest_hits`).
 pub const BVH_TRACE: WgslFile = (
     "bvh_trace.wgsl",
@@ -70,13 +80,24 @@ pub struct ShaderModule {
 }
 
 impl ShaderModule {
-    /// The full source: the constant header, then every file.
+    /// The full source: the files' `enable` directives (WGSL wants them before every
+    /// declaration), the constant header, then every file.
     pub fn source(&self) -> String {
-        let mut source = wgsl_constants();
+        let is_directive = |line: &&str| line.trim_start().starts_with("enable ");
+        let mut source: String = self
+            .files
+            .iter()
+            .flat_map(|(_, text)| text.lines().filter(is_directive))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        source.push_str(&wgsl_constants());
         source.push_str(&color_chart_constant());
         for (name, text) in self.files {
             source.push_str(&format!("\n// ---- {name} ----\n"));
-            source.push_str(text);
+            for line in text.lines().filter(|line| !is_directive(line)) {
+                source.push_str(line);
+                source.push('\n');
+            }
         }
         source
     }
@@ -114,6 +135,22 @@ pub const REFERENCE_MODULE: ShaderModule = ShaderModule {
     ],
 };
 
+/// The exact reference over the adapter's ray queries (`refract_gpu::reference`, where the
+/// adapter has `EXPERIMENTAL_RAY_QUERY`).
+pub const REFERENCE_RAY_QUERY_MODULE: ShaderModule = ShaderModule {
+    name: "reference-ray-query",
+    files: &[
+        RAY_QUERY_ENABLE,
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        BVH_RAY_QUERY,
+        REFERENCE,
+    ],
+};
+
 /// Every module the backend compiles: the shared ones, then each family's.
 pub fn modules() -> Vec<ShaderModule> {
     let mut modules = vec![
@@ -121,6 +158,7 @@ pub fn modules() -> Vec<ShaderModule> {
         CONFORMANCE_MODULE,
         BVH_MODULE,
         REFERENCE_MODULE,
+        REFERENCE_RAY_QUERY_MODULE,
     ];
     modules.extend(crate::methods::SHADERS);
     modules
