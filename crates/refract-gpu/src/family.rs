@@ -168,6 +168,9 @@ impl<F: GpuFamily> FamilySlot<F> {
             }
         };
         let start = Instant::now();
+        if let Some(timestamps) = cx.timestamps {
+            timestamps.begin_frame();
+        }
         self.family.plan(cx, params)?;
         let plan_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut encoder =

@@ -29,5 +29,6 @@ mod scene_buffers;
 pub mod shaders;
 mod timestamps;
 
-pub use context::{AdapterSummary, GpuContext, GpuError, list_adapters};
+pub use context::{AdapterSummary, GpuContext, GpuError, RayQueryPolicy, list_adapters};
 pub use renderer::{GpuFrame, GpuRenderer};
+pub use timestamps::PassTime;

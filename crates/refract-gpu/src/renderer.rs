@@ -19,7 +19,7 @@ use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::reference::{GpuReference, ReferencePipeline};
 use crate::scene_buffers::GpuScene;
-use crate::timestamps::Timestamps;
+use crate::timestamps::{PassTime, Timestamps};
 
 impl From<GpuError> for RenderError {
     fn from(err: GpuError) -> Self {
@@ -74,6 +74,15 @@ impl GpuRenderer {
             Ok(renderer) => Some(renderer),
             Err(err) => panic!("GPU pipelines: {err}"),
         }
+    }
+
+    /// The GPU time of the last frame's passes, summed per pass label in encoding order
+    /// (timestamp queries); empty without TIMESTAMP_QUERY and for the reference.
+    pub fn last_pass_times(&self) -> Vec<PassTime> {
+        self.timestamps
+            .as_ref()
+            .map(Timestamps::last_passes)
+            .unwrap_or_default()
     }
 
     /// The device and adapter.

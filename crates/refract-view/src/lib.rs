@@ -222,6 +222,8 @@ struct Viewer {
     /// The GPU's own time of the last frame (its passes' timestamps plus the CPU part of the
     /// frame), when the adapter has timestamp queries and the frame ran there.
     gpu_ms: Option<f64>,
+    /// The GPU time of the last frame's passes, per pass label (with `gpu_ms`).
+    pass_times: Vec<refract_gpu::PassTime>,
     /// The last frame was drawn from the GPU's colour buffer: `frame` is not it.
     shown_from_gpu: bool,
     /// Every frame's time from the start of its redraw to its presentation (the render, the
@@ -255,6 +257,16 @@ struct Viewer {
     show_panel: bool,
     /// An IOR the panel asked for, applied before the next frame.
     pending_ior: Option<f32>,
+}
+
+/// One pass label's GPU time for the title and the panel: `kernel 3.2 ms`, `cube-map faces ×18
+/// 9.1 ms`.
+fn pass_time(p: &refract_gpu::PassTime) -> String {
+    if p.count > 1 {
+        format!("{} ×{} {:.2} ms", p.label, p.count, p.ms)
+    } else {
+        format!("{} {:.2} ms", p.label, p.ms)
+    }
 }
 
 /// Where a reference level was traced, for the title and the summary.
@@ -359,6 +371,7 @@ impl Viewer {
         let gpu_passes = self
             .gpu_ms
             .map_or_else(String::new, |ms| format!("GPU passes {ms:.1} ms; "));
+        let pass_lines: Vec<String> = self.pass_times.iter().map(pass_time).collect();
         let readback = if self.use_gpu && !self.shown_from_gpu {
             "read back to the CPU"
         } else if self.use_gpu {
@@ -376,6 +389,9 @@ impl Viewer {
                         1e3 / ms.max(1e-3)
                     ));
                     ui.label(format!("{gpu_passes}{readback}"));
+                    for line in &pass_lines {
+                        ui.label(format!("  {line}"));
+                    }
                     egui::ComboBox::from_label("method (m/n)")
                         .selected_text(methods[method].name())
                         .show_ui(ui, |ui| {
@@ -646,9 +662,14 @@ impl Viewer {
             ErrorView::Flip => " — FLIP map",
             ErrorView::T2 => " — T2 error map (0–20°)",
         };
-        let passes = self
-            .gpu_ms
-            .map_or_else(String::new, |ms| format!(", GPU passes {ms:.1} ms"));
+        let passes = self.gpu_ms.map_or_else(String::new, |ms| {
+            let passes: Vec<String> = self.pass_times.iter().map(pass_time).collect();
+            if passes.is_empty() {
+                format!(", GPU passes {ms:.1} ms")
+            } else {
+                format!(", GPU passes {ms:.1} ms: {}", passes.join(", "))
+            }
+        });
         let readback = if self.use_gpu && !self.shown_from_gpu {
             ", read back"
         } else {
@@ -741,6 +762,7 @@ impl Viewer {
             self.last_ms = start.elapsed().as_secs_f64() * 1e3;
             self.gpu_ms =
                 (shown.timing.source == TimingSource::GpuTimestamps).then_some(shown.timing.ms);
+            self.pass_times = gpu.last_pass_times();
             self.shown_from_gpu = true;
             self.present(Source::Gpu(&params), width, height, panel)?;
             return self.after_present(begun);
@@ -752,6 +774,10 @@ impl Viewer {
             .render(&camera, &params, FrameOutputs::Color, &mut frame)?;
         self.last_ms = start.elapsed().as_secs_f64() * 1e3;
         self.gpu_ms = (timing.source == TimingSource::GpuTimestamps).then_some(timing.ms);
+        self.pass_times = match (&self.gpu, self.gpu_ms) {
+            (Some(gpu), Some(_)) if self.use_gpu => gpu.last_pass_times(),
+            _ => Vec::new(),
+        };
         self.shown_from_gpu = false;
         self.frame = frame;
         let mut pixels: Vec<u8> = self
@@ -1124,8 +1150,14 @@ impl Viewer {
                 )
             })
             .unwrap_or_default();
+        let passes = if self.pass_times.is_empty() {
+            String::new()
+        } else {
+            let passes: Vec<String> = self.pass_times.iter().map(pass_time).collect();
+            format!("; last frame's GPU passes: {}", passes.join(", "))
+        };
         format!(
-            "frames: {}, median {median:.2} ms a frame from redraw to present after the first ({path}){reference}",
+            "frames: {}, median {median:.2} ms a frame from redraw to present after the first ({path}){reference}{passes}",
             self.frames_done
         )
     }
@@ -1366,6 +1398,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         frames_done: 0,
         last_ms: 0.0,
         gpu_ms: None,
+        pass_times: Vec::new(),
         shown_from_gpu: false,
         frame_ms: Vec::new(),
         drag: None,

@@ -27,7 +27,6 @@ use crate::scene_buffers::GpuScene;
 use crate::shaders::{
     CORE, DISTANCE_SEARCH, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule,
 };
-use crate::timestamps::Timestamps;
 use refract_core::gpu::FrameUniforms;
 
 /// The module of the distance-map passes and paths (Umenhoffer et al. 2007).
@@ -438,7 +437,6 @@ impl DistanceMapTargets {
         queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
 
         let objects: Vec<_> = gpu_scene.objects.iter().collect();
-        let mut first = timestamps.map(Timestamps::begin_render);
         for layer in 0..layers {
             let (kind, meshes): (RasterKind, Vec<_>) = match layer {
                 0 => (RasterKind::Surface, vec![&gpu_scene.refractor]),
@@ -461,19 +459,26 @@ impl DistanceMapTargets {
                         targets: &[&slice[0], &slice[1], &slice[2]],
                         depth: &self.face_depth,
                     },
-                    first.take(),
+                    timestamps.and_then(|t| t.render_pass("cube-map faces")),
                 );
             }
         }
         let everything: Vec<_> = std::iter::once(&gpu_scene.refractor)
             .chain(gpu_scene.objects.iter())
             .collect();
-        self.eye
-            .encode(queue, raster, encoder, camera, &frame, &everything);
+        self.eye.encode(
+            queue,
+            raster,
+            encoder,
+            camera,
+            &frame,
+            &everything,
+            timestamps.and_then(|t| t.render_pass("eye surfaces")),
+        );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("distance-map ranges"),
-                timestamp_writes: None,
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("min-max ranges")),
             });
             pass.set_pipeline(&pipelines.ranges);
             pass.set_bind_group(0, &self.shade_group, &[]);
@@ -482,7 +487,7 @@ impl DistanceMapTargets {
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("distance-map kernel"),
-                timestamp_writes: timestamps.map(Timestamps::end_compute),
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("distance-map kernel")),
             });
             pass.set_pipeline(pipelines.methods.get(MethodId::DistanceMap, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);

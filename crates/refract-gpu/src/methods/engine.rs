@@ -23,7 +23,6 @@ use crate::passes::raster::SurfaceTargets;
 use crate::shaders::{
     CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
 };
-use crate::timestamps::Timestamps;
 
 /// The module of the engine methods: the front faces and environment of the image-space
 /// shader, the screen texture readers of the nearby-geometry shader, then `shade_engine`.
@@ -199,13 +198,20 @@ impl EngineTargets {
         // Without opaque objects the shader never reads the screen texture.
         if engine.has_objects != 0 {
             let objects: Vec<_> = scene.objects.iter().collect();
-            self.screen
-                .encode(&context.queue, raster, encoder, camera, &uniforms, &objects);
+            self.screen.encode(
+                &context.queue,
+                raster,
+                encoder,
+                camera,
+                &uniforms,
+                &objects,
+                timestamps.and_then(|t| t.render_pass("object surfaces")),
+            );
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("engine kernel"),
-                timestamp_writes: timestamps.map(Timestamps::end_compute),
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("engine kernel")),
             });
             pass.set_pipeline(pipelines.0.get(method, outputs));
             pass.set_bind_group(0, &self.group, &[]);

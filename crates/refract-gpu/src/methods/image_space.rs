@@ -27,7 +27,6 @@ use crate::passes::raster::{
 };
 use crate::scene_buffers::GpuScene;
 use crate::shaders::{CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, PROCEDURAL_SKY, ShaderModule};
-use crate::timestamps::Timestamps;
 
 /// The module of the image-space kernels (Wyman 2005a).
 pub(crate) const SHADER: ShaderModule = ShaderModule {
@@ -197,7 +196,6 @@ impl RefractorTargets {
         context
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
-        let mut first = timestamps.map(Timestamps::begin_render);
         if let Some(back) = back {
             raster.encode(
                 encoder,
@@ -210,7 +208,7 @@ impl RefractorTargets {
                     targets: &[&self.back],
                     depth: &self.depth,
                 },
-                first.take(),
+                timestamps.and_then(|t| t.render_pass("back faces")),
             );
         }
         raster.encode(
@@ -224,7 +222,7 @@ impl RefractorTargets {
                 targets: &[&self.front_p1, &self.front_n1],
                 depth: &self.depth,
             },
-            first.take(),
+            timestamps.and_then(|t| t.render_pass("front faces")),
         );
     }
 }
@@ -399,11 +397,9 @@ impl ImageSpaceTargets {
         };
         self.refractor.encode(cx, uniforms, back, encoder);
         {
-            // The frame ends with the last pass: the kernel's, or the objects' after it.
-            let end = timestamps.filter(|_| self.objects.is_none());
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("image-space kernel"),
-                timestamp_writes: end.map(Timestamps::end_compute),
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("image-space kernel")),
             });
             pass.set_pipeline(pipelines.kernels.get(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);

@@ -26,7 +26,6 @@ use crate::scene_buffers::GpuScene;
 use crate::shaders::{
     CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
 };
-use crate::timestamps::Timestamps;
 
 /// The module of the nearby-geometry kernel (Wyman 2005b): the image-space path, then the lookups.
 pub(crate) const SHADER: ShaderModule = ShaderModule {
@@ -310,11 +309,12 @@ impl NearbyTargets {
             nearby.ng_camera,
             &ng_frame,
             &objects,
+            timestamps.and_then(|t| t.render_pass("nearby-geometry texture")),
         );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("nearby-geometry kernel"),
-                timestamp_writes: timestamps.map(Timestamps::end_compute),
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("nearby-geometry kernel")),
             });
             pass.set_pipeline(pipelines.0.get(id, outputs));
             pass.set_bind_group(0, &self.shade_group, &[]);

@@ -16,7 +16,6 @@ use crate::passes::raster::SurfaceTargets;
 use crate::shaders::{
     CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
 };
-use crate::timestamps::Timestamps;
 
 /// The module of `draw_objects`: the image-space shader's front-face readers and outputs, the
 /// nearby-geometry shader's surface readers.
@@ -142,10 +141,11 @@ impl ObjectTargets {
             cx.camera,
             uniforms,
             &objects,
+            cx.timestamps.and_then(|t| t.render_pass("object surfaces")),
         );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("draw objects"),
-            timestamp_writes: cx.timestamps.map(Timestamps::end_compute),
+            timestamp_writes: cx.timestamps.and_then(|t| t.compute_pass("objects")),
         });
         pass.set_pipeline(match cx.outputs {
             FrameOutputs::ColorAndAovs => &pipelines.with_aovs,

@@ -27,7 +27,6 @@ use crate::methods::image_space::{OutputBuffers, check_limits};
 use crate::passes::raster::{DEPTH_FORMAT, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::{GpuMesh, GpuScene, Vertex};
 use crate::shaders::{CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule};
-use crate::timestamps::Timestamps;
 use refract_core::gpu::FrameUniforms;
 
 /// The module of the shading of `pvrr`'s views (Kakimoto et al. 2007).
@@ -535,7 +534,6 @@ impl PvrrTargets {
             SceneMesh::Refractor => &gpu_scene.refractor,
             SceneMesh::Object(k) => &gpu_scene.objects[k],
         };
-        let mut first_timestamp = timestamps.map(Timestamps::begin_render);
         for (v, view) in plan.views.iter().enumerate().rev() {
             let targets = if v == 0 { &self.eye } else { &self.map };
             let (width, height) = (view.camera.width(), view.camera.height());
@@ -568,7 +566,13 @@ impl PvrrTargets {
                         }),
                         stencil_ops: None,
                     }),
-                    timestamp_writes: first_timestamp.take(),
+                    timestamp_writes: timestamps.and_then(|t| {
+                        t.render_pass(if v == 0 {
+                            "eye view"
+                        } else {
+                            "reflector views"
+                        })
+                    }),
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
@@ -593,11 +597,13 @@ impl PvrrTargets {
             }
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("pvrr shade"),
-                timestamp_writes: if v == 0 {
-                    timestamps.map(Timestamps::end_compute)
-                } else {
-                    None
-                },
+                timestamp_writes: timestamps.and_then(|t| {
+                    t.compute_pass(if v == 0 {
+                        "eye shading"
+                    } else {
+                        "view shading"
+                    })
+                }),
             });
             pass.set_pipeline(pipelines.methods.get(MethodId::Pvrr, outputs));
             pass.set_bind_group(0, if v == 0 { &b.shade_eye } else { &b.shade_map }, &[]);

@@ -249,7 +249,7 @@ impl RasterPipelines {
     }
 
     /// Encodes `pass`: its meshes into its targets (as many as its kind writes) with its depth,
-    /// cleared first. `timestamp` writes the frame's first timestamp at the start.
+    /// cleared first, timed by `timestamp` when given.
     pub(crate) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -395,7 +395,9 @@ impl SurfaceTargets {
         &self.uniforms
     }
 
-    /// Writes `uniforms` (those of `camera`) and encodes the surface pass of `meshes`.
+    /// Writes `uniforms` (those of `camera`) and encodes the surface pass of `meshes`, timed by
+    /// `timestamp` when given.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode(
         &self,
         queue: &wgpu::Queue,
@@ -404,6 +406,7 @@ impl SurfaceTargets {
         camera: &Camera,
         uniforms: &refract_core::gpu::FrameUniforms,
         meshes: &[&GpuMesh],
+        timestamp: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
         raster.encode(
@@ -417,7 +420,7 @@ impl SurfaceTargets {
                 targets: &[&self.views[0], &self.views[1], &self.views[2]],
                 depth: &self.depth,
             },
-            None,
+            timestamp,
         );
     }
 }
