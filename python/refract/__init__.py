@@ -139,13 +139,15 @@ def compare(
     frames: int = 3,
     params: Optional[Mapping[str, Union[str, int]]] = None,
     out: PathLike = "out",
+    reference_backend: str = "cpu",
 ) -> List[Dict[str, Any]]:
     """Every method (default: all but the reference) against the exact reference on each
     scene, as ``refract compare`` runs it: images, ``metrics.json``, ``report.md`` and
     ``index.html`` go into ``out``. Returns one record per (scene, method, backend), the
     reference's own row first per scene: the fields of ``metrics.json``, ready for
     ``pandas.DataFrame(records)``. ``params`` apply to every method that has them.
-    Ctrl-C stops the run between frames."""
+    ``reference_backend`` traces the reference on ``"cpu"`` (the CPU tracer) or ``"gpu"``
+    (the WGSL tracer, ``docs/reference.md``). Ctrl-C stops the run between frames."""
     if isinstance(scenes, str):
         scenes = [scenes]
     text = _compare(
@@ -157,6 +159,7 @@ def compare(
         frames,
         None if params is None else dict(params),
         os.fspath(out),
+        reference_backend,
     )
     return json.loads(text)
 

@@ -74,9 +74,10 @@ fn run_experiment<T: Send>(
 
 /// Every method (default: all but the reference) against the reference on each scene, as
 /// `refract compare` runs it: writes images, `metrics.json`, `report.md` and `index.html` into
-/// `out`; returns the records (JSON text of a list of `metrics.json` rows).
+/// `out`; returns the records (JSON text of a list of `metrics.json` rows). The reference is
+/// traced by `reference_backend`: `"cpu"` (the CPU tracer) or `"gpu"` (the WGSL tracer).
 #[pyfunction]
-#[pyo3(signature = (scenes, methods=None, backends=vec!["cpu".to_owned()], res=256, spp=1, frames=3, params=None, out=PathBuf::from("out")))]
+#[pyo3(signature = (scenes, methods=None, backends=vec!["cpu".to_owned()], res=256, spp=1, frames=3, params=None, out=PathBuf::from("out"), reference_backend="cpu"))]
 #[allow(clippy::too_many_arguments)]
 pub fn compare(
     py: Python<'_>,
@@ -88,8 +89,18 @@ pub fn compare(
     frames: i64,
     params: Option<&Bound<'_, pyo3::types::PyDict>>,
     out: PathBuf,
+    reference_backend: &str,
 ) -> PyResult<String> {
     let params = crate::scene::param_pairs(params)?;
+    let reference_backend = match reference_backend {
+        "cpu" => BackendId::Trace,
+        "gpu" => BackendId::Gpu,
+        other => {
+            return Err(value_error(format!(
+                "reference_backend = {other:?}: expected \"cpu\" or \"gpu\""
+            )));
+        }
+    };
     let checked = |name: &str, v: i64, max: u32| {
         u32::try_from(v)
             .ok()
@@ -134,7 +145,7 @@ pub fn compare(
             )?,
             res,
             spp,
-            reference_backend: BackendId::Trace,
+            reference_backend,
             frames,
             out,
         };

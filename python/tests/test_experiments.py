@@ -41,6 +41,19 @@ def test_compare_returns_records_and_writes_the_report(tmp_path):
     assert len(table) == 6 and "flip_mean" in table.columns
 
 
+def test_compare_against_the_gpu_reference(tmp_path, gpu_available):
+    if not gpu_available:
+        pytest.skip("no GPU adapter")
+    cpu = refract.compare("sphere", methods=["wyman"], res=32, frames=1, out=tmp_path / "c")
+    gpu = refract.compare(
+        "sphere", methods=["wyman"], res=32, frames=1, out=tmp_path / "g", reference_backend="gpu"
+    )
+    assert [r["backend"] for r in cpu] == ["trace", "cpu"]
+    assert [r["backend"] for r in gpu] == ["gpu", "cpu"]
+    # The same FLIP against either reference, within the two references' f32 differences.
+    assert abs(cpu[1]["flip_mean"] - gpu[1]["flip_mean"]) <= 1e-3 * (1 + cpu[1]["flip_mean"])
+
+
 def test_compare_bad_inputs(tmp_path):
     with pytest.raises(ValueError, match="unknown method"):
         refract.compare("sphere", methods=["nope"], out=tmp_path / "a")
@@ -52,6 +65,8 @@ def test_compare_bad_inputs(tmp_path):
         refract.compare("sphere", methods=["single"], params={"seeds": 3}, out=tmp_path / "a")
     with pytest.raises(TypeError, match="params"):
         refract.compare("sphere", methods=["wyman"], params={"tir": True}, out=tmp_path / "a")
+    with pytest.raises(ValueError, match="reference_backend"):
+        refract.compare("sphere", methods=["single"], reference_backend="tpu", out=tmp_path / "a")
     with pytest.raises(ValueError, match="unknown scene"):
         refract.compare("nowhere", methods=["single"], res=8, out=tmp_path / "b")
     # A failed comparison leaves no half-made output directory.

@@ -531,8 +531,14 @@ fn info_lists_adapters_and_mesh_facts() {
     let none = text.lines().any(|l| l.starts_with("GPU adapters     none"));
     assert!(adapters.is_empty() == none, "{text}");
     for line in &adapters {
+        // Name (backend, type, driver); whether it has hardware ray queries.
         let detail = line.trim_start_matches("GPU adapter").trim();
-        assert!(detail.contains(" (") && detail.ends_with(')'), "{line}");
+        assert!(
+            detail.contains(" (")
+                && (detail.ends_with("); ray queries: yes")
+                    || detail.ends_with("); ray queries: no")),
+            "{line}"
+        );
     }
     if std::env::var("REFRACT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
         assert!(
