@@ -578,22 +578,25 @@ fn export_writes_meshes_and_scene_json() {
 fn claims_are_measured_and_written() {
     let dir = tempfile::tempdir().expect("tempdir");
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
-    let output = refract(
-        &[
+    // `refract claims` at 48² with one timing round into `out`, with `extra` arguments.
+    let claims = |out: &str, extra: &[&str]| -> String {
+        let mut args = vec![
             "claims",
             "--res",
             "48",
             "--data",
             data,
             "--out",
-            "c/claims.md",
+            out,
             "--timing-rounds",
             "1",
-        ],
-        dir.path(),
-    );
-    assert!(output.status.success(), "{}", stderr(&output));
-    let md = std::fs::read_to_string(dir.path().join("c/claims.md")).expect("claims.md");
+        ];
+        args.extend(extra);
+        let output = refract(&args, dir.path());
+        assert!(output.status.success(), "{}", stderr(&output));
+        std::fs::read_to_string(dir.path().join(out)).expect("claims.md")
+    };
+    let md = claims("c/claims.md", &[]);
     assert!(md.contains("Written by `refract claims`"), "{md}");
     for claim in ["**W1** Two interfaces", "**W3**", "**W4**"] {
         assert!(
@@ -627,24 +630,7 @@ fn claims_are_measured_and_written() {
         println!("skipped: no GPU adapter for --reference-backend gpu");
         return;
     }
-    let output = refract(
-        &[
-            "claims",
-            "--res",
-            "48",
-            "--data",
-            data,
-            "--out",
-            "g/claims.md",
-            "--timing-rounds",
-            "1",
-            "--reference-backend",
-            "gpu",
-        ],
-        dir.path(),
-    );
-    assert!(output.status.success(), "{}", stderr(&output));
-    let gpu = std::fs::read_to_string(dir.path().join("g/claims.md")).expect("claims.md");
+    let gpu = claims("g/claims.md", &["--reference-backend", "gpu"]);
     assert!(gpu.contains("traced on the GPU"), "{gpu}");
     let verdicts = |md: &str| -> Vec<(String, String)> {
         md.lines()
