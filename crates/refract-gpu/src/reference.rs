@@ -10,8 +10,14 @@
 //! runs long enough for a desktop GPU's watchdog; the running sum stays on the GPU between
 //! dispatches.
 //!
+//! Closest hits come from the WGSL traversal of a flattened BVH ([`Traversal::Software`]) or,
+//! where the device has wgpu's `EXPERIMENTAL_RAY_QUERY` ([`GpuContext::ray_queries`],
+//! `REFRACT_RAY_QUERY`), from the adapter's ray queries over one acceleration structure of the
+//! scene ([`Traversal::RayQuery`]); the path code after the hit is the same WGSL.
+//!
 //! [`crate::GpuRenderer`] renders the `reference` method with it (`render --method reference
-//! --backend gpu`, `compare --reference-backend gpu`).
+//! --backend gpu`, `compare`/`claims --reference-backend gpu`, sweeps, the viewer's split
+//! view).
 
 use std::sync::Arc;
 
