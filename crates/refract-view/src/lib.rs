@@ -185,6 +185,8 @@ struct Display {
     /// Draws a GPU frame's colour buffer straight into the window (no readback).
     frame_pipeline: wgpu::RenderPipeline,
     frame_layout: wgpu::BindGroupLayout,
+    /// The GPU frame's size and the surface's encoding (`FrameDisplay`), written every frame.
+    frame_uniform: wgpu::Buffer,
     texture_format: wgpu::TextureFormat,
     copy_src: bool,
     egui: egui::Context,
@@ -599,6 +601,12 @@ impl Viewer {
         });
         let frame_pipeline =
             display_pipeline(device, "view frame", FRAME_SHADER, &frame_layout, format);
+        let frame_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("view frame size"),
+            size: std::mem::size_of::<FrameDisplay>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         // The frame's bytes are sRGB-encoded: an sRGB surface gets them through an sRGB
         // texture (decoded, then encoded again), a linear one as they are.
         let texture_format = if format.is_srgb() {
@@ -629,6 +637,7 @@ impl Viewer {
             layout,
             frame_pipeline,
             frame_layout,
+            frame_uniform,
             texture_format,
             copy_src,
             egui: egui_ctx,
@@ -979,15 +988,10 @@ impl Viewer {
                 let color = gpu
                     .last_color(params)
                     .context("the GPU frame's colour buffer is gone")?;
-                let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("view frame size"),
-                    size: std::mem::size_of::<FrameDisplay>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let uniform = &display.frame_uniform;
                 let srgb_surface = u32::from(display.config.format.is_srgb());
                 queue.write_buffer(
-                    &uniform,
+                    uniform,
                     0,
                     bytemuck::bytes_of(&FrameDisplay {
                         width,
