@@ -28,8 +28,24 @@ use progress::Bars;
 #[derive(Debug, Parser)]
 #[command(name = "refract", version, about, long_about)]
 struct Cli {
+    /// How the GPU reference finds closest hits: auto (the adapter's hardware ray queries where
+    /// it has them, else the WGSL BVH traversal), on (ray queries; an adapter without them is
+    /// an error), off (the WGSL traversal). Default: REFRACT_RAY_QUERY, else auto.
+    #[arg(long, global = true, value_enum)]
+    ray_query: Option<RayQueryArg>,
     #[command(subcommand)]
     command: Option<Command>,
+}
+
+/// `--ray-query`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum RayQueryArg {
+    /// Ray queries where the adapter has them.
+    Auto,
+    /// Ray queries, or an error.
+    On,
+    /// The WGSL BVH traversal.
+    Off,
 }
 
 #[derive(Debug, Subcommand)]
@@ -221,6 +237,13 @@ fn print_methods() {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(policy) = cli.ray_query {
+        refract_gpu::RayQueryPolicy::choose(match policy {
+            RayQueryArg::Auto => refract_gpu::RayQueryPolicy::Auto,
+            RayQueryArg::On => refract_gpu::RayQueryPolicy::On,
+            RayQueryArg::Off => refract_gpu::RayQueryPolicy::Off,
+        });
+    }
     cleanup::install_signal_handler();
     let result = match cli.command {
         None => compare::default_options()

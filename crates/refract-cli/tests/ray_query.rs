@@ -161,8 +161,9 @@ fn ray_queries_and_the_wgsl_traversal_trace_the_same_reference() {
     }
 }
 
-/// `REFRACT_RAY_QUERY=on` on an adapter without ray queries is an error naming the adapter, not
-/// a silent fallback; a value other than auto, on or off is an error naming the variable.
+/// `REFRACT_RAY_QUERY=on` (or `--ray-query on`) on an adapter without ray queries is an error
+/// naming the adapter, not a silent fallback; a value other than auto, on or off is an error
+/// naming the variable; `--ray-query` takes precedence over the variable.
 #[test]
 fn forcing_ray_queries_without_them_is_an_error() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -203,7 +204,11 @@ fn forcing_ray_queries_without_them_is_an_error() {
             stderr(&forced)
         );
     }
-    // And off (the WGSL traversal) runs everywhere.
+    // And off (the WGSL traversal) runs everywhere; `--ray-query` overrides the variable.
     let off = refract(&args, &env("off"), dir.path());
     assert!(off.status.success(), "{}", stderr(&off));
+    let mut flagged = vec!["--ray-query", "off"];
+    flagged.extend(args);
+    let overridden = refract(&flagged, &env("on"), dir.path());
+    assert!(overridden.status.success(), "{}", stderr(&overridden));
 }

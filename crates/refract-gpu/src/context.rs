@@ -43,8 +43,9 @@ pub enum GpuError {
     /// Invalid parameters.
     #[error(transparent)]
     Ior(#[from] refract_core::kernel::InvalidIor),
-    /// `REFRACT_RAY_QUERY` is not one of its values, or asks for ray queries an adapter lacks.
-    #[error("REFRACT_RAY_QUERY: {0}")]
+    /// `REFRACT_RAY_QUERY` is not one of its values, or ray queries are forced on an adapter
+    /// without them.
+    #[error("ray queries: {0}")]
     RayQuery(String),
 }
 
@@ -61,7 +62,26 @@ pub enum RayQueryPolicy {
     Off,
 }
 
+/// The process's policy when a program chose one ([`RayQueryPolicy::choose`], e.g. the CLI's
+/// `--ray-query`); it takes precedence over `REFRACT_RAY_QUERY`.
+static CHOSEN_POLICY: std::sync::OnceLock<RayQueryPolicy> = std::sync::OnceLock::new();
+
 impl RayQueryPolicy {
+    /// Sets the policy of every device this process opens from now on (once; a second choice
+    /// is ignored and returns `false`).
+    pub fn choose(self) -> bool {
+        CHOSEN_POLICY.set(self).is_ok()
+    }
+
+    /// The policy chosen by the program ([`Self::choose`]), else the one `REFRACT_RAY_QUERY`
+    /// names: `auto` (or unset), `on`, `off`.
+    pub fn current() -> Result<Self, GpuError> {
+        match CHOSEN_POLICY.get() {
+            Some(policy) => Ok(*policy),
+            None => Self::from_env(),
+        }
+    }
+
     /// The policy `REFRACT_RAY_QUERY` names: `auto` (or unset), `on`, `off`.
     pub fn from_env() -> Result<Self, GpuError> {
         match std::env::var("REFRACT_RAY_QUERY").as_deref() {
@@ -69,7 +89,7 @@ impl RayQueryPolicy {
             Ok("on") => Ok(Self::On),
             Ok("off") => Ok(Self::Off),
             Ok(other) => Err(GpuError::RayQuery(format!(
-                "`{other}`: expected auto, on or off"
+                "REFRACT_RAY_QUERY=`{other}`: expected auto, on or off"
             ))),
         }
     }
@@ -174,13 +194,13 @@ impl GpuContext {
         let has_ray_queries = adapter
             .features()
             .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
-        let ray_queries = match RayQueryPolicy::from_env()? {
+        let ray_queries = match RayQueryPolicy::current()? {
             RayQueryPolicy::Auto => has_ray_queries,
             RayQueryPolicy::Off => false,
             RayQueryPolicy::On if has_ray_queries => true,
             RayQueryPolicy::On => {
                 return Err(GpuError::RayQuery(format!(
-                    "on, but {} ({}) has no ray queries (lavapipe has them from Mesa 24.1; docs/reference.md)",
+                    "forced on (--ray-query on or REFRACT_RAY_QUERY=on), but {} ({}) has no ray queries (lavapipe has them from Mesa 24.1; docs/reference.md)",
                     info.name, info.driver_info
                 )));
             }
