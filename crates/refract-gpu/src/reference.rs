@@ -161,18 +161,6 @@ impl ReferencePipeline {
             }
         })
     }
-
-    /// How this pipeline finds closest hits.
-    pub fn traversal(&self) -> Traversal {
-        self.traversal
-    }
-}
-
-impl GpuReference {
-    /// How this reference finds closest hits.
-    pub fn traversal(&self) -> Traversal {
-        self.pipeline.traversal
-    }
 }
 
 /// Group 1 of `bvh_ray_query.wgsl`: the scene's acceleration structure and its triangles.
@@ -466,6 +454,11 @@ impl GpuReference {
             samples_per_dispatch: None,
             outputs: None,
         })?)
+    }
+
+    /// How this reference finds closest hits.
+    pub fn traversal(&self) -> Traversal {
+        self.pipeline.traversal
     }
 
     /// Traces at most `samples` samples of every pixel per dispatch (`None`: about 2²¹ pixel

@@ -74,14 +74,6 @@ pub enum ReferenceBackend {
 }
 
 impl ReferenceBackend {
-    /// The backend id the references' frames carry.
-    pub fn id(self) -> BackendId {
-        match self {
-            Self::Cpu => BackendId::Trace,
-            Self::Gpu => BackendId::Gpu,
-        }
-    }
-
     /// The renderer that traces the references: the CPU tracer, or the GPU (no adapter is an
     /// error naming why).
     pub fn renderer(self) -> crate::Result<Box<dyn Renderer>> {

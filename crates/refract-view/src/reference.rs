@@ -125,17 +125,14 @@ impl Tracers {
 
     /// The GPU tracer on `context`'s device, compiled on first use.
     fn gpu_tracer(&mut self, context: &GpuContext) -> Result<&mut GpuTracer, RenderError> {
-        if self.gpu.is_none() {
-            let pipeline = Arc::new(ReferencePipeline::new(context)?);
-            self.gpu = Some(GpuTracer {
+        Ok(match &mut self.gpu {
+            Some(gpu) => gpu,
+            empty => empty.insert(GpuTracer {
                 context: context.clone(),
-                pipeline,
+                pipeline: Arc::new(ReferencePipeline::new(context)?),
                 scene: None,
-            });
-        }
-        self.gpu
-            .as_mut()
-            .ok_or_else(|| RenderError::Parameter("the GPU tracer was not created".into()))
+            }),
+        })
     }
 }
 
