@@ -41,11 +41,27 @@ struct Request {
 
 /// The background worker.
 pub struct ProgressiveReference {
-    requests: Sender<Request>,
+    /// `None` once dropped (closing the channel ends the worker).
+    requests: Option<Sender<Request>>,
     levels: Receiver<Level>,
     latest: Arc<AtomicU64>,
     /// The last request: its camera, whether on the GPU, its generation.
     requested: Option<(CameraDesc, bool, u64)>,
+    /// The worker, joined on drop so that its GPU objects (on the viewer's device) are released
+    /// before the device and the process go.
+    worker: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for ProgressiveReference {
+    /// Abandons the current request (the worker stops after the level it is tracing), closes
+    /// the channel and waits for the worker.
+    fn drop(&mut self) {
+        self.latest.fetch_add(1, Ordering::Relaxed);
+        self.requests = None;
+        if let Some(worker) = self.worker.take() {
+            let _ = worker.join();
+        }
+    }
 }
 
 /// The worker's GPU tracer: the pipeline compiled once per device, the scene uploaded once per
@@ -143,7 +159,7 @@ impl ProgressiveReference {
         let (outbox, levels) = channel::<Level>();
         let latest = Arc::new(AtomicU64::new(0));
         let current = Arc::clone(&latest);
-        std::thread::spawn(move || {
+        let worker = std::thread::spawn(move || {
             let MethodParams::Reference(settings) = MethodParams::defaults(MethodId::Reference)
             else {
                 return;
@@ -196,10 +212,11 @@ impl ProgressiveReference {
             }
         });
         Self {
-            requests,
+            requests: Some(requests),
             levels,
             latest,
             requested: None,
+            worker: Some(worker),
         }
     }
 
@@ -221,7 +238,10 @@ impl ProgressiveReference {
         }
         let generation = self.latest.fetch_add(1, Ordering::Relaxed) + 1;
         self.requested = Some((camera, gpu.is_some(), generation));
-        let _ = self.requests.send(Request {
+        let Some(requests) = &self.requests else {
+            return generation;
+        };
+        let _ = requests.send(Request {
             generation,
             scene: Arc::clone(scene),
             camera,
