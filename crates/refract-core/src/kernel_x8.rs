@@ -21,19 +21,42 @@ use crate::lanes::{F32x8, LANES, Mask, Vec3x8, atan2, le, lt, mask_lanes};
 use crate::optics::FACE_FORWARD_EPSILON;
 use crate::vector::{UNIT_TOLERANCE, robust_normalize};
 
-/// `P1`, `N1` and `d_N` of eight front surfaces, as lanes (plain loops: `array::map` and
-/// `from_fn` are not always inlined, and this runs per pixel).
-#[inline]
-fn front_lanes(front: &[FrontSurface; LANES]) -> (Vec3x8, Vec3x8, F32x8) {
-    let (mut p1, mut n1, mut d_n) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES], [0.0; LANES]);
-    for (i, f) in front.iter().enumerate() {
-        (p1[i], n1[i], d_n[i]) = (f.p1_ws, f.n1_ws, f.d_n);
+/// Eight front surfaces as lanes (structure of arrays): `P1`, `N1` and `d_N` of each pixel,
+/// as a rasteriser that resolves eight texels at once produces them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrontLanes {
+    /// `P1`, world space.
+    pub p1_ws: Vec3x8,
+    /// `N1` (any length; normalised by the kernel).
+    pub n1_ws: Vec3x8,
+    /// `d_N`.
+    pub d_n: F32x8,
+}
+
+impl FrontLanes {
+    /// The surfaces of eight pixels as lanes (plain loops: `array::map` and `from_fn` are not
+    /// always inlined, and this runs per pixel).
+    #[inline]
+    pub fn from_surfaces(front: &[FrontSurface; LANES]) -> Self {
+        let (mut p1, mut n1, mut d_n) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES], [0.0; LANES]);
+        for (i, f) in front.iter().enumerate() {
+            (p1[i], n1[i], d_n[i]) = (f.p1_ws, f.n1_ws, f.d_n);
+        }
+        Self {
+            p1_ws: Vec3x8::from_lanes(&p1),
+            n1_ws: Vec3x8::from_lanes(&n1),
+            d_n: F32x8::new(d_n),
+        }
     }
-    (
-        Vec3x8::from_lanes(&p1),
-        Vec3x8::from_lanes(&n1),
-        F32x8::new(d_n),
-    )
+
+    /// The surface of lane `i` (`i < LANES`).
+    pub fn surface(&self, i: usize) -> FrontSurface {
+        FrontSurface {
+            p1_ws: self.p1_ws.lane(i),
+            n1_ws: self.n1_ws.lane(i),
+            d_n: self.d_n.to_array()[i],
+        }
+    }
 }
 
 /// [`robust_normalize`]'s two common paths (already unit: `v`; otherwise `v · (1/√(v·v))`) and
@@ -135,14 +158,28 @@ pub fn one_interface_x8(
     front: &[FrontSurface; LANES],
     params: &ImageSpaceParams,
 ) -> [Result<OneInterfacePath, DegenerateInput>; LANES] {
-    let (p1, n1, _) = front_lanes(front);
-    let e = entry(camera, p1, n1, F32x8::splat(params.eta_in()));
+    one_interface_lanes(camera, &FrontLanes::from_surfaces(front), params)
+}
+
+/// [`one_interface_x8`] with the surfaces as lanes (the CPU backend's per-pixel path): lane `i`
+/// is `one_interface(camera, &front.surface(i), params)`, bit for bit.
+pub fn one_interface_lanes(
+    camera: &Camera,
+    front: &FrontLanes,
+    params: &ImageSpaceParams,
+) -> [Result<OneInterfacePath, DegenerateInput>; LANES] {
+    let e = entry(
+        camera,
+        front.p1_ws,
+        front.n1_ws,
+        F32x8::splat(params.eta_in()),
+    );
     let scalar = mask_lanes(e.scalar);
     let (view, n1, t1) = (e.view.to_lanes(), e.n1.to_lanes(), e.t1.to_lanes());
     let mut paths = [Err(DegenerateInput::NonFiniteResult); LANES];
     for (i, path) in paths.iter_mut().enumerate() {
         *path = if scalar[i] {
-            one_interface(camera, &front[i], params)
+            one_interface(camera, &front.surface(i), params)
         } else {
             Ok(OneInterfacePath {
                 view: view[i],
@@ -176,22 +213,28 @@ struct TwoInterfaceSoa {
 fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     camera: &Camera,
     uv_px: &[Vec2; LANES],
-    front: &[FrontSurface; LANES],
+    front: &FrontLanes,
     back: &S,
     params: &ImageSpaceParams,
 ) -> TwoInterfaceSoa {
-    let (p1, n1, d_n) = front_lanes(front);
+    let FrontLanes {
+        p1_ws: p1,
+        n1_ws: n1,
+        d_n,
+    } = *front;
     let eta = F32x8::splat(params.eta_in());
     let e = entry(camera, p1, n1, eta);
     let d_n_ok = d_n.simd_ge(F32x8::ZERO) & d_n.is_finite();
 
-    // d_V at P1's own pixel (Wyman 2005a §3.1), looked up lane by lane.
+    // d_V at P1's own pixel (Wyman 2005a §3.1), looked up lane by lane; `‖P1 − eye‖` on
+    // lanes, as `Camera::distance_from_eye`.
+    let front_distance = (p1 - Vec3x8::splat(camera.eye())).length().to_array();
     let mut d_v = [None; LANES];
     let mut d_v_or_n = d_n.to_array();
     for i in 0..LANES {
         d_v[i] = back
             .back_face(uv_px[i])
-            .map(|b| b.distance - camera.distance_from_eye(front[i].p1_ws))
+            .map(|b| b.distance - front_distance[i])
             .filter(|d| *d >= 0.0 && d.is_finite());
         if let Some(d) = d_v[i] {
             d_v_or_n[i] = d;
@@ -326,7 +369,13 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     back: &S,
     params: &ImageSpaceParams,
 ) -> [Result<TwoInterfacePath, DegenerateInput>; LANES] {
-    let soa = two_interface_soa(camera, uv_px, front, back, params);
+    let soa = two_interface_soa(
+        camera,
+        uv_px,
+        &FrontLanes::from_surfaces(front),
+        back,
+        params,
+    );
     let (view, n1, t1) = (soa.view.to_lanes(), soa.n1.to_lanes(), soa.t1.to_lanes());
     let (p2, n2, t2) = (soa.p2.to_lanes(), soa.n2.to_lanes(), soa.t2.to_lanes());
     let (d_tilde, tir_exit) = (soa.d_tilde.to_array(), mask_lanes(soa.tir_exit));
@@ -383,7 +432,7 @@ pub struct TwoInterfaceLanes {
 pub fn two_interface_lanes<S: BackFaceSampler + ?Sized>(
     camera: &Camera,
     uv_px: &[Vec2; LANES],
-    front: &[FrontSurface; LANES],
+    front: &FrontLanes,
     back: &S,
     params: &ImageSpaceParams,
 ) -> TwoInterfaceLanes {
@@ -400,7 +449,7 @@ pub fn two_interface_lanes<S: BackFaceSampler + ?Sized>(
         // The rare lanes, from the scalar kernel.
         let (mut t2, mut p2, mut n2) = (soa.t2.to_lanes(), soa.p2.to_lanes(), soa.n2.to_lanes());
         for i in (0..LANES).filter(|i| soa.scalar[*i]) {
-            match two_interface(camera, uv_px[i], &front[i], back, params) {
+            match two_interface(camera, uv_px[i], &front.surface(i), back, params) {
                 Ok(path) => {
                     (t2[i], p2[i], n2[i]) = (path.t2, path.p2, path.n2);
                     lanes.n2_from_back_face[i] = path.n2_source == ExitNormalSource::BackFace;
@@ -529,7 +578,13 @@ mod tests {
                     }
                 });
                 let lanes = two_interface_x8(&camera, &uv, &front, &Field, &params);
-                let lean = two_interface_lanes(&camera, &uv, &front, &Field, &params);
+                let lean = two_interface_lanes(
+                    &camera,
+                    &uv,
+                    &FrontLanes::from_surfaces(&front),
+                    &Field,
+                    &params,
+                );
                 let (t2, p2, n2) = (lean.t2.to_lanes(), lean.p2.to_lanes(), lean.n2.to_lanes());
                 let single = one_interface_x8(&camera, &front, &params);
                 for i in 0..LANES {

@@ -86,6 +86,16 @@ impl Vec3x8 {
         lanes
     }
 
+    /// The vector of lane `i` (`i < LANES`).
+    #[inline]
+    pub fn lane(self, i: usize) -> Vec3 {
+        Vec3::new(
+            self.x.to_array()[i],
+            self.y.to_array()[i],
+            self.z.to_array()[i],
+        )
+    }
+
     /// `(x·x' + y·y') + z·z'`, as [`Vec3::dot`].
     #[inline]
     pub fn dot(self, rhs: Self) -> F32x8 {

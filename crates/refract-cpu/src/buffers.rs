@@ -4,6 +4,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{BackFaceSample, BackFaceSampler};
+use refract_core::lanes::Vec3x8;
 use refract_core::{BackSurface, Camera};
 use refract_scene::Refractor;
 
@@ -85,28 +86,36 @@ impl BackFaces {
 }
 
 /// Resolves row `y` of a band of back faces into normals and distances from `eye`; covered
-/// pixels are resolved eight at a time.
+/// pixels are resolved eight at a time (the distance `‖p − eye‖` on lanes, glam's operations),
+/// and only the row's covered span is visited.
 fn resolve_row(band: &Band<'_>, y: u32, eye: Vec3, resolved: &mut [BackTexel]) {
-    resolved.fill(BackTexel::EMPTY);
-    let mut resolve = |group: &PixelGroup| {
-        let texels = band.texels_x8(&group.x, y);
-        for (&x, t) in group.x.iter().zip(&texels).take(group.len) {
-            resolved[x as usize] = BackTexel {
-                n_ws: t.n_ws,
-                distance: (t.p_ws - eye).length(),
+    let span = band.covered_span(y);
+    resolved[..span.start as usize].fill(BackTexel::EMPTY);
+    resolved[span.end as usize..].fill(BackTexel::EMPTY);
+    let eye = Vec3x8::splat(eye);
+    let resolve = |group: &PixelGroup, resolved: &mut [BackTexel]| {
+        let texels = band.texel_lanes(&group.x, y);
+        let distance = (texels.p_ws - eye).length().to_array();
+        let n_ws = texels.n_ws.to_lanes();
+        for i in 0..group.len {
+            resolved[group.x[i] as usize] = BackTexel {
+                n_ws: n_ws[i],
+                distance: distance[i],
             };
         }
     };
     let mut group = PixelGroup::new();
-    for x in (0..band.width()).filter(|&x| band.is_covered(x, y)) {
-        if group.push(x) {
-            resolve(&group);
+    for x in span {
+        if !band.is_covered(x, y) {
+            resolved[x as usize] = BackTexel::EMPTY;
+        } else if group.push(x) {
+            resolve(&group, resolved);
             group.len = 0;
         }
     }
     if group.len > 0 {
         group.pad();
-        resolve(&group);
+        resolve(&group, resolved);
     }
 }
 

@@ -9,6 +9,8 @@
 //! and a depth compare, never an interpolation. A renderer can run its per-pixel work band by
 //! band right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
 
+use core::ops::Range;
+
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
@@ -256,13 +258,55 @@ impl ScreenTriangle {
     }
 }
 
+/// Eight texels as lanes (structure of arrays): lane `i` holds [`Texel`] `i`'s fields, so a
+/// lane kernel reads them without a transpose.
+#[derive(Clone, Copy, Debug)]
+pub struct TexelLanes {
+    /// Window depth.
+    pub depth: F32x8,
+    /// Perspective-correct interpolated world position.
+    pub p_ws: Vec3x8,
+    /// Perspective-correct interpolated vertex normal (normalised; zero where it cannot be).
+    pub n_ws: Vec3x8,
+    /// The interpolated per-vertex scalar.
+    pub scalar: F32x8,
+    /// The mesh triangle of each lane.
+    pub triangle: [u32; LANES],
+}
+
+impl TexelLanes {
+    /// The texel of each lane.
+    pub fn to_texels(&self) -> [Texel; LANES] {
+        let (depth, scalar) = (self.depth.to_array(), self.scalar.to_array());
+        let (p_ws, n_ws) = (self.p_ws.to_lanes(), self.n_ws.to_lanes());
+        let mut texels = [Texel {
+            depth: 0.0,
+            p_ws: Vec3::ZERO,
+            n_ws: Vec3::ZERO,
+            scalar: 0.0,
+            triangle: 0,
+        }; LANES];
+        for (i, texel) in texels.iter_mut().enumerate() {
+            *texel = Texel {
+                depth: depth[i],
+                p_ws: p_ws[i],
+                n_ws: n_ws[i],
+                scalar: scalar[i],
+                triangle: self.triangle[i],
+            };
+        }
+        texels
+    }
+}
+
 /// [`ScreenTriangle::texel`] for eight pixels (lane `i`: triangle `triangles[i]`, pixel
 /// `(x[i], y)`): the barycentrics lane by lane, the interpolation on eight SIMD lanes with the
 /// same operations in the same order, so each texel has the scalar function's bits.
-fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+#[inline]
+fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> TexelLanes {
     let first = triangles[0];
     if triangles.iter().all(|t| core::ptr::eq(*t, first)) {
-        return texels_x8_one_triangle(first, x, y);
+        return texel_lanes_one_triangle(first, x, y);
     }
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
@@ -299,10 +343,10 @@ fn texels_x8(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> [
     )
 }
 
-/// [`texels_x8`] where every lane sees the same triangle (most groups of eight, inside a
+/// [`texel_lanes`] where every lane sees the same triangle (most groups of eight, inside a
 /// triangle larger than the group): its corners loaded once and splat, the same operations
 /// per lane, so the same bits.
-fn texels_x8_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+fn texel_lanes_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> TexelLanes {
     let mut l = [[0.0f32; LANES]; 3];
     let [a, b, c] = t.xy;
     for (i, &x) in x.iter().enumerate() {
@@ -340,7 +384,7 @@ struct CornersX8 {
 /// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
 /// space, the attributes perspective-correct (`λᵢ/wᵢ` normalised), the normal renormalised.
 #[inline(always)]
-fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> [Texel; LANES] {
+fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> TexelLanes {
     let [l0, l1, l2] = l;
     let depth = l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2];
     let pw = [l0 * c.inv_w[0], l1 * c.inv_w[1], l2 * c.inv_w[2]];
@@ -350,26 +394,13 @@ fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> [Texel;
     let (n_ws, n_ok) = (c.n[0] * w0 + c.n[1] * w1 + c.n[2] * w2).try_normalize();
     let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
     let scalar = w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2];
-
-    let (depth, scalar) = (depth.to_array(), scalar.to_array());
-    let (p_ws, n_ws) = (p_ws.to_lanes(), n_ws.to_lanes());
-    let mut texels = [Texel {
-        depth: 0.0,
-        p_ws: Vec3::ZERO,
-        n_ws: Vec3::ZERO,
-        scalar: 0.0,
-        triangle: 0,
-    }; LANES];
-    for (i, texel) in texels.iter_mut().enumerate() {
-        *texel = Texel {
-            depth: depth[i],
-            p_ws: p_ws[i],
-            n_ws: n_ws[i],
-            scalar: scalar[i],
-            triangle: source[i],
-        };
+    TexelLanes {
+        depth,
+        p_ws,
+        n_ws,
+        scalar,
+        triangle: source,
     }
-    texels
 }
 
 /// The triangles seen at pixels `x` of a row (`row` starts at the row's first pixel).
@@ -600,6 +631,9 @@ pub struct SurfaceBuffer {
     /// Height in pixels.
     pub height: u32,
     visibility: Vec<Visibility>,
+    /// Per row, the pixels `[first, end)` between its first and last covered pixel
+    /// (`[u32::MAX, 0]` for an empty row).
+    extents: Vec<[u32; 2]>,
     triangles: TriangleStore,
     /// Scratch: clip-space and projected vertex positions, and the per-band triangle lists.
     clip: Vec<Vec4>,
@@ -629,12 +663,28 @@ impl SurfaceBuffer {
     /// # Panics
     /// If one of the pixels is empty or outside the buffer.
     pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+        self.texel_lanes(x, y).to_texels()
+    }
+
+    /// [`Self::texels_x8`] as lanes.
+    ///
+    /// # Panics
+    /// If one of the pixels is empty or outside the buffer.
+    #[inline]
+    pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = (y * self.width) as usize;
-        texels_x8(
+        texel_lanes(
             gather_triangles(&self.visibility[row..], &self.triangles, x, y),
             x,
             y,
         )
+    }
+
+    /// The pixels of row `y` between its first and last covered pixel: no pixel outside is
+    /// covered (empty when the row is).
+    #[inline]
+    pub fn covered_span(&self, y: u32) -> Range<u32> {
+        span(self.extents[y as usize])
     }
 
     /// Whether pixel `index` (row-major) is covered.
@@ -653,7 +703,14 @@ pub struct Band<'a> {
     pub first_row: u32,
     width: u32,
     visibility: &'a [Visibility],
+    extents: &'a [[u32; 2]],
     triangles: &'a TriangleStore,
+}
+
+/// A row extent as a range (empty rows: `0..0`).
+#[inline]
+fn span([first, end]: [u32; 2]) -> Range<u32> {
+    if first < end { first..end } else { 0..0 }
 }
 
 impl Band<'_> {
@@ -691,12 +748,25 @@ impl Band<'_> {
 
     /// [`SurfaceBuffer::texels_x8`] for eight pixels of row `y` of this band.
     pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
+        self.texel_lanes(x, y).to_texels()
+    }
+
+    /// [`Self::texels_x8`] as lanes.
+    #[inline]
+    pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = ((y - self.first_row) * self.width) as usize;
-        texels_x8(
+        texel_lanes(
             gather_triangles(&self.visibility[row..], self.triangles, x, y),
             x,
             y,
         )
+    }
+
+    /// The pixels of row `y` (an image row inside this band) between its first and last
+    /// covered pixel: no pixel outside is covered (empty when the row is).
+    #[inline]
+    pub fn covered_span(&self, y: u32) -> Range<u32> {
+        span(self.extents[(y - self.first_row) as usize])
     }
 }
 
@@ -817,6 +887,7 @@ fn rasterize_bands_above<O, F>(
         width: buffer_width,
         height: buffer_height,
         visibility,
+        extents,
         triangles,
         clip,
         projected,
@@ -848,38 +919,64 @@ fn rasterize_bands_above<O, F>(
     }
 
     visibility.resize((width * height) as usize, test.cleared());
+    extents.resize(height as usize, EMPTY_EXTENT);
     let triangles = &*triangles;
     visibility
         .par_chunks_mut(band_pixels(width))
+        .zip(extents.par_chunks_mut(BAND_ROWS as usize))
         .zip(bins.par_iter())
         .zip(outputs)
         .enumerate()
-        .for_each(|(band, ((rows, bin), output))| {
+        .for_each(|(band, (((rows, extents), bin), output))| {
             let first_row = band as u32 * BAND_ROWS;
             rows.fill(test.cleared());
+            extents.fill(EMPTY_EXTENT);
             let floor = floor.map(|f| &f[(first_row * width) as usize..][..rows.len()]);
-            rasterize_band(triangles, bin, first_row, width, rows, test, floor);
+            let target = BandTarget {
+                first_row,
+                width,
+                rows,
+                extents,
+            };
+            rasterize_band(triangles, bin, target, test, floor);
             let band = Band {
                 first_row,
                 width,
                 visibility: rows,
+                extents,
                 triangles,
             };
             per_band(&band, output);
         });
 }
 
-/// Scan-converts the triangles of `bin` into `rows`, the visibility of the rows starting at
-/// `first_row` (full width): per pixel an edge test and, inside, a depth compare.
+/// The extent of a row without a covered pixel.
+const EMPTY_EXTENT: [u32; 2] = [u32::MAX, 0];
+
+/// The rows of one band being rasterised: their visibility (full width, from `first_row`) and
+/// the extent of each row's covered pixels.
+struct BandTarget<'r> {
+    first_row: u32,
+    width: u32,
+    rows: &'r mut [Visibility],
+    extents: &'r mut [[u32; 2]],
+}
+
+/// Scan-converts the triangles of `bin` into `target`: per pixel an edge test and, inside, a
+/// depth compare; each row's extent grows to the pixels written.
 fn rasterize_band(
     triangles: &TriangleStore,
     bin: &[u32],
-    first_row: u32,
-    width: u32,
-    rows: &mut [Visibility],
+    target: BandTarget<'_>,
     test: DepthTest,
     floor: Option<&[f32]>,
 ) {
+    let BandTarget {
+        first_row,
+        width,
+        rows,
+        extents,
+    } = target;
     let last_row = first_row + (rows.len() as u32 / width) - 1;
     for &id in bin {
         let t = triangles.get(id);
@@ -895,6 +992,7 @@ fn rasterize_band(
             let p = pixel_center_fixed(t.min[0], y);
             let mut e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
+            let (mut first_written, mut last_written) = (u32::MAX, 0);
             for x in t.min[0]..=t.max[0] {
                 let f = e;
                 e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
@@ -916,7 +1014,16 @@ fn rasterize_band(
                         depth,
                         triangle: id,
                     };
+                    first_written = first_written.min(x);
+                    last_written = x;
                 }
+            }
+            if first_written <= last_written {
+                let extent = &mut extents[(y - first_row) as usize];
+                *extent = [
+                    extent[0].min(first_written),
+                    extent[1].max(last_written + 1),
+                ];
             }
         }
     }

@@ -1,5 +1,5 @@
 //! The per-pixel work of a frame, eight pixels at a time: each row's covered pixels go through
-//! refract-core's lane kernels ([`two_interface_x8`], [`one_interface_x8`]) in groups of eight,
+//! refract-core's lane kernels ([`two_interface_lanes`], [`one_interface_lanes`]) in groups of eight,
 //! its background pixels through the eight-lane camera rays and environment lookup. Lanes are
 //! bit-identical to the scalar kernels, so grouping changes no pixel.
 //!
@@ -8,12 +8,14 @@
 //! texel of the eye's object pass; the refraction itself still sees the environment only, as in
 //! Wyman 2005a.
 
+use core::ops::Range;
+
 use glam::{UVec2, Vec2, Vec3};
 use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
-use refract_core::kernel::{FrontSurface, ImageSpaceParams};
-use refract_core::kernel_x8::{one_interface_x8, two_interface_lanes};
-use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
+use refract_core::kernel::ImageSpaceParams;
+use refract_core::kernel_x8::{FrontLanes, one_interface_lanes, two_interface_lanes};
+use refract_core::lanes::{F32x8, LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::view_depth;
 use refract_scene::Environment;
 
@@ -21,7 +23,7 @@ use crate::buffers::BackFaces;
 use crate::image_space::MethodAov;
 use crate::nearby_geometry::{NearbyTexel, NearbyTexture};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{Band, SurfaceBuffer, Texel};
+use crate::raster::{Band, SurfaceBuffer, Texel, TexelLanes};
 
 /// What the per-pixel work of a frame reads.
 pub(crate) struct ShadeContext<'a> {
@@ -61,8 +63,10 @@ impl RowOut<'_> {
 pub(crate) trait FrontRow {
     /// Whether pixel `x` of the row sees the refractor.
     fn is_covered(&self, x: u32) -> bool;
-    /// The front surfaces of eight covered pixels.
-    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES];
+    /// The pixels between the row's first and last covered pixel (none outside is covered).
+    fn covered_span(&self) -> Range<u32>;
+    /// The front surfaces of eight covered pixels, as lanes.
+    fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes;
     /// The front surface at pixel `x` (`None` where not covered).
     fn texel(&self, x: u32) -> Option<Texel>;
 }
@@ -78,8 +82,11 @@ impl FrontRow for BandRow<'_, '_> {
     fn is_covered(&self, x: u32) -> bool {
         self.band.is_covered(x, self.y)
     }
-    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
-        self.band.texels_x8(x, self.y)
+    fn covered_span(&self) -> Range<u32> {
+        self.band.covered_span(self.y)
+    }
+    fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes {
+        self.band.texel_lanes(x, self.y)
     }
     fn texel(&self, x: u32) -> Option<Texel> {
         self.band.texel(x, self.y)
@@ -98,8 +105,11 @@ impl FrontRow for BufferRow<'_> {
         self.buffer
             .is_covered((self.y * self.buffer.width + x) as usize)
     }
-    fn texels(&self, x: &[u32; LANES]) -> [Texel; LANES] {
-        self.buffer.texels_x8(x, self.y)
+    fn covered_span(&self) -> Range<u32> {
+        self.buffer.covered_span(self.y)
+    }
+    fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes {
+        self.buffer.texel_lanes(x, self.y)
     }
     fn texel(&self, x: u32) -> Option<Texel> {
         self.buffer.texel((self.y * self.buffer.width + x) as usize)
@@ -117,9 +127,18 @@ impl ShadeContext<'_> {
         aovs: Option<&mut [MethodAov]>,
     ) {
         let mut out = RowOut { colors, aovs };
+        let width = out.colors.len() as u32;
+        // Outside the refractor's span (and with no objects to draw) every pixel sees the
+        // environment: runs of eight neighbours, no per-pixel test.
+        let span = match self.objects {
+            None => front.covered_span(),
+            Some(_) => 0..width,
+        };
+        self.background_run(0..span.start, y, &mut out);
+        self.background_run(span.end..width, y, &mut out);
         let mut covered = PixelGroup::new();
         let mut background = PixelGroup::new();
-        for x in 0..out.colors.len() as u32 {
+        for x in span {
             let object = self.object(front, x, y);
             if let Some(object) = object {
                 out.write(x, object.color, || MethodAov::BACKGROUND);
@@ -155,6 +174,28 @@ impl ShadeContext<'_> {
         (!refractor_in_front).then_some(object)
     }
 
+    /// Pixels `xs` of row `y`, all of which see the environment directly, eight neighbours at
+    /// a time (the lanes of [`Self::background`], so the same bits).
+    fn background_run(&self, xs: Range<u32>, y: u32, out: &mut RowOut<'_>) {
+        let row_y = F32x8::splat(y as f32 + 0.5);
+        let mut x0 = xs.start;
+        while x0 < xs.end {
+            let len = (xs.end - x0).min(LANES as u32) as usize;
+            let uv = Vec2x8 {
+                x: F32x8::splat(x0 as f32) + LANE_INDEX + F32x8::splat(0.5),
+                y: row_y,
+            };
+            let dirs = self.camera.pixel_ray_dir_x8(uv);
+            let colors = self.environment.radiance_x8(dirs).to_lanes();
+            let start = x0 as usize;
+            out.colors[start..start + len].copy_from_slice(&colors[..len]);
+            if let Some(aovs) = out.aovs.as_deref_mut() {
+                aovs[start..start + len].fill(MethodAov::BACKGROUND);
+            }
+            x0 += len as u32;
+        }
+    }
+
     /// Eight pixels that see the environment directly.
     fn background(&self, group: &PixelGroup, y: u32, out: &mut RowOut<'_>) {
         let dirs = self.camera.pixel_ray_dir_x8(pixel_centers(&group.x, y));
@@ -168,19 +209,12 @@ impl ShadeContext<'_> {
     /// `T1` for `single`); black where the kernel reports a degenerate input or the TIR policy
     /// absorbs the ray.
     fn covered(&self, front: &impl FrontRow, group: &PixelGroup, y: u32, out: &mut RowOut<'_>) {
-        let texels = front.texels(&group.x);
-        let mut surfaces = [FrontSurface {
-            p1_ws: Vec3::ZERO,
-            n1_ws: Vec3::ZERO,
-            d_n: 0.0,
-        }; LANES];
-        for (surface, t) in surfaces.iter_mut().zip(&texels) {
-            *surface = FrontSurface {
-                p1_ws: t.p_ws,
-                n1_ws: t.n_ws,
-                d_n: t.scalar,
-            };
-        }
+        let texels = front.texel_lanes(&group.x);
+        let surfaces = FrontLanes {
+            p1_ws: texels.p_ws,
+            n1_ws: texels.n_ws,
+            d_n: texels.scalar,
+        };
         match self.back {
             None => self.one_interface(&surfaces, group, out),
             Some(back) => self.two_interface(&surfaces, back, group, y, out),
@@ -188,13 +222,8 @@ impl ShadeContext<'_> {
     }
 
     /// `single` on a group: the environment along `T1`.
-    fn one_interface(
-        &self,
-        surfaces: &[FrontSurface; LANES],
-        group: &PixelGroup,
-        out: &mut RowOut<'_>,
-    ) {
-        let paths = one_interface_x8(self.camera, surfaces, self.kernel);
+    fn one_interface(&self, surfaces: &FrontLanes, group: &PixelGroup, out: &mut RowOut<'_>) {
+        let paths = one_interface_lanes(self.camera, surfaces, self.kernel);
         // Degenerate lanes look up an arbitrary direction with the others, and are black.
         let mut directions = [Vec3::Y; LANES];
         for (direction, path) in directions.iter_mut().zip(&paths) {
@@ -221,7 +250,7 @@ impl ShadeContext<'_> {
     /// `wyman` and its ablations on a group: the environment along `T2`.
     fn two_interface(
         &self,
-        surfaces: &[FrontSurface; LANES],
+        surfaces: &FrontLanes,
         back: &BackFaces,
         group: &PixelGroup,
         y: u32,
@@ -269,6 +298,9 @@ impl ShadeContext<'_> {
         }
     }
 }
+
+/// `0, 1, …, 7`: lane `i`'s offset in a run of neighbouring pixels.
+const LANE_INDEX: F32x8 = F32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
 
 /// The centres of pixels `x` of row `y`, as lanes.
 #[inline]

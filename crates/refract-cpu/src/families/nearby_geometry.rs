@@ -15,7 +15,7 @@ use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::{FrontSurface, ImageSpaceParams};
-use refract_core::kernel_x8::two_interface_lanes;
+use refract_core::kernel_x8::{FrontLanes, two_interface_lanes};
 use refract_core::lanes::{LANES, Vec2x8};
 use refract_core::nearby_geometry::{
     NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
@@ -399,7 +399,8 @@ impl PixelContext<'_> {
         mut aovs: Option<&mut [NearbyAov]>,
     ) {
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
-        let paths = two_interface_lanes(self.camera, &uv, surfaces, self.back, self.kernel);
+        let front = FrontLanes::from_surfaces(surfaces);
+        let paths = two_interface_lanes(self.camera, &uv, &front, self.back, self.kernel);
         let (p2, t2, n2) = (
             paths.p2.to_lanes(),
             paths.t2.to_lanes(),
