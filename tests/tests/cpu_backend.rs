@@ -638,3 +638,58 @@ fn odd_frame_sizes_render_consistently() {
         }
     }
 }
+
+/// The rasteriser's barycentric weights (carried like the position, through near-plane
+/// clipping) locate each texel in its mesh triangle: `Σ wₖ·Pₖ` is the interpolated position and
+/// the weights sum to 1. On the sphere seen whole and from a camera whose near plane cuts
+/// it (clipped pieces); a weight that ignored the clipping or the corner order would put the
+/// point elsewhere on the triangle.
+#[test]
+fn rasteriser_barycentrics_locate_the_texel_in_its_triangle() {
+    let scene = builtin("sphere", 1.5);
+    let mesh = scene.refractor.mesh();
+    // The eye 1 from the unit sphere and the near plane beyond its nearest point: the plane
+    // cuts a hole of radius ~0.3 in the view, rimmed by clipped triangles.
+    let near_cut = refract_core::CameraDesc {
+        eye: Vec3::new(0.0, 0.0, 2.0),
+        target: Vec3::ZERO,
+        near: 1.05,
+        width: 96,
+        height: 96,
+        ..Default::default()
+    };
+    for (label, cam) in [
+        ("whole", camera(128)),
+        ("near-plane cut", Camera::new(near_cut).expect("camera")),
+    ] {
+        let buffer = refract_cpu::rasterize(
+            &refract_cpu::RasterMesh::new(mesh),
+            &cam,
+            refract_cpu::Faces::Both,
+            refract_cpu::DepthTest::Nearest,
+        );
+        let (mut checked, mut clipped, mut worst) = (0, 0, 0.0f32);
+        let in_front = |p: Vec3| (p - cam.eye()).dot(cam.look_dir()) >= cam.desc().near;
+        for index in 0..(cam.width() * cam.height()) as usize {
+            let Some(t) = buffer.texel(index) else {
+                continue;
+            };
+            let w = t.barycentrics;
+            let [a, b, c] = mesh.triangles[t.triangle as usize].map(|i| mesh.positions[i as usize]);
+            clipped += usize::from(![a, b, c].into_iter().all(in_front));
+            let p = w.x * a + w.y * b + w.z * c;
+            worst = worst.max((p - t.p_ws).length());
+            assert!((w.x + w.y + w.z - 1.0).abs() < 1e-5, "{label}: weights {w}");
+            assert!(w.min_element() > -1e-3, "{label}: weights {w} outside the triangle");
+            checked += 1;
+        }
+        println!(
+            "{label}: {checked} texels ({clipped} on clipped triangles), worst |Σ wₖ·Pₖ − p| = {worst:e}"
+        );
+        assert!(checked > 1000, "{label}: {checked} texels");
+        if label == "near-plane cut" {
+            assert!(clipped > 100, "{label}: {clipped} texels on clipped triangles");
+        }
+        assert!(worst < 1e-5, "{label}: worst {worst}");
+    }
+}

@@ -92,9 +92,13 @@ pub struct Texel {
     pub n_ws: Vec3,
     /// Perspective-correct interpolated per-vertex scalar (`d_N`; 0 for meshes without one).
     pub scalar: f32,
-    /// The mesh triangle the fragment belongs to: any other per-vertex attribute (uv, albedo)
-    /// is interpolated from it with [`RasterMesh::barycentrics`], and the mesh says which
-    /// object it is.
+    /// The fragment's barycentric weights `(w0, w1, w2)` in its mesh triangle (vertex order
+    /// of `triangles[triangle]`), perspective-correct: any other per-vertex attribute (uv,
+    /// albedo) is `w0·a0 + w1·a1 + w2·a2`. The rasteriser carries them as an attribute (the
+    /// corners' own weights, interpolated like the position), so pieces of a clipped
+    /// triangle give weights in the whole triangle.
+    pub barycentrics: Vec3,
+    /// The mesh triangle the fragment belongs to (the mesh says which object it is).
     pub triangle: u32,
 }
 
@@ -134,24 +138,10 @@ impl<'a> RasterMesh<'a> {
     fn scalar(&self, vertex: u32) -> f32 {
         self.scalars.get(vertex as usize).copied().unwrap_or(0.0)
     }
-
-    /// The barycentric weights `(w0, w1, w2)` of a texel's world position in its triangle (the
-    /// texel lies on it, clipped or not), for interpolating any per-vertex attribute:
-    /// `a = w0·a0 + w1·a1 + w2·a2`. Degenerate triangles give `(1, 0, 0)`.
-    pub fn barycentrics(&self, texel: &Texel) -> Vec3 {
-        let [a, b, c] = self.triangles[texel.triangle as usize].map(|i| self.positions[i as usize]);
-        let (e1, e2, p) = (b - a, c - a, texel.p_ws - a);
-        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-        let (p1, p2) = (p.dot(e1), p.dot(e2));
-        let det = d11 * d22 - d12 * d12;
-        if det.abs() <= f32::MIN_POSITIVE || det.is_nan() {
-            return Vec3::X;
-        }
-        let w1 = (d22 * p1 - d12 * p2) / det;
-        let w2 = (d11 * p2 - d12 * p1) / det;
-        Vec3::new(1.0 - w1 - w2, w1, w2)
-    }
 }
+
+/// The barycentric weights of a triangle's three vertices.
+const CORNER_BARYCENTRICS: [Vec3; 3] = [Vec3::X, Vec3::Y, Vec3::Z];
 
 /// A vertex after projection, with the attributes to interpolate.
 #[derive(Clone, Copy, Debug)]
@@ -160,6 +150,8 @@ struct ClipVertex {
     p_ws: Vec3,
     n_ws: Vec3,
     scalar: f32,
+    /// Barycentric weights in the mesh triangle (a unit vector at its vertices).
+    bary: Vec3,
 }
 
 impl ClipVertex {
@@ -169,6 +161,7 @@ impl ClipVertex {
             p_ws: self.p_ws.lerp(other.p_ws, t),
             n_ws: self.n_ws.lerp(other.n_ws, t),
             scalar: self.scalar + (other.scalar - self.scalar) * t,
+            bary: self.bary.lerp(other.bary, t),
         }
     }
 }
@@ -179,6 +172,8 @@ struct Attributes {
     p_ws: Vec3,
     n_ws: Vec3,
     scalar: f32,
+    /// Barycentric weights of the corner in the mesh triangle.
+    bary: Vec3,
 }
 
 /// A triangle set up for scan conversion: fixed-point screen positions (`y` down), and what
@@ -253,6 +248,7 @@ impl ScreenTriangle {
             p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
             n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
             scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
+            barycentrics: pw[0] * v0.bary + pw[1] * v1.bary + pw[2] * v2.bary,
             triangle: self.source,
         }
     }
@@ -270,6 +266,8 @@ pub struct TexelLanes {
     pub n_ws: Vec3x8,
     /// The interpolated per-vertex scalar.
     pub scalar: F32x8,
+    /// The barycentric weights in the mesh triangle ([`Texel::barycentrics`]).
+    pub barycentrics: Vec3x8,
     /// The mesh triangle of each lane.
     pub triangle: [u32; LANES],
 }
@@ -279,11 +277,13 @@ impl TexelLanes {
     pub fn to_texels(&self) -> [Texel; LANES] {
         let (depth, scalar) = (self.depth.to_array(), self.scalar.to_array());
         let (p_ws, n_ws) = (self.p_ws.to_lanes(), self.n_ws.to_lanes());
+        let barycentrics = self.barycentrics.to_lanes();
         let mut texels = [Texel {
             depth: 0.0,
             p_ws: Vec3::ZERO,
             n_ws: Vec3::ZERO,
             scalar: 0.0,
+            barycentrics: Vec3::ZERO,
             triangle: 0,
         }; LANES];
         for (i, texel) in texels.iter_mut().enumerate() {
@@ -292,6 +292,7 @@ impl TexelLanes {
                 p_ws: p_ws[i],
                 n_ws: n_ws[i],
                 scalar: scalar[i],
+                barycentrics: barycentrics[i],
                 triangle: self.triangle[i],
             };
         }
@@ -313,6 +314,7 @@ fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) ->
     let (mut depth, mut inv_w, mut scalar) =
         ([[0.0f32; LANES]; 3], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
     let (mut p, mut n) = ([[Vec3::ZERO; LANES]; 3], [[Vec3::ZERO; LANES]; 3]);
+    let mut bary = [[Vec3::ZERO; LANES]; 3];
     let mut source = [0u32; LANES];
     for (i, t) in triangles.iter().enumerate() {
         source[i] = t.source;
@@ -326,6 +328,7 @@ fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) ->
             scalar[k][i] = t.attributes[k].scalar;
             p[k][i] = t.attributes[k].p_ws;
             n[k][i] = t.attributes[k].n_ws;
+            bary[k][i] = t.attributes[k].bary;
         }
     }
     let f = F32x8::new;
@@ -338,6 +341,7 @@ fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) ->
             scalar: [f(scalar[0]), f(scalar[1]), f(scalar[2])],
             p: [v(&p[0]), v(&p[1]), v(&p[2])],
             n: [v(&n[0]), v(&n[1]), v(&n[2])],
+            bary: [v(&bary[0]), v(&bary[1]), v(&bary[2])],
         },
         source,
     )
@@ -367,6 +371,7 @@ fn texel_lanes_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> Tex
             scalar: [0, 1, 2].map(|k| s(corner(k).scalar)),
             p: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).p_ws)),
             n: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).n_ws)),
+            bary: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).bary)),
         },
         [t.source; LANES],
     )
@@ -379,6 +384,7 @@ struct CornersX8 {
     scalar: [F32x8; 3],
     p: [Vec3x8; 3],
     n: [Vec3x8; 3],
+    bary: [Vec3x8; 3],
 }
 
 /// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
@@ -394,11 +400,13 @@ fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> TexelLa
     let (n_ws, n_ok) = (c.n[0] * w0 + c.n[1] * w1 + c.n[2] * w2).try_normalize();
     let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
     let scalar = w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2];
+    let barycentrics = c.bary[0] * w0 + c.bary[1] * w1 + c.bary[2] * w2;
     TexelLanes {
         depth,
         p_ws,
         n_ws,
         scalar,
+        barycentrics,
         triangle: source,
     }
 }
@@ -575,21 +583,29 @@ impl TriangleStore {
                     let corners = tri.map(|i| projected[i as usize]);
                     if corners.iter().all(|v| v.in_front) {
                         let attributes = || {
-                            tri.map(|i| Attributes {
-                                p_ws: mesh.positions[i as usize],
-                                n_ws: mesh.normals[i as usize],
-                                scalar: mesh.scalar(i),
+                            [0, 1, 2].map(|k| {
+                                let i = tri[k] as usize;
+                                Attributes {
+                                    p_ws: mesh.positions[i],
+                                    n_ws: mesh.normals[i],
+                                    scalar: mesh.scalar(i as u32),
+                                    bary: CORNER_BARYCENTRICS[k],
+                                }
                             })
                         };
                         out.extend(setup(corners, attributes, camera, faces, source));
                         continue;
                     }
                     // Crossing the near plane: clip, then set up the pieces.
-                    let v = tri.map(|i| ClipVertex {
-                        clip: clip[i as usize],
-                        p_ws: mesh.positions[i as usize],
-                        n_ws: mesh.normals[i as usize],
-                        scalar: mesh.scalar(i),
+                    let v = [0, 1, 2].map(|k| {
+                        let i = tri[k] as usize;
+                        ClipVertex {
+                            clip: clip[i],
+                            p_ws: mesh.positions[i],
+                            n_ws: mesh.normals[i],
+                            scalar: mesh.scalar(i as u32),
+                            bary: CORNER_BARYCENTRICS[k],
+                        }
                     });
                     clip_near(v, &mut polygon);
                     for k in 1..polygon.len().saturating_sub(1) {
@@ -599,6 +615,7 @@ impl TriangleStore {
                                 p_ws: v.p_ws,
                                 n_ws: v.n_ws,
                                 scalar: v.scalar,
+                                bary: v.bary,
                             })
                         };
                         let corners = piece.map(|v| project(v.clip, width, height));

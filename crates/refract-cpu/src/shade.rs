@@ -174,26 +174,13 @@ impl ShadeContext<'_> {
         (!refractor_in_front).then_some(object)
     }
 
-    /// Pixels `xs` of row `y`, all of which see the environment directly, eight neighbours at
-    /// a time (the lanes of [`Self::background`], so the same bits).
+    /// Pixels `xs` of row `y`, all of which see the environment directly (see
+    /// [`environment_run`]).
     fn background_run(&self, xs: Range<u32>, y: u32, out: &mut RowOut<'_>) {
-        let row_y = F32x8::splat(y as f32 + 0.5);
-        let mut x0 = xs.start;
-        while x0 < xs.end {
-            let len = (xs.end - x0).min(LANES as u32) as usize;
-            let uv = Vec2x8 {
-                x: F32x8::splat(x0 as f32) + LANE_INDEX + F32x8::splat(0.5),
-                y: row_y,
-            };
-            let dirs = self.camera.pixel_ray_dir_x8(uv);
-            let colors = self.environment.radiance_x8(dirs).to_lanes();
-            let start = x0 as usize;
-            out.colors[start..start + len].copy_from_slice(&colors[..len]);
-            if let Some(aovs) = out.aovs.as_deref_mut() {
-                aovs[start..start + len].fill(MethodAov::BACKGROUND);
-            }
-            x0 += len as u32;
+        if let Some(aovs) = out.aovs.as_deref_mut() {
+            aovs[xs.start as usize..xs.end as usize].fill(MethodAov::BACKGROUND);
         }
+        environment_run(self.camera, self.environment, xs, y, out.colors);
     }
 
     /// Eight pixels that see the environment directly.
@@ -296,6 +283,32 @@ impl ShadeContext<'_> {
                 }
             });
         }
+    }
+}
+
+/// The environment seen directly by pixels `xs` of row `y` of `camera`, written to
+/// `colors[xs]`: eight neighbours at a time, their centres computed on lanes (no per-pixel
+/// gather), each lane the bits of [`Camera::pixel_ray`] and [`Environment::radiance`]'s lane
+/// twin for its pixel.
+pub(crate) fn environment_run(
+    camera: &Camera,
+    environment: &Environment,
+    xs: Range<u32>,
+    y: u32,
+    colors: &mut [Vec3],
+) {
+    let row_y = F32x8::splat(y as f32 + 0.5);
+    let mut x0 = xs.start;
+    while x0 < xs.end {
+        let len = (xs.end - x0).min(LANES as u32) as usize;
+        let uv = Vec2x8 {
+            x: F32x8::splat(x0 as f32) + LANE_INDEX + F32x8::splat(0.5),
+            y: row_y,
+        };
+        let radiance = environment.radiance_x8(camera.pixel_ray_dir_x8(uv));
+        let start = x0 as usize;
+        colors[start..start + len].copy_from_slice(&radiance.to_lanes()[..len]);
+        x0 += len as u32;
     }
 }
 

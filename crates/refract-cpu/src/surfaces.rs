@@ -10,7 +10,7 @@ use crate::raster::{DepthTest, Faces, RasterMesh, rasterize};
 
 /// The nearest front faces of mesh `which` seen by `camera`, row-major from the top (`None`
 /// where the mesh is not seen), or `None` for an object index out of range. Texture
-/// coordinates are interpolated with the texel's barycentrics ([`RasterMesh::barycentrics`]).
+/// coordinates are interpolated with the texel's barycentrics ([`crate::raster::Texel::barycentrics`]).
 pub fn rasterize_surface(
     scene: &Scene,
     which: SceneMesh,
@@ -26,7 +26,7 @@ pub fn rasterize_surface(
                 let uv = if mesh.uvs.is_empty() {
                     Vec2::ZERO
                 } else {
-                    let w = raster.barycentrics(&t);
+                    let w = t.barycentrics;
                     let [a, b, c] =
                         mesh.triangles[t.triangle as usize].map(|v| mesh.uvs[v as usize]);
                     w.x * a + w.y * b + w.z * c

@@ -336,7 +336,7 @@ impl DistanceMapScene for MapScene<'_> {
             LayerContent::Others(_) => &self.map.others,
         };
         let (mesh, triangle) = meshes.source(t.triangle);
-        let w = meshes.raster().barycentrics(&t);
+        let w = t.barycentrics;
         TexelSurface {
             normal: t.n_ws,
             material: surface_material(self.scene, mesh, triangle, w, t.p_ws, t.n_ws),
@@ -470,7 +470,7 @@ impl CpuFamily for DistancePasses {
                 return (scene.environment.radiance(dir), DistanceAov::default());
             };
             let (mesh, triangle) = everything.source(t.triangle);
-            let w = raster.barycentrics(&t);
+            let w = t.barycentrics;
             let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
             if material.ior == 0.0 {
                 return (material.rgb, DistanceAov::default());

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
-use refract_core::kernel::{FrontSurface, ImageSpaceParams};
+use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, two_interface_lanes};
 use refract_core::lanes::{LANES, Vec2x8};
 use refract_core::nearby_geometry::{
@@ -139,7 +139,7 @@ impl NearbyTexture {
                             continue;
                         };
                         let object = &scene.objects[k];
-                        let w = raster.barycentrics(&t);
+                        let w = t.barycentrics;
                         let uv = object.uv_at(triangle, Vec2::new(w.y, w.z), t.p_ws);
                         surfaces[i] = t.p_ws.extend((t.p_ws - eye).dot(look));
                         shading[i] = Shading {
@@ -291,49 +291,29 @@ struct PixelContext<'a> {
     nearby: &'a NearbyTexture,
 }
 
-/// A pixel of a row, before the refraction: what it shows when it is not the refractor.
-enum Pixel {
-    /// The refractor, in front of any object: the kernel and the lookup decide.
-    Refractor(FrontSurface),
-    /// An object seen directly.
-    Object(Vec3),
-    /// The environment along the pixel's ray.
-    Environment,
-}
-
 impl PixelContext<'_> {
-    /// Shades row `y`: pixels that see an object or the environment directly at once, the
-    /// refractor's pixels eight at a time through the lane kernel (`two_interface_lanes`,
-    /// bit-identical to the scalar kernel), then each lane's lookup.
+    /// Shades row `y`: the pixels the refractor covers eight at a time (their front texels
+    /// resolved on lanes, then the lane kernel `two_interface_lanes`, bit-identical to the
+    /// scalar kernel, and each lane's lookup, or the object where one is nearer), pixels that
+    /// see an object directly at once, and the environment eight pixels at a time.
     fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [NearbyAov]>) {
         let mut group = PixelGroup::new();
         let mut background = PixelGroup::new();
-        let mut surfaces = [FrontSurface {
-            p1_ws: Vec3::ZERO,
-            n1_ws: Vec3::ZERO,
-            d_n: 0.0,
-        }; LANES];
+        let row = (y * self.camera.width()) as usize;
         for x in 0..colors.len() as u32 {
-            match self.classify(x, y) {
-                Pixel::Refractor(surface) => {
-                    surfaces[group.len] = surface;
-                    if group.push(x) {
-                        self.refractor(&group, &surfaces, y, colors, aovs.as_deref_mut());
-                        group.len = 0;
-                    }
+            if self.front.is_covered(row + x as usize) {
+                if group.push(x) {
+                    self.refractor(&group, y, colors, aovs.as_deref_mut());
+                    group.len = 0;
                 }
-                Pixel::Object(color) => {
-                    colors[x as usize] = color;
-                    if let Some(aovs) = aovs.as_deref_mut() {
-                        aovs[x as usize] = NearbyAov::NONE;
-                    }
+            } else if let Some(object) = self.nearby.texel(UVec2::new(x, y) + self.pad) {
+                colors[x as usize] = object.color;
+                if let Some(aovs) = aovs.as_deref_mut() {
+                    aovs[x as usize] = NearbyAov::NONE;
                 }
-                Pixel::Environment => {
-                    if background.push(x) {
-                        self.background(&background, y, colors, aovs.as_deref_mut());
-                        background.len = 0;
-                    }
-                }
+            } else if background.push(x) {
+                self.background(&background, y, colors, aovs.as_deref_mut());
+                background.len = 0;
             }
         }
         if background.len > 0 {
@@ -341,31 +321,8 @@ impl PixelContext<'_> {
             self.background(&background, y, colors, aovs.as_deref_mut());
         }
         if group.len > 0 {
-            let len = group.len;
             group.pad();
-            let first = surfaces[0];
-            surfaces[len..].fill(first);
-            self.refractor(&group, &surfaces, y, colors, aovs);
-        }
-    }
-
-    /// What pixel `(x, y)` shows: the refractor when it is covered and in front of the objects.
-    #[inline]
-    fn classify(&self, x: u32, y: u32) -> Pixel {
-        let index = (y * self.camera.width() + x) as usize;
-        let object = self.nearby.texel(UVec2::new(x, y) + self.pad);
-        let front = self
-            .front
-            .texel(index)
-            .filter(|f| object.is_none_or(|o| view_depth(self.camera, f.p_ws) < o.surface.depth));
-        match (front, object) {
-            (Some(front), _) => Pixel::Refractor(FrontSurface {
-                p1_ws: front.p_ws,
-                n1_ws: front.n_ws,
-                d_n: front.scalar,
-            }),
-            (None, Some(o)) => Pixel::Object(o.color),
-            (None, None) => Pixel::Environment,
+            self.refractor(&group, y, colors, aovs);
         }
     }
 
@@ -389,26 +346,40 @@ impl PixelContext<'_> {
         }
     }
 
-    /// Eight refractor pixels of row `y`: the lane kernel, then the lookup per lane.
+    /// Eight pixels of row `y` the refractor covers: the lane kernel, then per lane the object
+    /// when one is nearer than the refractor there, else the lookup.
     fn refractor(
         &self,
         group: &PixelGroup,
-        surfaces: &[FrontSurface; LANES],
         y: u32,
         colors: &mut [Vec3],
         mut aovs: Option<&mut [NearbyAov]>,
     ) {
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
-        let front = FrontLanes::from_surfaces(surfaces);
+        let texels = self.front.texel_lanes(&group.x, y);
+        let front = FrontLanes {
+            p1_ws: texels.p_ws,
+            n1_ws: texels.n_ws,
+            d_n: texels.scalar,
+        };
         let paths = two_interface_lanes(self.camera, &uv, &front, self.back, self.kernel);
-        let (p2, t2, n2) = (
+        let (p1, p2, t2, n2) = (
+            texels.p_ws.to_lanes(),
             paths.p2.to_lanes(),
             paths.t2.to_lanes(),
             paths.n2.to_lanes(),
         );
         for i in 0..group.len {
             let x = group.x[i] as usize;
-            let (color, aov) = if paths.ok[i] {
+            // The refractor wins only where it is strictly nearer (NaN: the object).
+            let refractor_nearer = |depth: f32| view_depth(self.camera, p1[i]) < depth;
+            let object = self
+                .nearby
+                .texel(UVec2::new(group.x[i], y) + self.pad)
+                .filter(|o| !refractor_nearer(o.surface.depth));
+            let (color, aov) = if let Some(object) = object {
+                (object.color, NearbyAov::NONE)
+            } else if paths.ok[i] {
                 self.lookup(NearbyAov {
                     covered: true,
                     p2: p2[i],

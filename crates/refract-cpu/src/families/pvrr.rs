@@ -21,8 +21,9 @@ use refract_scene::{
 use crate::distance_map::surface_material;
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, rasterize_into};
+use crate::raster::{DepthTest, Faces, SurfaceBuffer, Texel, rasterize_into};
 use crate::scene_meshes::SceneMeshes;
+use crate::shade::environment_run;
 
 /// A rendered view's radiance, row-major from the top.
 #[derive(Default)]
@@ -238,7 +239,6 @@ fn render_view(
     let width = camera.width() as usize;
     let rows = ViewRows {
         pass,
-        raster: &raster,
         buffer,
     };
     match aovs {
@@ -260,16 +260,25 @@ fn render_view(
 /// one by one.
 struct ViewRows<'a> {
     pass: &'a ViewPass<'a>,
-    raster: &'a RasterMesh<'a>,
     buffer: &'a SurfaceBuffer,
 }
 
 impl ViewRows<'_> {
     fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [PvrrAov]>) {
+        // Outside the row's covered span every pixel sees the environment: runs of eight.
+        let span = self.buffer.covered_span(y);
+        let width = colors.len() as u32;
+        for run in [0..span.start, span.end..width] {
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[run.start as usize..run.end as usize].fill(PvrrAov::default());
+            }
+            let camera = &self.pass.view.camera;
+            environment_run(camera, &self.pass.scene.environment, run, y, colors);
+        }
         let mut surface = PixelGroup::new();
         let mut background = PixelGroup::new();
         let row = (y as usize) * colors.len();
-        for x in 0..colors.len() as u32 {
+        for x in span {
             if self.buffer.is_covered(row + x as usize) {
                 if surface.push(x) {
                     self.surfaces(&surface, y, colors, aovs.as_deref_mut());
@@ -347,7 +356,7 @@ impl ViewRows<'_> {
             children,
         } = *self.pass;
         let (mesh, triangle) = meshes.source(t.triangle);
-        let w = self.raster.barycentrics(t);
+        let w = t.barycentrics;
         let Some(draw) = view
             .draws
             .iter()
