@@ -680,7 +680,10 @@ fn rasteriser_barycentrics_locate_the_texel_in_its_triangle() {
             let p = w.x * a + w.y * b + w.z * c;
             worst = worst.max((p - t.p_ws).length());
             assert!((w.x + w.y + w.z - 1.0).abs() < 1e-5, "{label}: weights {w}");
-            assert!(w.min_element() > -1e-3, "{label}: weights {w} outside the triangle");
+            assert!(
+                w.min_element() > -1e-3,
+                "{label}: weights {w} outside the triangle"
+            );
             checked += 1;
         }
         println!(
@@ -688,7 +691,10 @@ fn rasteriser_barycentrics_locate_the_texel_in_its_triangle() {
         );
         assert!(checked > 1000, "{label}: {checked} texels");
         if label == "near-plane cut" {
-            assert!(clipped > 100, "{label}: {clipped} texels on clipped triangles");
+            assert!(
+                clipped > 100,
+                "{label}: {clipped} texels on clipped triangles"
+            );
         }
         assert!(worst < 1e-5, "{label}: worst {worst}");
     }

@@ -967,6 +967,31 @@ fn rasterize_bands_above<O, F>(
         });
 }
 
+/// The pixels `i` of a row (`0 ≤ i < columns`, from the triangle's left bound) whose centres
+/// are inside: `eₖ + biasₖ + stepₖ·i ≥ 0` for the three edges, where `eₖ` is edge `k` at pixel
+/// 0. Each inequality is linear in `i`, so the solution is one run `first..=last` (`None`:
+/// empty), solved exactly in integers: the same pixels as testing each one.
+#[inline]
+fn inside_run(e: [i64; 3], step: [i64; 3], bias: [i64; 3], columns: i64) -> Option<(i64, i64)> {
+    let (mut first, mut last) = (0, columns - 1);
+    for k in 0..3 {
+        let v = e[k] + bias[k];
+        let s = step[k];
+        if s > 0 {
+            // v + s·i ≥ 0 ⇔ i ≥ ⌈−v / s⌉ (only binding while v < 0).
+            if v < 0 {
+                first = first.max((-v + s - 1) / s);
+            }
+        } else if v < 0 {
+            return None; // s ≤ 0: the edge only falls to the right
+        } else if s < 0 {
+            // v + s·i ≥ 0 ⇔ i ≤ ⌊v / −s⌋.
+            last = last.min(v / -s);
+        }
+    }
+    (first <= last).then_some((first, last))
+}
+
 /// The extent of a row without a covered pixel.
 const EMPTY_EXTENT: [u32; 2] = [u32::MAX, 0];
 
@@ -1002,20 +1027,24 @@ fn rasterize_band(
         // Edge functions step by −Δy·SUBPIXEL per pixel to the right (exact integer arithmetic).
         // A pixel centre on an edge is inside when the edge is top-left: for integers,
         // `e > 0 || (e == 0 && top_left)` is `e + bias ≥ 0` with bias −1, or 0 on a top-left
-        // edge; and all three are ≥ 0 exactly when their bitwise OR is (no sign bit set).
+        // edge. Each row's inside pixels are one run, found from the three edges at once
+        // ([`inside_run`]), so the loop below visits only them.
         let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL);
         let bias = [tl0, tl1, tl2].map(|tl| i64::from(tl) - 1);
+        let columns = i64::from(t.max[0] - t.min[0]) + 1;
         for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
             let p = pixel_center_fixed(t.min[0], y);
-            let mut e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
+            let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
+            let Some((first, last)) = inside_run(e, step, bias, columns) else {
+                continue;
+            };
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             let (mut first_written, mut last_written) = (u32::MAX, 0);
-            for x in t.min[0]..=t.max[0] {
+            let mut e = [0, 1, 2].map(|k| e[k] + step[k] * first);
+            for x in t.min[0] + first as u32..=t.min[0] + last as u32 {
                 let f = e;
                 e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
-                if ((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) < 0 {
-                    continue;
-                }
+                debug_assert!(((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) >= 0);
                 let depth = t.depth_at(t.barycentrics(f));
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
@@ -1043,5 +1072,50 @@ fn rasterize_band(
                 ];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The pixels of a row inside by testing each one: what [`inside_run`] must find.
+    fn inside_by_pixel(e: [i64; 3], step: [i64; 3], bias: [i64; 3], columns: i64) -> Vec<i64> {
+        (0..columns)
+            .filter(|&i| (0..3).all(|k| e[k] + bias[k] + step[k] * i >= 0))
+            .collect()
+    }
+
+    proptest! {
+        /// The run solved from the three edges is exactly the set of pixels each passing the
+        /// edge test, whatever the signs of the steps (edges rising, falling, horizontal) and
+        /// the top-left biases, including runs clipped by the row's bounds and empty rows.
+        #[test]
+        fn inside_run_is_the_pixels_that_pass_the_edge_tests(
+            e in proptest::array::uniform3(-40_000i64..40_000),
+            step in proptest::array::uniform3(-3_000i64..3_000),
+            bias in proptest::array::uniform3(-1i64..=0),
+            columns in 1i64..64,
+        ) {
+            let expected = inside_by_pixel(e, step, bias, columns);
+            let run = inside_run(e, step, bias, columns);
+            match run {
+                None => prop_assert!(expected.is_empty(), "missed {:?}", expected),
+                Some((first, last)) => {
+                    prop_assert_eq!(expected, (first..=last).collect::<Vec<_>>());
+                }
+            }
+        }
+    }
+
+    /// Steps of zero (an edge parallel to the rows) keep or drop the whole row.
+    #[test]
+    fn a_horizontal_edge_keeps_or_drops_the_row() {
+        assert_eq!(
+            inside_run([0, 5, 5], [0, 1, -1], [0, 0, 0], 4),
+            Some((0, 3))
+        );
+        assert_eq!(inside_run([0, 5, 5], [0, 1, -1], [-1, 0, 0], 4), None);
     }
 }

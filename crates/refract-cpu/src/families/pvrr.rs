@@ -237,10 +237,7 @@ fn render_view(
     let raster = pass.meshes.raster();
     rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);
     let width = camera.width() as usize;
-    let rows = ViewRows {
-        pass,
-        buffer,
-    };
+    let rows = ViewRows { pass, buffer };
     match aovs {
         Some(aovs) => out
             .par_chunks_mut(width)
