@@ -699,3 +699,38 @@ fn rasteriser_barycentrics_locate_the_texel_in_its_triangle() {
         assert!(worst < 1e-5, "{label}: worst {worst}");
     }
 }
+
+/// A reused renderer clears only what its last frame drew (each row's extent): frames of one
+/// size from cameras that move the refractor across the image, and with the back faces' depth
+/// test switched between frames (furthest, then second surface), equal fresh frames. A buffer
+/// that kept the last frame's fragments outside the new extents would show a ghost torus.
+#[test]
+fn reused_buffers_forget_the_last_frame() {
+    let scene = builtin("torus", 1.33);
+    let mut renderer = CpuRenderer::new();
+    renderer.prepare(&scene).expect("prepare");
+    let mut reused = Frame::default();
+    for (k, params) in [
+        method(MethodId::Wyman),
+        method(MethodId::Wyman),
+        second_surface(),
+        method(MethodId::Single),
+        method(MethodId::Wyman),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let cam = Camera::new(refract_core::CameraDesc {
+            eye: Vec3::new(-2.0 + k as f32, 0.3 * k as f32, 4.0),
+            width: 64,
+            height: 48,
+            ..Default::default()
+        })
+        .expect("camera");
+        let fresh = cpu_frame(&scene, &cam, params);
+        renderer
+            .render(&cam, params, FrameOutputs::ColorAndAovs, &mut reused)
+            .expect("reused");
+        assert_eq!(format!("{fresh:?}"), format!("{reused:?}"), "frame {k}");
+    }
+}

@@ -88,10 +88,9 @@ impl BackFaces {
 /// Resolves row `y` of a band of back faces into normals and distances from `eye`; covered
 /// pixels are resolved eight at a time (the distance `‖p − eye‖` on lanes, glam's operations),
 /// and only the row's covered span is visited.
+/// Texels outside the span are not written: [`BackFaces::back_face`] never reads them.
 fn resolve_row(band: &Band<'_>, y: u32, eye: Vec3, resolved: &mut [BackTexel]) {
     let span = band.covered_span(y);
-    resolved[..span.start as usize].fill(BackTexel::EMPTY);
-    resolved[span.end as usize..].fill(BackTexel::EMPTY);
     let eye = Vec3x8::splat(eye);
     let resolve = |group: &PixelGroup, resolved: &mut [BackTexel]| {
         let texels = band.texel_lanes(&group.x, y);
@@ -127,7 +126,12 @@ impl BackFaceSampler for BackFaces {
         if !(uv_px.x >= 0.0 && uv_px.y >= 0.0 && uv_px.x < w && uv_px.y < h) {
             return None;
         }
-        let texel = self.resolved[uv_px.y as usize * self.buffer.width as usize + uv_px.x as usize];
+        let (x, y) = (uv_px.x as u32, uv_px.y as u32);
+        // Outside the row's covered span the resolved texels are stale: the pixel is empty.
+        if !self.buffer.covered_span(y).contains(&x) {
+            return None;
+        }
+        let texel = self.resolved[(y * self.buffer.width + x) as usize];
         (texel.distance >= 0.0).then_some(BackFaceSample {
             n_ws: texel.n_ws,
             distance: texel.distance,

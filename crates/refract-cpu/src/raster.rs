@@ -656,6 +656,10 @@ pub struct SurfaceBuffer {
     clip: Vec<Vec4>,
     projected: Vec<Projected>,
     bins: Vec<Vec<u32>>,
+    /// The frame shape and depth test whose cleared value every pixel outside its row's
+    /// extent holds (`None`: unknown, clear everything): the next frame of that shape clears
+    /// only the last frame's extents.
+    cleared_for: Option<(u32, u32, DepthTest)>,
 }
 
 impl SurfaceBuffer {
@@ -909,6 +913,7 @@ fn rasterize_bands_above<O, F>(
         clip,
         projected,
         bins,
+        cleared_for,
     } = buffer;
     *buffer_width = width;
     *buffer_height = height;
@@ -937,6 +942,9 @@ fn rasterize_bands_above<O, F>(
 
     visibility.resize((width * height) as usize, test.cleared());
     extents.resize(height as usize, EMPTY_EXTENT);
+    // Outside the last frame's extents the pixels still hold the cleared value when it was
+    // the same shape and test; otherwise (and once a frame panicked) every pixel is cleared.
+    let clear_extents_only = cleared_for.take() == Some((width, height, test));
     let triangles = &*triangles;
     visibility
         .par_chunks_mut(band_pixels(width))
@@ -946,7 +954,14 @@ fn rasterize_bands_above<O, F>(
         .enumerate()
         .for_each(|(band, (((rows, extents), bin), output))| {
             let first_row = band as u32 * BAND_ROWS;
-            rows.fill(test.cleared());
+            if clear_extents_only {
+                for (row, extent) in rows.chunks_exact_mut(width as usize).zip(&*extents) {
+                    let run = span(*extent);
+                    row[run.start as usize..run.end as usize].fill(test.cleared());
+                }
+            } else {
+                rows.fill(test.cleared());
+            }
             extents.fill(EMPTY_EXTENT);
             let floor = floor.map(|f| &f[(first_row * width) as usize..][..rows.len()]);
             let target = BandTarget {
@@ -965,6 +980,7 @@ fn rasterize_bands_above<O, F>(
             };
             per_band(&band, output);
         });
+    *cleared_for = Some((width, height, test));
 }
 
 /// The pixels `i` of a row (`0 ≤ i < columns`, from the triangle's left bound) whose centres
