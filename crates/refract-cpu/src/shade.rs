@@ -305,7 +305,9 @@ pub(crate) fn environment_run(
             x: F32x8::splat(x0 as f32) + LANE_INDEX + F32x8::splat(0.5),
             y: row_y,
         };
-        let radiance = environment.radiance_x8(camera.pixel_ray_dir_x8(uv)).to_lanes();
+        let radiance = environment
+            .radiance_x8(camera.pixel_ray_dir_x8(uv))
+            .to_lanes();
         let start = x0 as usize;
         if len == LANES {
             // A constant length: inline stores instead of a call to `memcpy` per eight pixels.

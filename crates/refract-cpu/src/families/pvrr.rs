@@ -12,6 +12,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::lanes::{LANES, Vec2x8};
+use refract_core::pvrr::PvrrVertex;
 use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
 use refract_scene::{
@@ -201,6 +202,21 @@ impl PvrrPasses {
     }
 }
 
+/// What the pixels on one triangle of a view share: a diffuse object's triangle, or a
+/// reflector's (its corners' map positions and states, `None` for a mesh the scene lacks; the
+/// map it reads, `None` past the last level).
+enum TriangleSurface<'a> {
+    Diffuse {
+        mesh: SceneMesh,
+        triangle: u32,
+    },
+    Reflector {
+        corners: Option<[PvrrVertex; 3]>,
+        map: Option<&'a Image>,
+        kind: ReflectorKind,
+    },
+}
+
 /// The rendered maps of views `first..`.
 struct ChildMaps<'a> {
     first: usize,
@@ -324,7 +340,9 @@ impl ViewRows<'_> {
         }
     }
 
-    /// Eight pixels that see a surface.
+    /// Eight pixels that see a surface. Neighbouring pixels mostly see the same triangle: what
+    /// a pixel's shading needs of its triangle (which mesh, which reflector draw, its corners'
+    /// map positions) is looked up once per run of pixels on it.
     fn surfaces(
         &self,
         group: &PixelGroup,
@@ -333,8 +351,12 @@ impl ViewRows<'_> {
         mut aovs: Option<&mut [PvrrAov]>,
     ) {
         let texels = self.buffer.texels_x8(&group.x, y);
-        for (&x, t) in group.x.iter().zip(&texels).take(group.len) {
-            let (color, aov) = self.surface(t);
+        let mut triangle = self.triangle_surface(texels[0].triangle);
+        for (i, (&x, t)) in group.x.iter().zip(&texels).take(group.len).enumerate() {
+            if i > 0 && t.triangle != texels[i - 1].triangle {
+                triangle = self.triangle_surface(t.triangle);
+            }
+            let (color, aov) = self.surface(t, &triangle);
             colors[x as usize] = color;
             if let Some(aovs) = aovs.as_deref_mut() {
                 aovs[x as usize] = aov;
@@ -342,9 +364,8 @@ impl ViewRows<'_> {
         }
     }
 
-    /// The colour of a surface texel: a diffuse object shaded, or a reflector's map looked up
-    /// at its vertices' interpolated coordinates (black where they are not all mapped).
-    fn surface(&self, t: &Texel) -> (Vec3, PvrrAov) {
+    /// What shading needs of combined triangle `triangle` of this view's meshes.
+    fn triangle_surface(&self, triangle: u32) -> TriangleSurface<'_> {
         let ViewPass {
             scene,
             plan,
@@ -352,28 +373,44 @@ impl ViewRows<'_> {
             meshes,
             children,
         } = *self.pass;
-        let (mesh, triangle) = meshes.source(t.triangle);
-        let w = t.barycentrics;
+        let (mesh, triangle) = meshes.source(triangle);
         let Some(draw) = view
             .draws
             .iter()
             .find(|d| plan.reflectors[d.reflector].mesh == mesh)
         else {
-            let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
-            return (material.rgb, PvrrAov::default());
+            return TriangleSurface::Diffuse { mesh, triangle };
+        };
+        TriangleSurface::Reflector {
+            corners: scene
+                .mesh(mesh)
+                .map(|m| m.triangles[triangle as usize].map(|v| draw.vertices[v as usize])),
+            map: draw.map.and_then(|m| children.get(m)),
+            kind: plan.reflectors[draw.reflector].kind,
+        }
+    }
+
+    /// The colour of a surface texel on `triangle`: a diffuse object shaded, or a reflector's
+    /// map looked up at its vertices' interpolated coordinates (black where they are not all
+    /// mapped).
+    fn surface(&self, t: &Texel, triangle: &TriangleSurface<'_>) -> (Vec3, PvrrAov) {
+        let w = t.barycentrics;
+        let (corners, map, kind) = match *triangle {
+            TriangleSurface::Diffuse { mesh, triangle } => {
+                let scene = self.pass.scene;
+                let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
+                return (material.rgb, PvrrAov::default());
+            }
+            TriangleSurface::Reflector { corners, map, kind } => (corners, map, kind),
         };
         let covered = PvrrAov {
             covered: true,
             zoom: true,
         };
-        let Some(corners) = scene
-            .mesh(mesh)
-            .map(|m| m.triangles[triangle as usize].map(|v| draw.vertices[v as usize]))
-        else {
+        let Some(corners) = corners else {
             return (Vec3::ZERO, covered);
         };
         let state: f32 = (0..3).map(|k| w[k] * corners[k].state).sum();
-        let map = draw.map.and_then(|m| children.get(m));
         let (Some(map), true) = (map, state <= 0.0) else {
             return (Vec3::ZERO, covered);
         };
@@ -382,10 +419,12 @@ impl ViewRows<'_> {
                 .map(|k| w[k] * Vec2::from_array(corners[k].st[c]))
                 .sum::<Vec2>()
         });
-        let tint = match plan.reflectors[draw.reflector].kind {
-            ReflectorKind::Mirror { f0 } => {
-                mirror_tint(f0, t.n_ws, (t.p_ws - view.camera.eye()).normalize())
-            }
+        let tint = match kind {
+            ReflectorKind::Mirror { f0 } => mirror_tint(
+                f0,
+                t.n_ws,
+                (t.p_ws - self.pass.view.camera.eye()).normalize(),
+            ),
             ReflectorKind::Lens { .. } => Vec3::ONE,
         };
         (
