@@ -1,8 +1,13 @@
 //! The CPU backend at 1024² per method: buffers and kernel separately and together, on the
-//! built-in sphere and the real meshes (Wyman 2005a Table 1 models).
+//! built-in sphere and the real meshes (Wyman 2005a Table 1 models); and the shared stages
+//! alone (scan conversion, the back faces resolved).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use refract_cpu::{CpuRenderer, FrameBuffers, render_buffers_into, shade_into};
+use refract_core::BackSurface;
+use refract_cpu::{
+    BackFaces, CpuRenderer, DepthTest, Faces, FrameBuffers, RasterMesh, SurfaceBuffer,
+    rasterize_into, render_buffers_into, shade_into,
+};
 use refract_geometry::{Mesh, builtin};
 use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
 
@@ -73,6 +78,25 @@ fn cpu_methods(c: &mut Criterion) {
                 })
             });
         }
+        // Stages shared by every rasterising method, alone: scan conversion (visibility only)
+        // and the back faces rasterised and resolved into normals and distances.
+        let raster = RasterMesh::with_scalars(scene.refractor.mesh(), scene.refractor.d_n());
+        let mut surface = SurfaceBuffer::new();
+        group.bench_function("stage/scan-conversion-front", |b| {
+            b.iter(|| {
+                rasterize_into(
+                    &raster,
+                    &camera,
+                    Faces::Front,
+                    DepthTest::Nearest,
+                    &mut surface,
+                )
+            })
+        });
+        let mut back = BackFaces::default();
+        group.bench_function("stage/back-faces-resolved", |b| {
+            b.iter(|| back.render_into(&scene.refractor, &camera, BackSurface::Furthest))
+        });
         group.finish();
     }
 }

@@ -579,7 +579,8 @@ fn image_space_methods_draw_the_objects_the_reference_sees() {
 
 /// Eight texels resolved at once equal the scalar resolve bit for bit: on the torus's small
 /// triangles (lanes on different triangles) and on the sphere at 640², whose triangles span
-/// ~20 pixels (most groups on one triangle: the incremental edge functions).
+/// ~20 pixels (most groups on one triangle: the incremental edge functions); with only some
+/// attributes asked for, those keep their bits and the others are zero.
 #[test]
 fn eight_lane_texels_equal_scalar_texels() {
     for (name, size) in [("torus", 96u32), ("sphere", 640)] {
@@ -594,13 +595,23 @@ fn eight_lane_texels_equal_scalar_texels() {
             for chunk in covered.chunks(8) {
                 let x: [u32; 8] = core::array::from_fn(|i| chunk[i.min(chunk.len() - 1)]);
                 let lanes = front.texels_x8(&x, y);
-                for (xi, lane) in x.iter().zip(lanes) {
+                // Fewer attributes: the same bits for those asked for, zero for the others.
+                let some = front
+                    .attribute_lanes::<{ refract_cpu::raster::Attribute::SCALAR }>(&x, y)
+                    .to_texels();
+                for ((xi, lane), some) in x.iter().zip(lanes).zip(some) {
                     let scalar = front.texel((y * size + xi) as usize).expect("covered");
                     assert_eq!(
                         format!("{lane:?}"),
                         format!("{scalar:?}"),
                         "{name}: ({xi}, {y})"
                     );
+                    let expected = refract_cpu::Texel {
+                        depth: 0.0,
+                        barycentrics: Vec3::ZERO,
+                        ..scalar
+                    };
+                    assert_eq!(format!("{some:?}"), format!("{expected:?}"));
                     checked += 1;
                 }
             }

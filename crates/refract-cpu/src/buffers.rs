@@ -93,7 +93,7 @@ fn resolve_row(band: &Band<'_>, y: u32, eye: Vec3, resolved: &mut [BackTexel]) {
     let span = band.covered_span(y);
     let eye = Vec3x8::splat(eye);
     let resolve = |group: &PixelGroup, resolved: &mut [BackTexel]| {
-        let texels = band.texel_lanes(&group.x, y);
+        let texels = band.attribute_lanes::<0>(&group.x, y);
         let distance = (texels.p_ws - eye).length().to_array();
         let n_ws = texels.n_ws.to_lanes();
         for i in 0..group.len {

@@ -254,6 +254,22 @@ impl ScreenTriangle {
     }
 }
 
+/// The interpolated attributes of a texel beyond its position and normal, as bits: a caller of
+/// [`SurfaceBuffer::attribute_lanes`] or [`Band::attribute_lanes`] names the ones it reads, and
+/// the others are neither gathered nor interpolated (they read zero).
+pub struct Attribute;
+
+impl Attribute {
+    /// [`Texel::depth`].
+    pub const DEPTH: u8 = 1;
+    /// [`Texel::scalar`].
+    pub const SCALAR: u8 = 2;
+    /// [`Texel::barycentrics`].
+    pub const BARYCENTRICS: u8 = 4;
+    /// Every attribute.
+    pub const ALL: u8 = Self::DEPTH | Self::SCALAR | Self::BARYCENTRICS;
+}
+
 /// Eight texels as lanes (structure of arrays): lane `i` holds [`Texel`] `i`'s fields, so a
 /// lane kernel reads them without a transpose.
 #[derive(Clone, Copy, Debug)]
@@ -303,11 +319,18 @@ impl TexelLanes {
 /// [`ScreenTriangle::texel`] for eight pixels (lane `i`: triangle `triangles[i]`, pixel
 /// `(x[i], y)`): the barycentrics lane by lane, the interpolation on eight SIMD lanes with the
 /// same operations in the same order, so each texel has the scalar function's bits.
+///
+/// Only the attributes in `ATTRIBUTES` ([`Attribute`] bits) beside the position and the normal
+/// are gathered and interpolated; the others are zero.
 #[inline]
-fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) -> TexelLanes {
+fn texel_lanes<const ATTRIBUTES: u8>(
+    triangles: [&ScreenTriangle; LANES],
+    x: &[u32; LANES],
+    y: u32,
+) -> TexelLanes {
     let first = triangles[0];
     if triangles.iter().all(|t| core::ptr::eq(*t, first)) {
-        return texel_lanes_one_triangle(first, x, y);
+        return texel_lanes_one_triangle::<ATTRIBUTES>(first, x, y);
     }
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
@@ -323,17 +346,23 @@ fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) ->
         let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
         for k in 0..3 {
             l[k][i] = li[k];
-            depth[k][i] = t.depth[k];
             inv_w[k][i] = t.inv_w[k];
-            scalar[k][i] = t.attributes[k].scalar;
             p[k][i] = t.attributes[k].p_ws;
             n[k][i] = t.attributes[k].n_ws;
-            bary[k][i] = t.attributes[k].bary;
+            if ATTRIBUTES & Attribute::DEPTH != 0 {
+                depth[k][i] = t.depth[k];
+            }
+            if ATTRIBUTES & Attribute::SCALAR != 0 {
+                scalar[k][i] = t.attributes[k].scalar;
+            }
+            if ATTRIBUTES & Attribute::BARYCENTRICS != 0 {
+                bary[k][i] = t.attributes[k].bary;
+            }
         }
     }
     let f = F32x8::new;
     let v = Vec3x8::from_lanes;
-    interpolate_x8(
+    interpolate_x8::<ATTRIBUTES>(
         [f(l[0]), f(l[1]), f(l[2])],
         &CornersX8 {
             depth: [f(depth[0]), f(depth[1]), f(depth[2])],
@@ -350,7 +379,11 @@ fn texel_lanes(triangles: [&ScreenTriangle; LANES], x: &[u32; LANES], y: u32) ->
 /// [`texel_lanes`] where every lane sees the same triangle (most groups of eight, inside a
 /// triangle larger than the group): its corners loaded once and splat, the same operations
 /// per lane, so the same bits.
-fn texel_lanes_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> TexelLanes {
+fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
+    t: &ScreenTriangle,
+    x: &[u32; LANES],
+    y: u32,
+) -> TexelLanes {
     let mut l = [[0.0f32; LANES]; 3];
     let [a, b, c] = t.xy;
     for (i, &x) in x.iter().enumerate() {
@@ -363,7 +396,7 @@ fn texel_lanes_one_triangle(t: &ScreenTriangle, x: &[u32; LANES], y: u32) -> Tex
     let f = F32x8::new;
     let s = F32x8::splat;
     let corner = |k: usize| &t.attributes[k];
-    interpolate_x8(
+    interpolate_x8::<ATTRIBUTES>(
         [f(l[0]), f(l[1]), f(l[2])],
         &CornersX8 {
             depth: t.depth.map(s),
@@ -390,17 +423,34 @@ struct CornersX8 {
 /// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
 /// space, the attributes perspective-correct (`λᵢ/wᵢ` normalised), the normal renormalised.
 #[inline(always)]
-fn interpolate_x8(l: [F32x8; 3], c: &CornersX8, source: [u32; LANES]) -> TexelLanes {
+fn interpolate_x8<const ATTRIBUTES: u8>(
+    l: [F32x8; 3],
+    c: &CornersX8,
+    source: [u32; LANES],
+) -> TexelLanes {
     let [l0, l1, l2] = l;
-    let depth = l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2];
+    let wanted = |attribute: u8| ATTRIBUTES & attribute != 0;
+    let depth = if wanted(Attribute::DEPTH) {
+        l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2]
+    } else {
+        F32x8::ZERO
+    };
     let pw = [l0 * c.inv_w[0], l1 * c.inv_w[1], l2 * c.inv_w[2]];
     let inv_sum = F32x8::ONE / (pw[0] + pw[1] + pw[2]);
     let (w0, w1, w2) = (pw[0] * inv_sum, pw[1] * inv_sum, pw[2] * inv_sum);
     let p_ws = c.p[0] * w0 + c.p[1] * w1 + c.p[2] * w2;
     let (n_ws, n_ok) = (c.n[0] * w0 + c.n[1] * w1 + c.n[2] * w2).try_normalize();
     let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
-    let scalar = w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2];
-    let barycentrics = c.bary[0] * w0 + c.bary[1] * w1 + c.bary[2] * w2;
+    let scalar = if wanted(Attribute::SCALAR) {
+        w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2]
+    } else {
+        F32x8::ZERO
+    };
+    let barycentrics = if wanted(Attribute::BARYCENTRICS) {
+        c.bary[0] * w0 + c.bary[1] * w1 + c.bary[2] * w2
+    } else {
+        Vec3x8::ZERO
+    };
     TexelLanes {
         depth,
         p_ws,
@@ -693,8 +743,18 @@ impl SurfaceBuffer {
     /// If one of the pixels is empty or outside the buffer.
     #[inline]
     pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
+        self.attribute_lanes::<{ Attribute::ALL }>(x, y)
+    }
+
+    /// [`Self::texel_lanes`] with only the position, the normal and the [`Attribute`]s in
+    /// `ATTRIBUTES` (the others zero): the same bits for those, less work.
+    ///
+    /// # Panics
+    /// If one of the pixels is empty or outside the buffer.
+    #[inline]
+    pub fn attribute_lanes<const ATTRIBUTES: u8>(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = (y * self.width) as usize;
-        texel_lanes(
+        texel_lanes::<ATTRIBUTES>(
             gather_triangles(&self.visibility[row..], &self.triangles, x, y),
             x,
             y,
@@ -775,8 +835,14 @@ impl Band<'_> {
     /// [`Self::texels_x8`] as lanes.
     #[inline]
     pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
+        self.attribute_lanes::<{ Attribute::ALL }>(x, y)
+    }
+
+    /// [`SurfaceBuffer::attribute_lanes`] for eight pixels of row `y` of this band.
+    #[inline]
+    pub fn attribute_lanes<const ATTRIBUTES: u8>(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = ((y - self.first_row) * self.width) as usize;
-        texel_lanes(
+        texel_lanes::<ATTRIBUTES>(
             gather_triangles(&self.visibility[row..], self.triangles, x, y),
             x,
             y,
@@ -983,6 +1049,10 @@ fn rasterize_bands_above<O, F>(
     *cleared_for = Some((width, height, test));
 }
 
+/// Triangles wider than this many pixels have each row's inside run solved ([`inside_run`]);
+/// narrower ones test each pixel of their bounds.
+const RUN_MIN_COLUMNS: i64 = 8;
+
 /// The pixels `i` of a row (`0 ≤ i < columns`, from the triangle's left bound) whose centres
 /// are inside: `eₖ + biasₖ + stepₖ·i ≥ 0` for the three edges, where `eₖ` is edge `k` at pixel
 /// 0. Each inequality is linear in `i`, so the solution is one run `first..=last` (`None`:
@@ -1043,16 +1113,23 @@ fn rasterize_band(
         // Edge functions step by −Δy·SUBPIXEL per pixel to the right (exact integer arithmetic).
         // A pixel centre on an edge is inside when the edge is top-left: for integers,
         // `e > 0 || (e == 0 && top_left)` is `e + bias ≥ 0` with bias −1, or 0 on a top-left
-        // edge. Each row's inside pixels are one run, found from the three edges at once
-        // ([`inside_run`]), so the loop below visits only them.
+        // edge. Each row's inside pixels are one run; on wide triangles it is found from the
+        // three edges at once ([`inside_run`]), so the loop below visits only them.
         let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL);
         let bias = [tl0, tl1, tl2].map(|tl| i64::from(tl) - 1);
         let columns = i64::from(t.max[0] - t.min[0]) + 1;
         for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
             let p = pixel_center_fixed(t.min[0], y);
             let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
-            let Some((first, last)) = inside_run(e, step, bias, columns) else {
-                continue;
+            // Narrow triangles (dense meshes: a few pixels a row) test each pixel; solving the run
+            // (three divisions) pays from about a group of eight pixels up.
+            let (first, last) = if columns > RUN_MIN_COLUMNS {
+                match inside_run(e, step, bias, columns) {
+                    Some(run) => run,
+                    None => continue,
+                }
+            } else {
+                (0, columns - 1)
             };
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             let (mut first_written, mut last_written) = (u32::MAX, 0);
@@ -1060,7 +1137,11 @@ fn rasterize_band(
             for x in t.min[0] + first as u32..=t.min[0] + last as u32 {
                 let f = e;
                 e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
-                debug_assert!(((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) >= 0);
+                // All three `e + bias ≥ 0` exactly when their bitwise OR is (no sign bit set);
+                // always true inside a solved run.
+                if ((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) < 0 {
+                    continue;
+                }
                 let depth = t.depth_at(t.barycentrics(f));
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)

@@ -23,7 +23,7 @@ use crate::buffers::BackFaces;
 use crate::image_space::MethodAov;
 use crate::nearby_geometry::{NearbyTexel, NearbyTexture};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{Band, SurfaceBuffer, Texel, TexelLanes};
+use crate::raster::{Attribute, Band, SurfaceBuffer, Texel, TexelLanes};
 
 /// What the per-pixel work of a frame reads.
 pub(crate) struct ShadeContext<'a> {
@@ -65,7 +65,7 @@ pub(crate) trait FrontRow {
     fn is_covered(&self, x: u32) -> bool;
     /// The pixels between the row's first and last covered pixel (none outside is covered).
     fn covered_span(&self) -> Range<u32>;
-    /// The front surfaces of eight covered pixels, as lanes.
+    /// The front surfaces of eight covered pixels, as lanes (position, normal and scalar).
     fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes;
     /// The front surface at pixel `x` (`None` where not covered).
     fn texel(&self, x: u32) -> Option<Texel>;
@@ -86,7 +86,8 @@ impl FrontRow for BandRow<'_, '_> {
         self.band.covered_span(self.y)
     }
     fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes {
-        self.band.texel_lanes(x, self.y)
+        self.band
+            .attribute_lanes::<{ Attribute::SCALAR }>(x, self.y)
     }
     fn texel(&self, x: u32) -> Option<Texel> {
         self.band.texel(x, self.y)
@@ -109,7 +110,8 @@ impl FrontRow for BufferRow<'_> {
         self.buffer.covered_span(self.y)
     }
     fn texel_lanes(&self, x: &[u32; LANES]) -> TexelLanes {
-        self.buffer.texel_lanes(x, self.y)
+        self.buffer
+            .attribute_lanes::<{ Attribute::SCALAR }>(x, self.y)
     }
     fn texel(&self, x: u32) -> Option<Texel> {
         self.buffer.texel((self.y * self.buffer.width + x) as usize)

@@ -28,7 +28,7 @@ use refract_scene::{
 use crate::buffers::{BackFaces, front_faces_into};
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
+use crate::raster::{Attribute, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::scene_meshes::SceneMeshes;
 
 /// One texel of the NG texture: the nearest opaque surface seen through it.
@@ -356,7 +356,9 @@ impl PixelContext<'_> {
         mut aovs: Option<&mut [NearbyAov]>,
     ) {
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
-        let texels = self.front.texel_lanes(&group.x, y);
+        let texels = self
+            .front
+            .attribute_lanes::<{ Attribute::SCALAR }>(&group.x, y);
         let front = FrontLanes {
             p1_ws: texels.p_ws,
             n1_ws: texels.n_ws,

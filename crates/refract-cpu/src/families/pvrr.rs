@@ -22,7 +22,7 @@ use refract_scene::{
 use crate::distance_map::surface_material;
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{DepthTest, Faces, SurfaceBuffer, Texel, rasterize_into};
+use crate::raster::{Attribute, DepthTest, Faces, SurfaceBuffer, Texel, rasterize_into};
 use crate::scene_meshes::SceneMeshes;
 use crate::shade::environment_run;
 
@@ -269,7 +269,7 @@ fn render_view(
 
 /// One rasterised view, shaded row by row: the pixels that see the environment and those that
 /// see a surface each gathered eight at a time (camera rays and sky on lanes, texels resolved
-/// on lanes: [`SurfaceBuffer::texels_x8`], the scalar resolve's bits), the surfaces then shaded
+/// on lanes: [`SurfaceBuffer::attribute_lanes`], the scalar resolve's bits), the surfaces then shaded
 /// one by one.
 struct ViewRows<'a> {
     pass: &'a ViewPass<'a>,
@@ -350,7 +350,11 @@ impl ViewRows<'_> {
         colors: &mut [Vec3],
         mut aovs: Option<&mut [PvrrAov]>,
     ) {
-        let texels = self.buffer.texels_x8(&group.x, y);
+        // Position, normal and barycentrics: what the shading reads.
+        let texels = self
+            .buffer
+            .attribute_lanes::<{ Attribute::BARYCENTRICS }>(&group.x, y)
+            .to_texels();
         let mut triangle = self.triangle_surface(texels[0].triangle);
         for (i, (&x, t)) in group.x.iter().zip(&texels).take(group.len).enumerate() {
             if i > 0 && t.triangle != texels[i - 1].triangle {
