@@ -14,7 +14,7 @@ use core::ops::Range;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
-use refract_core::lanes::{F32x8, LANES, Vec3x8};
+use refract_core::lanes::{F32x8, LANES, Vec3x8, mask_from_lanes};
 use refract_geometry::Mesh;
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
@@ -224,6 +224,52 @@ impl ScreenTriangle {
         e.map(|e| (e as f64 * self.inv_area) as f32)
     }
 
+    /// [`Self::barycentrics`] at pixels `x` of row `y`, eight at once: along a row each edge
+    /// function steps by an exact integer per pixel, so lane `i`'s value is lane 0's plus
+    /// `(xᵢ − x₀)·step`, computed in `f64`, where every integer below 2⁵³ is exact: the same
+    /// integers, scaled and rounded as the scalar function does, so the same bits. A triangle
+    /// whose edge values could reach 2⁵³ (vertices far off screen) takes the scalar path.
+    #[inline]
+    fn barycentrics_x8(&self, x: &[u32; LANES], y: u32) -> [F32x8; 3] {
+        let [a, b, c] = self.xy;
+        let q = pixel_center_fixed(x[0], y);
+        let start = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
+        let step = [c[1] - b[1], a[1] - c[1], b[1] - a[1]].map(|d| -d * SUBPIXEL);
+        let mut offset = [0.0f64; LANES];
+        let mut reach = 0i64;
+        for (o, &xi) in offset.iter_mut().zip(x) {
+            let d = i64::from(xi) - i64::from(x[0]);
+            reach = reach.max(d.abs());
+            *o = d as f64;
+        }
+        const EXACT: i64 = 1 << 53;
+        let exact = (0..3).all(|k| {
+            step[k]
+                .checked_abs()
+                .and_then(|s| s.checked_mul(reach))
+                .and_then(|s| s.checked_add(start[k].checked_abs()?))
+                .is_some_and(|bound| bound < EXACT)
+        });
+        let mut l = [[0.0f32; LANES]; 3];
+        if exact {
+            for k in 0..3 {
+                let (e0, s) = (start[k] as f64, step[k] as f64);
+                for i in 0..LANES {
+                    l[k][i] = ((e0 + offset[i] * s) * self.inv_area) as f32;
+                }
+            }
+        } else {
+            for (i, &xi) in x.iter().enumerate() {
+                let q = pixel_center_fixed(xi, y);
+                let li = self.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+                for k in 0..3 {
+                    l[k][i] = li[k];
+                }
+            }
+        }
+        l.map(F32x8::new)
+    }
+
     #[inline]
     fn depth_at(&self, l: [f32; 3]) -> f32 {
         l[0] * self.depth[0] + l[1] * self.depth[1] + l[2] * self.depth[2]
@@ -289,6 +335,26 @@ pub struct TexelLanes {
 }
 
 impl TexelLanes {
+    /// Lane `i` from `a` where `take_a[i]`, else from `b`.
+    #[inline]
+    fn select(take_a: [bool; LANES], a: &Self, b: &Self) -> Self {
+        let mask = mask_from_lanes(take_a);
+        let mut triangle = b.triangle;
+        for i in 0..LANES {
+            if take_a[i] {
+                triangle[i] = a.triangle[i];
+            }
+        }
+        Self {
+            depth: mask.select(a.depth, b.depth),
+            p_ws: Vec3x8::select(mask, a.p_ws, b.p_ws),
+            n_ws: Vec3x8::select(mask, a.n_ws, b.n_ws),
+            scalar: mask.select(a.scalar, b.scalar),
+            barycentrics: Vec3x8::select(mask, a.barycentrics, b.barycentrics),
+            triangle,
+        }
+    }
+
     /// The texel of each lane.
     pub fn to_texels(&self) -> [Texel; LANES] {
         let (depth, scalar) = (self.depth.to_array(), self.scalar.to_array());
@@ -331,6 +397,30 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     let first = triangles[0];
     if triangles.iter().all(|t| core::ptr::eq(*t, first)) {
         return texel_lanes_one_triangle::<ATTRIBUTES>(first, x, y);
+    }
+    // Up to three triangles (a group straddling one or two edges, the common mixed cases):
+    // each evaluated on every lane with the vector path, then each lane takes its own
+    // triangle's values.
+    let mut distinct = [first; 3];
+    let mut count = 1;
+    for t in triangles {
+        if !distinct[..count].iter().any(|d| core::ptr::eq(*d, t)) {
+            if count == distinct.len() {
+                count += 1;
+                break;
+            }
+            distinct[count] = t;
+            count += 1;
+        }
+    }
+    if count <= distinct.len() {
+        let mut lanes = texel_lanes_one_triangle::<ATTRIBUTES>(first, x, y);
+        for &other in &distinct[1..count] {
+            let on_other = triangles.map(|t| core::ptr::eq(t, other));
+            let values = texel_lanes_one_triangle::<ATTRIBUTES>(other, x, y);
+            lanes = TexelLanes::select(on_other, &values, &lanes);
+        }
+        return lanes;
     }
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
@@ -384,20 +474,10 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
     x: &[u32; LANES],
     y: u32,
 ) -> TexelLanes {
-    let mut l = [[0.0f32; LANES]; 3];
-    let [a, b, c] = t.xy;
-    for (i, &x) in x.iter().enumerate() {
-        let q = pixel_center_fixed(x, y);
-        let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
-        for k in 0..3 {
-            l[k][i] = li[k];
-        }
-    }
-    let f = F32x8::new;
     let s = F32x8::splat;
     let corner = |k: usize| &t.attributes[k];
     interpolate_x8::<ATTRIBUTES>(
-        [f(l[0]), f(l[1]), f(l[2])],
+        t.barycentrics_x8(x, y),
         &CornersX8 {
             depth: t.depth.map(s),
             inv_w: t.inv_w.map(s),
@@ -1201,6 +1281,54 @@ mod tests {
                 None => prop_assert!(expected.is_empty(), "missed {:?}", expected),
                 Some((first, last)) => {
                     prop_assert_eq!(expected, (first..=last).collect::<Vec<_>>());
+                }
+            }
+        }
+    }
+
+    /// A screen triangle with corners `xy` (fixed point) for barycentric tests.
+    fn triangle(xy: [[i64; 2]; 3]) -> ScreenTriangle {
+        let area = edge(xy[0], xy[1], xy[2]).abs().max(1);
+        let corner = Attributes {
+            p_ws: Vec3::ZERO,
+            n_ws: Vec3::Z,
+            scalar: 0.0,
+            bary: Vec3::X,
+        };
+        ScreenTriangle {
+            xy,
+            inv_area: 1.0 / area as f64,
+            depth: [0.5; 3],
+            inv_w: [1.0; 3],
+            attributes: [corner; 3],
+            min: [0, 0],
+            max: [0, 0],
+            source: 0,
+        }
+    }
+
+    proptest! {
+        /// Eight pixels' barycentrics at once have the scalar function's bits, for on-screen
+        /// triangles (the exact `f64` path) and for corners far off screen, where the edge
+        /// values pass 2⁵³ (the scalar path).
+        #[test]
+        fn eight_barycentrics_equal_the_scalar_ones(
+            corners in proptest::array::uniform3(proptest::array::uniform2(-(1i64 << 29)..(1i64 << 29))),
+            near in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
+            far in proptest::bool::ANY,
+            x0 in 0u32..1000,
+            offsets in proptest::array::uniform8(0u32..24),
+            y in 0u32..1000,
+        ) {
+            let t = triangle(if far { corners } else { near });
+            let x = offsets.map(|o| x0 + o);
+            let lanes = t.barycentrics_x8(&x, y).map(|l| l.to_array());
+            let [a, b, c] = t.xy;
+            for (i, &xi) in x.iter().enumerate() {
+                let q = pixel_center_fixed(xi, y);
+                let scalar = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+                for k in 0..3 {
+                    prop_assert_eq!(lanes[k][i].to_bits(), scalar[k].to_bits());
                 }
             }
         }
