@@ -5,9 +5,16 @@
 //!
 //! The scan conversion keeps only what the depth test needs per pixel (window depth and a
 //! triangle id, 8 bytes); the attributes of the surviving fragment are interpolated when a
-//! pixel is read ([`SurfaceBuffer::texel`], [`Band::texels_x8`]), so overdraw costs an edge test
-//! and a depth compare, never an interpolation. A renderer can run its per-pixel work band by
-//! band right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
+//! pixel is read ([`SurfaceBuffer::texel`], eight at a time with [`Band::attribute_lanes`],
+//! only the attributes asked for), so overdraw costs an edge test and a depth compare, never an
+//! interpolation. A texel carries its perspective-correct barycentric weights in its mesh
+//! triangle, through near-plane clipping. A renderer can run its per-pixel work band by band
+//! right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
+//!
+//! Per frame the work follows the geometry: each row records the extent of its covered pixels
+//! ([`Band::covered_span`]), so per-pixel passes skip the rest and the next frame of the same
+//! size clears only those extents; a wide triangle's inside pixels on a row are solved as one
+//! run from its three edge functions, exactly (the same pixels as testing each).
 
 use core::ops::Range;
 
