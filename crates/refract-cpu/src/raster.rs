@@ -821,20 +821,11 @@ impl SurfaceBuffer {
     /// # Panics
     /// If one of the pixels is empty or outside the buffer.
     pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
-        self.texel_lanes(x, y).to_texels()
+        self.attribute_lanes::<{ Attribute::ALL }>(x, y).to_texels()
     }
 
-    /// [`Self::texels_x8`] as lanes.
-    ///
-    /// # Panics
-    /// If one of the pixels is empty or outside the buffer.
-    #[inline]
-    pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
-        self.attribute_lanes::<{ Attribute::ALL }>(x, y)
-    }
-
-    /// [`Self::texel_lanes`] with only the position, the normal and the [`Attribute`]s in
-    /// `ATTRIBUTES` (the others zero): the same bits for those, less work.
+    /// [`Self::texels_x8`] as lanes, with only the position, the normal and the
+    /// [`Attribute`]s in `ATTRIBUTES` (the others zero): the same bits for those, less work.
     ///
     /// # Panics
     /// If one of the pixels is empty or outside the buffer.
@@ -912,17 +903,6 @@ impl Band<'_> {
     /// The number of rows of this band.
     pub fn rows(&self) -> u32 {
         (self.visibility.len() / self.width as usize) as u32
-    }
-
-    /// [`SurfaceBuffer::texels_x8`] for eight pixels of row `y` of this band.
-    pub fn texels_x8(&self, x: &[u32; LANES], y: u32) -> [Texel; LANES] {
-        self.texel_lanes(x, y).to_texels()
-    }
-
-    /// [`Self::texels_x8`] as lanes.
-    #[inline]
-    pub fn texel_lanes(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
-        self.attribute_lanes::<{ Attribute::ALL }>(x, y)
     }
 
     /// [`SurfaceBuffer::attribute_lanes`] for eight pixels of row `y` of this band.
