@@ -236,7 +236,7 @@ impl ScreenTriangle {
     /// `(xᵢ − x₀)·step`, computed in `f64`, where every integer below 2⁵³ is exact: the same
     /// integers, scaled and rounded as the scalar function does, so the same bits. A triangle
     /// whose edge values could reach 2⁵³ (vertices far off screen) takes the scalar path.
-    #[inline]
+    #[inline(always)]
     fn barycentrics_x8(&self, x: &[u32; LANES], y: u32) -> [F32x8; 3] {
         let [a, b, c] = self.xy;
         let q = pixel_center_fixed(x[0], y);
