@@ -401,27 +401,11 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     x: &[u32; LANES],
     y: u32,
 ) -> TexelLanes {
-    let first = triangles[0];
-    if triangles.iter().all(|t| core::ptr::eq(*t, first)) {
-        return texel_lanes_one_triangle::<ATTRIBUTES>(first, x, y);
-    }
-    // Up to three triangles (a group straddling one or two edges, the common mixed cases):
-    // each evaluated on every lane with the vector path, then each lane takes its own
-    // triangle's values.
-    let mut distinct = [first; 3];
-    let mut count = 1;
-    for t in triangles {
-        if !distinct[..count].iter().any(|d| core::ptr::eq(*d, t)) {
-            if count == distinct.len() {
-                count += 1;
-                break;
-            }
-            distinct[count] = t;
-            count += 1;
-        }
-    }
-    if count <= distinct.len() {
-        let mut lanes = texel_lanes_one_triangle::<ATTRIBUTES>(first, x, y);
+    // At most three triangles (one: inside a triangle; two or three: straddling one or two
+    // edges, the common mixed cases): each evaluated on every lane with the vector path, then
+    // each lane takes its own triangle's values.
+    if let Some((distinct, count)) = at_most_three(&triangles) {
+        let mut lanes = texel_lanes_one_triangle::<ATTRIBUTES>(distinct[0], x, y);
         for &other in &distinct[1..count] {
             let on_other = triangles.map(|t| core::ptr::eq(t, other));
             let values = texel_lanes_one_triangle::<ATTRIBUTES>(other, x, y);
@@ -495,6 +479,27 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
         },
         [t.source; LANES],
     )
+}
+
+/// The distinct triangles of eight lanes, in lane order, and how many there are; `None` when
+/// there are more than three.
+#[inline]
+fn at_most_three<'t>(
+    triangles: &[&'t ScreenTriangle; LANES],
+) -> Option<([&'t ScreenTriangle; 3], usize)> {
+    let mut distinct = [triangles[0]; 3];
+    let mut count = 1;
+    for &t in triangles {
+        if distinct[..count].iter().any(|d| core::ptr::eq(*d, t)) {
+            continue;
+        }
+        if count == distinct.len() {
+            return None;
+        }
+        distinct[count] = t;
+        count += 1;
+    }
+    Some((distinct, count))
 }
 
 /// The corner values of eight lanes' triangles.
