@@ -128,7 +128,9 @@ struct DmBracket {
     taken: u32,
 }
 
-fn dm_linear_search(layer: u32, x: vec3<f32>, r: vec3<f32>, a: f32, t_lo: f32, t_hi: f32, steps: u32, skip_cos: f32) -> DmBracket {
+// With `stop`, ends without a bracket after the first sample at or beyond `d_stop` (the best
+// hit so far).
+fn dm_linear_search(layer: u32, x: vec3<f32>, r: vec3<f32>, a: f32, t_lo: f32, t_hi: f32, steps: u32, skip_cos: f32, stop: bool, d_stop: f32) -> DmBracket {
     var out: DmBracket;
     out.found = false;
     out.taken = steps + 1u;
@@ -146,21 +148,25 @@ fn dm_linear_search(layer: u32, x: vec3<f32>, r: vec3<f32>, a: f32, t_lo: f32, t
         let p_len = length(p);
         if stored <= 0.0 || dot(p, x) > skip_cos * p_len * x_len {
             has_previous = false;
-            continue;
+        } else {
+            let ratio = p_len / stored;
+            if has_previous && ((ratio_prev < 1.0) != (ratio < 1.0)) && (two_sided || ratio_prev < 1.0) {
+                out.d_near = d_prev;
+                out.ratio_near = ratio_prev;
+                out.d_far = d;
+                out.ratio_far = ratio;
+                out.found = true;
+                out.taken = i + 1u;
+                return out;
+            }
+            has_previous = true;
+            d_prev = d;
+            ratio_prev = ratio;
         }
-        let ratio = p_len / stored;
-        if has_previous && ((ratio_prev < 1.0) != (ratio < 1.0)) && (two_sided || ratio_prev < 1.0) {
-            out.d_near = d_prev;
-            out.ratio_near = ratio_prev;
-            out.d_far = d;
-            out.ratio_far = ratio;
-            out.found = true;
+        if stop && d >= d_stop {
             out.taken = i + 1u;
             return out;
         }
-        has_previous = true;
-        d_prev = d;
-        ratio_prev = ratio;
     }
     return out;
 }
@@ -236,19 +242,22 @@ fn dm_hit(x: vec3<f32>, r: vec3<f32>, start: i32, search: DmSearch) -> DmHit {
                 continue;
             }
         }
-        let s = x + r * dm_ray_parameter(t_lo, a);
+        // A layer whose first sample lies behind the best hit so far cannot beat it.
+        let d_first = dm_ray_parameter(t_lo, a);
+        if out.found && d_first >= out.d {
+            continue;
+        }
+        let s = x + r * d_first;
         let e = x + r * dm_ray_parameter(t_hi, a);
         let steps = dm_linear_steps(s, e, search);
         var skip_cos = 2.0;
         if start == i32(layer) {
             skip_cos = skip_cos_start;
         }
-        let bracket = dm_linear_search(layer, x, r, a, t_lo, t_hi, steps, skip_cos);
+        // A bracket behind the best hit so far cannot win: the search stops there.
+        let bracket = dm_linear_search(layer, x, r, a, t_lo, t_hi, steps, skip_cos, out.found, out.d);
         out.linear_steps += bracket.taken;
         if !bracket.found {
-            continue;
-        }
-        if out.found && bracket.d_near >= out.d {
             continue;
         }
         let refined = dm_secant(layer, x, r, bracket, search.secant_steps);

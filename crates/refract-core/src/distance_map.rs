@@ -203,7 +203,10 @@ pub struct Bracket {
 /// (`|r|/|r'| < 1` undershooting, `≥ 1` overshooting): in either order for a two-sided layer,
 /// only undershooting then overshooting (a surface met from the reference point's side)
 /// otherwise. An empty texel restarts the search; so do samples whose direction is within
-/// `skip_cos` (a cosine) of the start direction `x`. Returns the bracket and the samples taken.
+/// `skip_cos` (a cosine) of the start direction `x`. The search ends, without a bracket, after
+/// the first sample at or beyond ray parameter `d_stop` (`None`: no limit): [`hit`]
+/// passes the best hit so far, since every later bracket would start behind it (the samples'
+/// `d` never decrease). Returns the bracket and the samples taken.
 ///
 /// The samples are independent of one another: they are computed eight at a time on SIMD lanes
 /// (each lane the scalar operations in the scalar order, so the same bits as one at a time:
@@ -221,6 +224,7 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
     t_hi: f32,
     steps: u32,
     skip_cos: f32,
+    d_stop: Option<f32>,
 ) -> (Option<Bracket>, u32) {
     let dt = (t_hi - t_lo) / steps as f32;
     let two_sided = layers.two_sided(layer);
@@ -245,24 +249,27 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
             let (d, p_len) = (d[k], p_len[k]);
             if stored[k] <= 0.0 || toward[k] > skip_cos * p_len * x_len {
                 previous = None;
-                continue;
+            } else {
+                let ratio = p_len / stored[k];
+                if let Some((d_prev, ratio_prev)) = previous
+                    && (ratio_prev < 1.0) != (ratio < 1.0)
+                    && (two_sided || ratio_prev < 1.0)
+                {
+                    return (
+                        Some(Bracket {
+                            d_near: d_prev,
+                            ratio_near: ratio_prev,
+                            d_far: d,
+                            ratio_far: ratio,
+                        }),
+                        first + k as u32 + 1,
+                    );
+                }
+                previous = Some((d, ratio));
             }
-            let ratio = p_len / stored[k];
-            if let Some((d_prev, ratio_prev)) = previous
-                && (ratio_prev < 1.0) != (ratio < 1.0)
-                && (two_sided || ratio_prev < 1.0)
-            {
-                return (
-                    Some(Bracket {
-                        d_near: d_prev,
-                        ratio_near: ratio_prev,
-                        d_far: d,
-                        ratio_far: ratio,
-                    }),
-                    first + k as u32 + 1,
-                );
+            if d_stop.is_some_and(|stop| d >= stop) {
+                return (None, first + k as u32 + 1);
             }
-            previous = Some((d, ratio));
         }
         first += LANES as u32;
     }
@@ -329,14 +336,43 @@ pub struct SearchWork {
     pub secant_steps: u32,
 }
 
+/// The texture-space parameters `[t_lo, t_hi]` of the ray `x + R d` that [`hit`] searches in
+/// layer `layer` (`a = |x|`): `[T_START, T_END]`, or with min-max the part inside the layer's
+/// shell widened by [`MIN_MAX_MARGIN`] ([`shell_segment`]); `None` where there is nothing to
+/// search (an empty layer, a ray that misses the shell).
+#[inline]
+pub fn layer_segment<L: DistanceLayers + ?Sized>(
+    layers: &L,
+    layer: usize,
+    x: Vec3,
+    r: Vec3,
+    a: f32,
+    params: &SearchParams,
+) -> Option<(f32, f32)> {
+    if !params.min_max {
+        return Some((T_START, T_END));
+    }
+    let (r_min, r_max) = layers.range(layer)?;
+    let (r_min, r_max) = (
+        r_min * (1.0 - MIN_MAX_MARGIN),
+        r_max * (1.0 + MIN_MAX_MARGIN),
+    );
+    let (d_lo, d_hi) = shell_segment(x, r, r_min, r_max)?;
+    let t_lo = texture_parameter(d_lo, a).max(T_START);
+    let t_hi = texture_parameter(d_hi, a).min(T_END);
+    (t_hi > t_lo).then_some((t_lo, t_hi))
+}
+
 /// `Hit()` of §17.2: the first intersection of the ray `x + R d` (`R` unit, `x` in cube-map
 /// space) with the layers. Each layer is searched linearly in `t` from [`T_START`] (or, with
 /// min-max, from the layer's shell widened by [`MIN_MAX_MARGIN`], [`shell_segment`]) in
-/// [`linear_steps`] steps; each layer's bracket is refined by [`secant`] (unless it lies
-/// behind the best hit so far) and the nearest refined hit wins. (The chapter refines only the
-/// layer with the nearest overshooting sample; with per-layer step counts a coarse bracket in
-/// the front layer can then lose to a finer one behind it, which showed as surfaces seen
-/// through walls once depth-peeled layers were added.) `start` is the layer the ray starts on, ignored near the start
+/// [`linear_steps`] steps, ending at the best hit so far (a bracket that starts behind it
+/// cannot win: the secant stays inside its bracket); each layer's bracket is refined by
+/// [`secant`] and the nearest refined hit wins: the hit of searching every layer to its end,
+/// with fewer samples. (The chapter refines only the layer with the nearest overshooting
+/// sample; with per-layer step counts a coarse bracket in the front layer can then lose to a
+/// finer one behind it, which showed as surfaces seen through walls once depth-peeled layers
+/// were added.) `start` is the layer the ray starts on, ignored near the start
 /// ([`START_SKIP_TEXELS`]; no self-intersection).
 #[inline]
 pub fn hit<L: DistanceLayers + ?Sized>(
@@ -352,25 +388,18 @@ pub fn hit<L: DistanceLayers + ?Sized>(
     let mut work = SearchWork::default();
     let mut best: Option<LayerHit> = None;
     for layer in 0..layers.layer_count().min(MAX_LAYERS) {
-        let (mut t_lo, mut t_hi) = (T_START, T_END);
-        if params.min_max {
-            let Some((r_min, r_max)) = layers.range(layer) else {
-                continue;
-            };
-            let (r_min, r_max) = (
-                r_min * (1.0 - MIN_MAX_MARGIN),
-                r_max * (1.0 + MIN_MAX_MARGIN),
-            );
-            let Some((d_lo, d_hi)) = shell_segment(x, r, r_min, r_max) else {
-                continue;
-            };
-            t_lo = texture_parameter(d_lo, a).max(T_START);
-            t_hi = texture_parameter(d_hi, a).min(T_END);
-            if t_hi <= t_lo {
-                continue;
-            }
+        let Some((t_lo, t_hi)) = layer_segment(layers, layer, x, r, a, params) else {
+            continue;
+        };
+        // A bracket that starts behind the best hit so far cannot beat it (the secant stays
+        // inside its bracket): the search stops there, and a layer whose first sample lies
+        // behind it is not searched.
+        let d_stop = best.map(|b| b.d);
+        let d_first = ray_parameter(t_lo, a);
+        if d_stop.is_some_and(|stop| d_first >= stop) {
+            continue;
         }
-        let s = x + r * ray_parameter(t_lo, a);
+        let s = x + r * d_first;
         let e = x + r * ray_parameter(t_hi, a);
         let steps = linear_steps(s, e, params);
         let skip_cos = if start == Some(layer) {
@@ -378,14 +407,12 @@ pub fn hit<L: DistanceLayers + ?Sized>(
         } else {
             2.0 // no direction is that close
         };
-        let (found, taken) = linear_search(layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos);
+        let (found, taken) =
+            linear_search(layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos, d_stop);
         work.linear_steps += taken;
         let Some(bracket) = found else {
             continue;
         };
-        if best.is_some_and(|b| bracket.d_near >= b.d) {
-            continue; // this layer's crossing lies behind the best hit
-        }
         let (d, secant_steps) = secant(layers, layer, x, r, bracket, params.secant_steps);
         work.secant_steps += secant_steps;
         if best.is_none_or(|b| d < b.d) {
@@ -788,6 +815,137 @@ mod tests {
         }
     }
 
+    /// [`hit`] without its cut: every layer searched to its end, every bracket refined, the
+    /// nearest refined hit (the first layer on a tie).
+    fn exhaustive_hit<L: DistanceLayers + ?Sized>(
+        layers: &L,
+        x: Vec3,
+        r: Vec3,
+        start: Option<usize>,
+        params: &SearchParams,
+    ) -> (Option<LayerHit>, u32) {
+        let a = x.length().max(1e-6);
+        let skip_cos_start =
+            crate::math::sin_cos(START_SKIP_TEXELS * 2.0 / layers.face_size() as f32).1;
+        let (mut best, mut samples): (Option<LayerHit>, u32) = (None, 0);
+        for layer in 0..layers.layer_count() {
+            let Some((t_lo, t_hi)) = layer_segment(layers, layer, x, r, a, params) else {
+                continue;
+            };
+            let (s, e) = (
+                x + r * ray_parameter(t_lo, a),
+                x + r * ray_parameter(t_hi, a),
+            );
+            let steps = linear_steps(s, e, params);
+            let skip_cos = if start == Some(layer) {
+                skip_cos_start
+            } else {
+                2.0
+            };
+            let (found, taken) =
+                scalar_linear_search(layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos, None);
+            samples += taken;
+            let Some(bracket) = found else { continue };
+            let (d, _) = secant(layers, layer, x, r, bracket, params.secant_steps);
+            if best.is_none_or(|b| d < b.d) {
+                best = Some(LayerHit {
+                    layer: layer as u32,
+                    d,
+                });
+            }
+        }
+        (best, samples)
+    }
+
+    /// [`AnalyticRoom`] with its layers in the other order: the wall is searched first, so the
+    /// sphere's search runs with a stop beyond its crossing.
+    struct WallFirst(AnalyticRoom);
+
+    impl DistanceLayers for WallFirst {
+        fn layer_count(&self) -> usize {
+            2
+        }
+        fn face_size(&self) -> u32 {
+            self.0.face_size()
+        }
+        fn distance(&self, layer: usize, dir: Vec3) -> f32 {
+            self.0.distance(1 - layer, dir)
+        }
+        fn range(&self, layer: usize) -> Option<(f32, f32)> {
+            self.0.range(1 - layer)
+        }
+        fn two_sided(&self, layer: usize) -> bool {
+            self.0.two_sided(1 - layer)
+        }
+    }
+
+    /// Two concentric spheres close together (radii in layer order), the outer one first: a
+    /// ray from inside crosses the inner one just before the outer one, often within one
+    /// linear step.
+    struct CloseShells([f32; 2]);
+
+    impl DistanceLayers for CloseShells {
+        fn layer_count(&self) -> usize {
+            2
+        }
+        fn face_size(&self) -> u32 {
+            256
+        }
+        fn distance(&self, layer: usize, _dir: Vec3) -> f32 {
+            self.0[layer]
+        }
+        fn range(&self, layer: usize) -> Option<(f32, f32)> {
+            Some((self.0[layer], self.0[layer]))
+        }
+        fn two_sided(&self, _layer: usize) -> bool {
+            true
+        }
+    }
+
+    /// Stopping each layer's search at the best hit so far changes no hit, on rays from inside
+    /// the sphere, from its surface and from beyond it, in every direction, with and without
+    /// min-max, with the layers in either order; and it saves samples (a search that never
+    /// stops would fail the last check).
+    #[test]
+    fn stopping_at_the_best_hit_finds_the_exhaustive_hit() {
+        let (mut rays, mut hits, mut saved) = (0, 0, 0);
+        let room = AnalyticRoom { size: 48 };
+        let wall_first = WallFirst(AnalyticRoom { size: 48 });
+        let shells = CloseShells([1.03, 1.0]);
+        let orders: [(&dyn DistanceLayers, usize); 3] =
+            [(&room, 0), (&wall_first, 1), (&shells, 0)];
+        for ((layers, sphere), min_max) in orders.into_iter().flat_map(|o| [(o, false), (o, true)])
+        {
+            let params = SearchParams {
+                min_max,
+                ..SearchParams::default()
+            };
+            for k in 0..600 {
+                let phi = k as f32 * 2.399_963;
+                let z = ((k * 7 % 600) as f32 / 600.0) * 1.96 - 0.98;
+                let ring = (1.0 - z * z).sqrt();
+                let r = Vec3::new(ring * phi.cos(), z, ring * phi.sin());
+                let (x, start) = match k % 3 {
+                    0 => (Vec3::new(0.3, -0.2, 0.5), None),
+                    1 => (Vec3::new(0.0, -0.6, 0.8), Some(sphere)),
+                    _ => (Vec3::new(-1.7, 0.4, 1.1), None),
+                };
+                let (found, work) = hit(layers, x, r, start, &params);
+                let (expected, samples) = exhaustive_hit(layers, x, r, start, &params);
+                assert_eq!(found, expected, "ray {k}, min-max {min_max}");
+                assert!(work.linear_steps <= samples);
+                rays += 1;
+                hits += usize::from(found.is_some());
+                saved += usize::from(work.linear_steps < samples);
+            }
+        }
+        assert!(hits > rays * 3 / 4, "{hits} of {rays} rays hit");
+        assert!(
+            saved > rays / 4,
+            "{saved} of {rays} rays took fewer samples"
+        );
+    }
+
     /// The linear search one sample at a time, as it was before the lanes (Listing 17-1).
     #[allow(clippy::too_many_arguments)]
     fn scalar_linear_search<L: DistanceLayers + ?Sized>(
@@ -800,6 +958,7 @@ mod tests {
         t_hi: f32,
         steps: u32,
         skip_cos: f32,
+        d_stop: Option<f32>,
     ) -> (Option<Bracket>, u32) {
         let dt = (t_hi - t_lo) / steps as f32;
         let two_sided = layers.two_sided(layer);
@@ -808,11 +967,18 @@ mod tests {
         for i in 0..=steps {
             let t = (t_lo + dt * i as f32).min(t_hi);
             let d = ray_parameter(t, a);
+            let beyond = |d: f32| d_stop.is_some_and(|stop| d >= stop);
+            if previous.is_some_and(|(d_prev, _)| beyond(d_prev)) {
+                return (None, i); // every bracket from here starts at or beyond d_stop
+            }
             let p = x + r * d;
             let stored = layers.distance(layer, p);
             let p_len = p.length();
             if stored <= 0.0 || p.dot(x) > skip_cos * p_len * x_len {
                 previous = None;
+                if beyond(d) {
+                    return (None, i + 1);
+                }
                 continue;
             }
             let ratio = p_len / stored;
@@ -842,6 +1008,7 @@ mod tests {
             steps in 1u32..90,
             t in (0.0f32..0.9, 0.0f32..1.0),
             skip in proptest::bool::ANY,
+            stop in proptest::option::of(0.0f32..6.0),
         ) {
             let layers = AnalyticRoom { size: 32 };
             let (x, r) = (Vec3::from_array(x), Vec3::from_array(r));
@@ -850,8 +1017,9 @@ mod tests {
             let t_lo = T_START + t.0;
             let t_hi = (t_lo + t.1 * (T_END - t_lo)).max(t_lo);
             let skip_cos = if skip { 0.999 } else { 2.0 };
-            let lanes = linear_search(&layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos);
-            let scalar = scalar_linear_search(&layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos);
+            let lanes = linear_search(&layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos, stop);
+            let scalar =
+                scalar_linear_search(&layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos, stop);
             // Bit for bit (`PartialEq` on the floats, and the sample counts).
             proptest::prop_assert_eq!(lanes, scalar);
         }
@@ -872,9 +1040,9 @@ mod tests {
                 (1.0 - z * z).sqrt() * phi.sin(),
             );
             let x = Vec3::new(0.3, -0.2, 0.5);
-            let lanes = linear_search(&layers, 1, x, r, x.length(), T_START, T_END, 37, 2.0);
+            let lanes = linear_search(&layers, 1, x, r, x.length(), T_START, T_END, 37, 2.0, None);
             let scalar =
-                scalar_linear_search(&layers, 1, x, r, x.length(), T_START, T_END, 37, 2.0);
+                scalar_linear_search(&layers, 1, x, r, x.length(), T_START, T_END, 37, 2.0, None);
             assert_eq!(lanes, scalar, "ray {k}");
             found += usize::from(lanes.0.is_some());
         }
