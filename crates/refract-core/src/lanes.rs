@@ -195,6 +195,19 @@ impl Neg for Vec3x8 {
     }
 }
 
+/// Component by component, as `Vec3 * Vec3`.
+impl Mul for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn mul(self, rhs: Self) -> Self {
+        Self {
+            x: self.x * rhs.x,
+            y: self.y * rhs.y,
+            z: self.z * rhs.z,
+        }
+    }
+}
+
 /// Scales each lane's vector by that lane's scalar.
 impl Mul<F32x8> for Vec3x8 {
     type Output = Self;
@@ -237,6 +250,35 @@ impl Vec2x8 {
         Self {
             x: F32x8::new(x),
             y: F32x8::new(y),
+        }
+    }
+
+    /// The same point in every lane.
+    #[inline]
+    pub const fn splat(v: Vec2) -> Self {
+        Self {
+            x: F32x8::splat(v.x),
+            y: F32x8::splat(v.y),
+        }
+    }
+
+    /// Each lane's point.
+    #[inline]
+    pub fn to_lanes(self) -> [Vec2; LANES] {
+        let (x, y) = (self.x.to_array(), self.y.to_array());
+        let mut lanes = [Vec2::ZERO; LANES];
+        for (i, lane) in lanes.iter_mut().enumerate() {
+            *lane = Vec2::new(x[i], y[i]);
+        }
+        lanes
+    }
+
+    /// Lane-wise `if mask { a } else { b }`.
+    #[inline]
+    pub fn select(mask: Mask, a: Self, b: Self) -> Self {
+        Self {
+            x: mask.select(a.x, b.x),
+            y: mask.select(a.y, b.y),
         }
     }
 }

@@ -15,6 +15,7 @@
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
 use crate::camera::{Camera, CameraDesc, CameraError};
+use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, lt};
 
 /// Where a vertex's exact ray ends: a scene point, or a direction to the environment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -416,6 +417,69 @@ pub fn mirror_tint(f0: Vec3, n: Vec3, v: Vec3) -> Vec3 {
     f0 + (Vec3::ONE - f0) * m5
 }
 
+/// [`sample_bilinear`] at eight positions: lane `i` is `sample_bilinear(map, st_i)`, bit for
+/// bit (the same operations on lanes; the four texels of each lane gathered one by one).
+#[inline]
+pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 {
+    let (w, h) = map.size();
+    // f32::clamp(0, hi): a NaN stays NaN.
+    let clamp = |v: F32x8, hi: u32| {
+        let v = lt(v, F32x8::ZERO).select(F32x8::ZERO, v);
+        let hi = F32x8::splat((hi - 1) as f32);
+        v.simd_gt(hi).select(hi, v)
+    };
+    let x = clamp(st.x - F32x8::splat(0.5), w);
+    let y = clamp(st.y - F32x8::splat(0.5), h);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0.to_array(), y0.to_array());
+    let mut corners = [[Vec3::ZERO; LANES]; 4];
+    for i in 0..LANES {
+        let (x0, y0) = (x0[i] as u32, y0[i] as u32);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        corners[0][i] = map.texel(x0, y0);
+        corners[1][i] = map.texel(x1, y0);
+        corners[2][i] = map.texel(x0, y1);
+        corners[3][i] = map.texel(x1, y1);
+    }
+    let [t00, t10, t01, t11] = corners.map(|c| Vec3x8::from_lanes(&c));
+    let (gx, gy) = (F32x8::ONE - fx, F32x8::ONE - fy);
+    let top = t00 * gx + t10 * fx;
+    let bottom = t01 * gx + t11 * fx;
+    top * gy + bottom * fy
+}
+
+/// [`lookup`] at eight pixels: lane `i` is `lookup(map, [st[0]_i, st[1]_i, st[2]_i], tint_i)`,
+/// bit for bit; the second and third channels' lookups are made only when some lane's
+/// coordinates differ per channel.
+#[inline]
+pub fn lookup_x8<M: MapTexels + ?Sized>(map: &M, st: [Vec2x8; 3], tint: Vec3x8) -> Vec3x8 {
+    let r = sample_bilinear_x8(map, st[0]);
+    let equal = |a: Vec2x8, b: Vec2x8| a.x.simd_eq(b.x) & a.y.simd_eq(b.y);
+    let shared: Mask = equal(st[1], st[0]) & equal(st[2], st[0]);
+    if shared.all() {
+        return r * tint;
+    }
+    let g = sample_bilinear_x8(map, st[1]);
+    let b = sample_bilinear_x8(map, st[2]);
+    let split = Vec3x8 {
+        x: r.x,
+        y: g.y,
+        z: b.z,
+    };
+    Vec3x8::select(shared, r, split) * tint
+}
+
+/// [`mirror_tint`] at eight pixels, bit for bit.
+#[inline]
+pub fn mirror_tint_x8(f0: Vec3, n: Vec3x8, v: Vec3x8) -> Vec3x8 {
+    let cos = n.dot(v).abs();
+    // f32::min(cos, 1): a NaN gives 1.
+    let m = F32x8::ONE - lt(cos, F32x8::ONE).select(cos, F32x8::ONE);
+    let m5 = m * m * m * m * m;
+    Vec3x8::splat(f0) + Vec3x8::splat(Vec3::ONE - f0) * m5
+}
+
 /// One vertex of a reflector as both backends draw it: its map position per channel (R, G, B)
 /// and its state (`shaders/pvrr.wgsl`, `struct PvrrVertex`; the second vertex buffer of the
 /// reflector pass).
@@ -691,5 +755,75 @@ mod tests {
         assert_eq!(mirror_tint(Vec3::ONE, Vec3::Z, Vec3::X), Vec3::ONE);
         let f = mirror_tint(Vec3::splat(0.5), Vec3::Z, Vec3::Z);
         assert!((f - Vec3::splat(0.5)).length() < 1e-6);
+    }
+
+    /// A map whose texels differ in every bit pattern (no two neighbours alike).
+    struct Noise(u32, u32);
+    impl MapTexels for Noise {
+        fn size(&self) -> (u32, u32) {
+            (self.0, self.1)
+        }
+        fn texel(&self, x: u32, y: u32) -> Vec3 {
+            let h = (x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663)) % 10_007;
+            Vec3::new(
+                h as f32 / 997.0,
+                (h % 101) as f32 * 0.37,
+                1.0 / (1.0 + h as f32),
+            )
+        }
+    }
+
+    /// Lane `i` of the eight-lane lookup, tint and bilinear sample is the scalar function's,
+    /// bit for bit: inside the map, past its edges, on texel centres, with one position for
+    /// the three channels and with three (chromatic aberration), NaN positions included.
+    #[test]
+    fn eight_lane_lookups_equal_the_scalar_ones_bit_for_bit() {
+        let map = Noise(37, 23);
+        let mut state = 11u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 40) as f32) / (1u64 << 24) as f32
+        };
+        let bits = |v: Vec3| {
+            v.to_array()
+                .map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() })
+        };
+        for round in 0..2000 {
+            let mut position = || match (next() * 12.0) as u32 {
+                0 => Vec2::new(-3.0 + 50.0 * next(), 40.0 * next() - 8.0),
+                1 => Vec2::new((next() * 37.0).floor() + 0.5, (next() * 23.0).floor() + 0.5),
+                2 => Vec2::new(f32::NAN, 3.0),
+                _ => Vec2::new(37.0 * next(), 23.0 * next()),
+            };
+            let st: [[Vec2; 3]; LANES] = core::array::from_fn(|_| {
+                let first = position();
+                if round % 2 == 0 {
+                    [first; 3]
+                } else {
+                    [first, position(), position()]
+                }
+            });
+            let n: [Vec3; LANES] = core::array::from_fn(|_| {
+                Vec3::new(next() - 0.5, next() - 0.5, next()).normalize_or_zero()
+            });
+            let v: [Vec3; LANES] = core::array::from_fn(|_| {
+                Vec3::new(next() - 0.5, next() - 0.5, -next()).normalize_or_zero()
+            });
+            let f0 = Vec3::new(0.9, 0.6 * next(), 0.3);
+            let tint = mirror_tint_x8(f0, Vec3x8::from_lanes(&n), Vec3x8::from_lanes(&v));
+            let channels = [0, 1, 2].map(|c| Vec2x8::from_lanes(&st.map(|s| s[c])));
+            let looked_up = lookup_x8(&map, channels, tint).to_lanes();
+            let sampled = sample_bilinear_x8(&map, channels[1]).to_lanes();
+            let tint = tint.to_lanes();
+            for i in 0..LANES {
+                let scalar_tint = mirror_tint(f0, n[i], v[i]);
+                assert_eq!(bits(tint[i]), bits(scalar_tint), "tint, lane {i}");
+                assert_eq!(bits(sampled[i]), bits(sample_bilinear(&map, st[i][1])));
+                let scalar = lookup(&map, st[i], scalar_tint);
+                assert_eq!(bits(looked_up[i]), bits(scalar), "{:?}", st[i]);
+            }
+        }
     }
 }

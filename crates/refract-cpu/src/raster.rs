@@ -481,16 +481,14 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
     )
 }
 
-/// The distinct triangles of eight lanes, in lane order, and how many there are; `None` when
-/// there are more than three.
+/// The distinct values of eight lanes (triangles, triangle ids), in lane order, and how many
+/// there are; `None` when there are more than three.
 #[inline]
-fn at_most_three<'t>(
-    triangles: &[&'t ScreenTriangle; LANES],
-) -> Option<([&'t ScreenTriangle; 3], usize)> {
-    let mut distinct = [triangles[0]; 3];
+pub(crate) fn at_most_three<T: Copy + Distinct>(lanes: &[T; LANES]) -> Option<([T; 3], usize)> {
+    let mut distinct = [lanes[0]; 3];
     let mut count = 1;
-    for &t in triangles {
-        if distinct[..count].iter().any(|d| core::ptr::eq(*d, t)) {
+    for &t in lanes {
+        if distinct[..count].iter().any(|d| d.same(t)) {
             continue;
         }
         if count == distinct.len() {
@@ -500,6 +498,26 @@ fn at_most_three<'t>(
         count += 1;
     }
     Some((distinct, count))
+}
+
+/// What [`at_most_three`] compares: a triangle by identity, an id by value.
+pub(crate) trait Distinct {
+    /// Whether `self` and `other` are the same.
+    fn same(self, other: Self) -> bool;
+}
+
+impl Distinct for &ScreenTriangle {
+    #[inline]
+    fn same(self, other: Self) -> bool {
+        core::ptr::eq(self, other)
+    }
+}
+
+impl Distinct for u32 {
+    #[inline]
+    fn same(self, other: Self) -> bool {
+        self == other
+    }
 }
 
 /// The corner values of eight lanes' triangles.

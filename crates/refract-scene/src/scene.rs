@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
 use refract_core::distance_map::TexelMaterial;
 pub use refract_core::fresnel::Conductor;
+use refract_core::lanes::{F32x8, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{MAX_PLANES, Plane};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
 
@@ -252,6 +253,16 @@ pub const COLOR_CHART: [[f32; 3]; 24] = [
     [0.031, 0.032, 0.032],
 ];
 
+/// [`Albedo::ColorChart`] at `uv`.
+#[inline]
+fn color_chart(uv: Vec2) -> Vec3 {
+    if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
+        return Vec3::splat(0.18);
+    }
+    let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
+    Vec3::from_array(COLOR_CHART[row * 6 + col])
+}
+
 impl Albedo {
     /// The albedo at texture coordinates `uv` (or world `xz` for meshes without uvs).
     pub fn at(&self, uv: Vec2) -> Vec3 {
@@ -265,17 +276,54 @@ impl Albedo {
                     b
                 }
             }
-            Self::ColorChart => {
-                if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
-                    return Vec3::splat(0.18);
-                }
-                let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
-                Vec3::from_array(COLOR_CHART[row * 6 + col])
-            }
+            Self::ColorChart => color_chart(uv),
             Self::Wood { light, dark, rings } => {
                 let r = Vec2::new(uv.x - 0.5, (uv.y - 0.5) * 0.25).length();
                 let f = (rings * r + 0.15 * (40.0 * uv.x).sin()).rem_euclid(1.0);
                 light + (dark - light) * (f * f)
+            }
+        }
+    }
+
+    /// [`Self::at`] at eight texture coordinates: lane `i` is `at(uv_i)`, bit for bit (a NaN
+    /// for a NaN). The
+    /// checker's parity and the wood's `fract` are exact lane operations (`a − 2⌊a/2⌋` of an
+    /// integer-valued float, `a − trunc(a)`, equal to `rem_euclid`'s `fmodf`); the wood's
+    /// `sin` and the colour chart's table are per lane.
+    pub fn at_x8(&self, uv: Vec2x8) -> Vec3x8 {
+        let splat = F32x8::splat;
+        match *self {
+            Self::Constant(c) => Vec3x8::splat(c),
+            Self::Checker { a, b, squares } => {
+                let cells = (uv.x * splat(squares)).floor() + (uv.y * splat(squares)).floor();
+                let parity = cells - splat(2.0) * (cells * splat(0.5)).floor();
+                Vec3x8::select(
+                    parity.simd_lt(F32x8::ONE),
+                    Vec3x8::splat(a),
+                    Vec3x8::splat(b),
+                )
+            }
+            Self::ColorChart => {
+                let (u, v) = (uv.x.to_array(), uv.y.to_array());
+                let mut patches = [Vec3::ZERO; 8];
+                for (i, patch) in patches.iter_mut().enumerate() {
+                    *patch = color_chart(Vec2::new(u[i], v[i]));
+                }
+                Vec3x8::from_lanes(&patches)
+            }
+            Self::Wood { light, dark, rings } => {
+                let (dx, dy) = (uv.x - splat(0.5), (uv.y - splat(0.5)) * splat(0.25));
+                let r = (dx * dx + dy * dy).sqrt();
+                let u = uv.x.to_array();
+                let mut wave = [0.0f32; 8];
+                for (w, u) in wave.iter_mut().zip(u) {
+                    *w = (40.0 * u).sin();
+                }
+                let a = splat(rings) * r + splat(0.15) * F32x8::new(wave);
+                // `a % 1` (fmodf, exact) is `a − trunc(a)`; `rem_euclid` adds 1 below 0.
+                let rem = a - a.trunc();
+                let f = rem.simd_lt(F32x8::ZERO).select(rem + F32x8::ONE, rem);
+                Vec3x8::splat(light) + Vec3x8::splat(dark - light) * (f * f)
             }
         }
     }
@@ -362,6 +410,33 @@ impl Object {
         (1.0 - barycentrics.x - barycentrics.y) * a + barycentrics.x * b + barycentrics.y * c
     }
 
+    /// [`Self::uv_at`] at eight points of triangle `triangle`: lane `i` is
+    /// `uv_at(triangle, barycentrics_i, p_ws_i)`, bit for bit.
+    pub fn uv_at_x8(&self, triangle: u32, barycentrics: Vec2x8, p_ws: Vec3x8) -> Vec2x8 {
+        if self.mesh.uvs.is_empty() {
+            return Vec2x8 {
+                x: p_ws.x,
+                y: p_ws.z,
+            };
+        }
+        let [a, b, c] = self.mesh.triangles[triangle as usize].map(|i| self.mesh.uvs[i as usize]);
+        let w0 = F32x8::ONE - barycentrics.x - barycentrics.y;
+        let (w1, w2) = (barycentrics.x, barycentrics.y);
+        let (a, b, c) = (Vec2x8::splat(a), Vec2x8::splat(b), Vec2x8::splat(c));
+        Vec2x8 {
+            x: w0 * a.x + w1 * b.x + w2 * c.x,
+            y: w0 * a.y + w1 * b.y + w2 * c.y,
+        }
+    }
+
+    /// [`Self::shade`] at eight points: lane `i` is `shade(light, uv_i, n_i)`, bit for bit.
+    pub fn shade_x8(&self, light: &DirectionalLight, uv: Vec2x8, n: Vec3x8) -> Vec3x8 {
+        match &self.material {
+            Material::Diffuse(albedo) => light.shade_x8(albedo.at_x8(uv), n),
+            Material::Conductor(_) => Vec3x8::ZERO,
+        }
+    }
+
     /// The plane that stands for this object in the ray-plane and iterative lookups of
     /// Wyman 2005b §4.2–4.3 (the paper leaves the choice to the user): the object's own plane
     /// when it is planar ([`Self::own_plane`]), otherwise the plane through its bounding-sphere
@@ -441,6 +516,12 @@ impl DirectionalLight {
     /// Diffuse radiance leaving a surface of `albedo` with unit normal `n`, seen from either side.
     pub fn shade(&self, albedo: Vec3, n: Vec3) -> Vec3 {
         albedo * (self.ambient + n.dot(self.direction).abs() * self.radiance)
+    }
+
+    /// [`Self::shade`] on eight lanes, bit for bit.
+    pub fn shade_x8(&self, albedo: Vec3x8, n: Vec3x8) -> Vec3x8 {
+        let cos = n.dot(Vec3x8::splat(self.direction)).abs();
+        albedo * (Vec3x8::splat(self.ambient) + cos * Vec3x8::splat(self.radiance))
     }
 }
 
@@ -587,5 +668,114 @@ impl Scene {
                 err.to_string(),
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use refract_core::lanes::LANES;
+
+    /// A tiny deterministic generator (no dependency for unit tests).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.next()
+        }
+    }
+
+    /// The bits of each component, every NaN as one value (lanes and scalar code may differ in
+    /// a NaN's sign and payload only).
+    fn bits(v: Vec3) -> [u32; 3] {
+        v.to_array()
+            .map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() })
+    }
+
+    /// Texture coordinates around the uv square, far outside it, on cell and ring edges, and a
+    /// few non-finite ones.
+    fn coordinates(rng: &mut Lcg) -> [Vec2; LANES] {
+        core::array::from_fn(|_| match (rng.next() * 20.0) as u32 {
+            0 => Vec2::new(rng.range(-1e7, 1e7), rng.range(-1e9, 1e9)),
+            1 => Vec2::new(
+                (rng.next() * 16.0).floor() / 8.0,
+                -(rng.next() * 16.0).floor() / 4.0,
+            ),
+            2 => Vec2::new(f32::NAN, 0.5),
+            3 => Vec2::new(0.5, f32::INFINITY),
+            _ => Vec2::new(rng.range(-3.0, 4.0), rng.range(-3.0, 4.0)),
+        })
+    }
+
+    #[test]
+    fn eight_lanes_of_shading_equal_the_scalar_shading_bit_for_bit() {
+        let albedos = [
+            Albedo::Constant(Vec3::new(0.2, 0.4, 0.6)),
+            Albedo::Checker {
+                a: Vec3::splat(0.9),
+                b: Vec3::new(0.1, 0.2, 0.05),
+                squares: 8.0,
+            },
+            Albedo::ColorChart,
+            Albedo::WOOD,
+        ];
+        let light = DirectionalLight {
+            direction: Vec3::new(0.3, 0.8, -0.52).normalize(),
+            radiance: Vec3::new(1.0, 0.95, 0.9),
+            ambient: Vec3::splat(0.15),
+        };
+        let mut plane = refract_geometry::shapes::plane(3.0, 4).expect("plane");
+        // Stretch the uvs past the unit square, so the lanes see cell edges and rings.
+        plane
+            .uvs
+            .iter_mut()
+            .for_each(|uv| *uv = *uv * 5.0 - Vec2::splat(2.0));
+        let mut no_uvs = plane.clone();
+        no_uvs.uvs.clear();
+        let mut rng = Lcg(3);
+        for albedo in &albedos {
+            for mesh in [&plane, &no_uvs] {
+                let object =
+                    Object::new(mesh.clone(), Material::Diffuse(albedo.clone())).expect("object");
+                for round in 0..300 {
+                    let uv = coordinates(&mut rng);
+                    let lanes = albedo.at_x8(Vec2x8::from_lanes(&uv)).to_lanes();
+                    for (lane, uv) in lanes.iter().zip(uv) {
+                        assert_eq!(bits(*lane), bits(albedo.at(uv)), "{albedo:?} at {uv}");
+                    }
+                    let triangle = round % mesh.triangles.len() as u32;
+                    let w: [Vec2; LANES] = core::array::from_fn(|_| {
+                        Vec2::new(rng.range(-0.2, 1.0), rng.range(-0.2, 1.0))
+                    });
+                    let p: [Vec3; LANES] = core::array::from_fn(|_| {
+                        Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0))
+                    });
+                    let n: [Vec3; LANES] = core::array::from_fn(|_| {
+                        Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.3).normalize()
+                    });
+                    let uv_lanes =
+                        object.uv_at_x8(triangle, Vec2x8::from_lanes(&w), Vec3x8::from_lanes(&p));
+                    let shaded = object
+                        .shade_x8(&light, uv_lanes, Vec3x8::from_lanes(&n))
+                        .to_lanes();
+                    for i in 0..LANES {
+                        let uv = object.uv_at(triangle, w[i], p[i]);
+                        let uv_lane = uv_lanes.to_lanes()[i];
+                        assert_eq!(
+                            uv_lane.to_array().map(f32::to_bits),
+                            uv.to_array().map(f32::to_bits)
+                        );
+                        assert_eq!(bits(shaded[i]), bits(object.shade(&light, uv, n[i])));
+                    }
+                }
+            }
+        }
     }
 }

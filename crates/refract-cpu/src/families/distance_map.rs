@@ -17,6 +17,7 @@ use refract_core::distance_map::{
     DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
     TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, trace_path,
 };
+use refract_core::lanes::{Vec2x8, Vec3x8};
 use refract_core::{Camera, CubeFace};
 use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, PixelLayers, RenderError, Scene,
@@ -309,6 +310,31 @@ pub fn surface_material(
                     ),
                     ior: 0.0,
                 },
+            }
+        }
+    }
+}
+
+/// [`surface_material`]'s `rgb` at eight points of one triangle (barycentrics `w`, positions
+/// `p_ws`, normals `n_ws` as lanes): lane `i` bit for bit the scalar function's.
+pub fn surface_rgb_x8(
+    scene: &Scene,
+    mesh: SceneMesh,
+    triangle: u32,
+    w: Vec3x8,
+    p_ws: Vec3x8,
+    n_ws: Vec3x8,
+) -> Vec3x8 {
+    match mesh {
+        SceneMesh::Refractor => Vec3x8::splat(scene.refractor.texel_material().rgb),
+        SceneMesh::Object(k) => {
+            let object = &scene.objects[k];
+            match object.conductor() {
+                Some(c) => Vec3x8::splat(c.f0()),
+                None => {
+                    let uv = object.uv_at_x8(triangle, Vec2x8 { x: w.y, y: w.z }, p_ws);
+                    object.shade_x8(&scene.light, uv, n_ws)
+                }
             }
         }
     }

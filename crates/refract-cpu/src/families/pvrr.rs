@@ -11,18 +11,20 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
-use refract_core::lanes::{LANES, Vec2x8};
+use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes, mask_lanes};
 use refract_core::pvrr::PvrrVertex;
-use refract_core::pvrr::{MapTexels, lookup, mirror_tint};
+use refract_core::pvrr::{MapTexels, lookup, lookup_x8, mirror_tint, mirror_tint_x8};
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
 use refract_scene::{
     Aov, Frame, FrameOutputs, LayerValue, PixelLayers, PvrrParams, RenderError, Scene, SceneMesh,
 };
 
-use crate::distance_map::surface_material;
+use crate::distance_map::{surface_material, surface_rgb_x8};
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
-use crate::raster::{Attribute, DepthTest, Faces, SurfaceBuffer, Texel, rasterize_into};
+use crate::raster::{
+    Attribute, DepthTest, Faces, SurfaceBuffer, Texel, TexelLanes, at_most_three, rasterize_into,
+};
 use crate::scene_meshes::SceneMeshes;
 use crate::shade::environment_run;
 
@@ -340,32 +342,129 @@ impl ViewRows<'_> {
         }
     }
 
-    /// Eight pixels that see a surface. Neighbouring pixels mostly see the same triangle: what
-    /// a pixel's shading needs of its triangle (which mesh, which reflector draw, its corners'
-    /// map positions) is looked up once per run of pixels on it.
+    /// Eight pixels that see a surface, shaded on lanes ([`Self::shade_lanes`]).
     fn surfaces(
         &self,
         group: &PixelGroup,
         y: u32,
         colors: &mut [Vec3],
-        mut aovs: Option<&mut [PvrrAov]>,
+        aovs: Option<&mut [PvrrAov]>,
     ) {
         // Position, normal and barycentrics: what the shading reads.
         let texels = self
             .buffer
-            .attribute_lanes::<{ Attribute::BARYCENTRICS }>(&group.x, y)
-            .to_texels();
-        let mut triangle = self.triangle_surface(texels[0].triangle);
-        for (i, (&x, t)) in group.x.iter().zip(&texels).take(group.len).enumerate() {
-            if i > 0 && t.triangle != texels[i - 1].triangle {
-                triangle = self.triangle_surface(t.triangle);
-            }
-            let (color, aov) = self.surface(t, &triangle);
+            .attribute_lanes::<{ Attribute::BARYCENTRICS }>(&group.x, y);
+        let (color, aov) = self.shade_lanes(&texels);
+        let color = color.to_lanes();
+        for (&x, color) in group.x.iter().zip(color).take(group.len) {
             colors[x as usize] = color;
-            if let Some(aovs) = aovs.as_deref_mut() {
+        }
+        if let Some(aovs) = aovs {
+            for (&x, aov) in group.x.iter().zip(aov).take(group.len) {
                 aovs[x as usize] = aov;
             }
         }
+    }
+
+    /// The colours and AOVs of eight surface texels, lane `i` bit for bit
+    /// [`Self::surface`]'s for texel `i`. Neighbouring pixels mostly see the same triangle:
+    /// each of the group's triangles (at most three; with more, lane by lane) is looked up
+    /// once ([`Self::triangle_surface`]) and shaded on all eight lanes, each lane keeping its
+    /// own triangle's values.
+    fn shade_lanes(&self, texels: &TexelLanes) -> (Vec3x8, [PvrrAov; LANES]) {
+        let Some((distinct, count)) = at_most_three(&texels.triangle) else {
+            let texels = texels.to_texels();
+            let (mut colors, mut aovs) = ([Vec3::ZERO; LANES], [PvrrAov::default(); LANES]);
+            for (i, t) in texels.iter().enumerate() {
+                (colors[i], aovs[i]) = self.surface(t, &self.triangle_surface(t.triangle));
+            }
+            return (Vec3x8::from_lanes(&colors), aovs);
+        };
+        let (mut color, mut covered, mut zoom) =
+            self.triangle_lanes(texels, &self.triangle_surface(distinct[0]));
+        for &other in &distinct[1..count] {
+            let mut on_other = [false; LANES];
+            for (on, &t) in on_other.iter_mut().zip(&texels.triangle) {
+                *on = t == other;
+            }
+            let on_other = mask_from_lanes(on_other);
+            let (c, v, z) = self.triangle_lanes(texels, &self.triangle_surface(other));
+            color = Vec3x8::select(on_other, c, color);
+            (covered, zoom) = (on_other.select(v, covered), on_other.select(z, zoom));
+        }
+        let (covered, zoom) = (mask_lanes(covered), mask_lanes(zoom));
+        let mut aovs = [PvrrAov::default(); LANES];
+        for (i, aov) in aovs.iter_mut().enumerate() {
+            *aov = PvrrAov {
+                covered: covered[i],
+                zoom: zoom[i],
+            };
+        }
+        (color, aovs)
+    }
+
+    /// [`Self::surface`] on all eight lanes as if each were on `triangle`: the colours and the
+    /// lanes' `covered` and `zoom` AOVs as masks.
+    fn triangle_lanes(
+        &self,
+        t: &TexelLanes,
+        triangle: &TriangleSurface<'_>,
+    ) -> (Vec3x8, Mask, Mask) {
+        let (none, all) = (
+            mask_from_lanes([false; LANES]),
+            mask_from_lanes([true; LANES]),
+        );
+        let (corners, map, kind) = match *triangle {
+            TriangleSurface::Diffuse { mesh, triangle } => {
+                let rgb = surface_rgb_x8(
+                    self.pass.scene,
+                    mesh,
+                    triangle,
+                    t.barycentrics,
+                    t.p_ws,
+                    t.n_ws,
+                );
+                return (rgb, none, none);
+            }
+            TriangleSurface::Reflector { corners, map, kind } => (corners, map, kind),
+        };
+        let (Some(corners), Some(map)) = (corners, map) else {
+            return (Vec3x8::ZERO, all, all);
+        };
+        let w = [t.barycentrics.x, t.barycentrics.y, t.barycentrics.z];
+        // As the scalar sums: the state from the first term, the positions from zero.
+        let state = w[0] * F32x8::splat(corners[0].state)
+            + w[1] * F32x8::splat(corners[1].state)
+            + w[2] * F32x8::splat(corners[2].state);
+        let looked_up = state.simd_le(F32x8::ZERO);
+        if looked_up.none() {
+            return (Vec3x8::ZERO, all, all);
+        }
+        // (Loops, not `array::map`: its closures are not always inlined.)
+        let mut st = [Vec2x8::splat(Vec2::ZERO); 3];
+        for (c, st) in st.iter_mut().enumerate() {
+            for (k, w) in w.iter().enumerate() {
+                let [x, y] = corners[k].st[c];
+                *st = Vec2x8 {
+                    x: st.x + *w * F32x8::splat(x),
+                    y: st.y + *w * F32x8::splat(y),
+                };
+            }
+        }
+        let tint = match kind {
+            ReflectorKind::Mirror { f0 } => {
+                let to_texel = t.p_ws - Vec3x8::splat(self.pass.view.camera.eye());
+                let view = to_texel * (F32x8::ONE / to_texel.length());
+                mirror_tint_x8(f0, t.n_ws, view)
+            }
+            ReflectorKind::Lens { .. } => Vec3x8::splat(Vec3::ONE),
+        };
+        let color = lookup_x8(map, st, tint);
+        (
+            Vec3x8::select(looked_up, color, Vec3x8::ZERO),
+            all,
+            !looked_up,
+        )
     }
 
     /// What shading needs of combined triangle `triangle` of this view's meshes.
@@ -438,5 +537,105 @@ impl ViewRows<'_> {
                 zoom: false,
             },
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use refract_scene::MethodId;
+
+    /// Every surface pixel of every view (the eye and each map) shaded on lanes is lane by
+    /// lane the scalar shading's, bit for bit: a convex mirror with its map, a stack of maps,
+    /// and a lens with chromatic aberration (three map positions per vertex), whose views hold
+    /// diffuse objects of every albedo, reflectors looked up and not, and groups on one, two,
+    /// three and more triangles.
+    #[test]
+    fn lane_shading_equals_the_scalar_shading_bit_for_bit() {
+        let mut groups_by_triangles = [0usize; 5];
+        for (name, dispersion) in [
+            ("convex-mirror", 0),
+            ("mirror-stack", 0),
+            ("spectacles", 10),
+        ] {
+            let scene = Arc::new(refract_eval::load_scene(name).expect(name).scene);
+            let camera = scene.camera(120, 96).expect("camera");
+            let params = PvrrParams {
+                resolution: 128,
+                dispersion,
+                ..PvrrParams::DEFAULT
+            };
+            let mut passes = PvrrPasses::default();
+            passes.prepare(&scene);
+            let cx = FrameCx {
+                scene: &scene,
+                camera: &camera,
+                method: MethodId::Pvrr,
+                outputs: FrameOutputs::Color,
+            };
+            passes
+                .render(&cx, &params, &mut Frame::default())
+                .expect("frame");
+            let plan = passes.last_plan();
+            for (index, view) in plan.views.iter().enumerate() {
+                let children = ChildMaps {
+                    first: index + 1,
+                    images: &passes.images[index + 1..],
+                };
+                let pass = ViewPass {
+                    scene: &scene,
+                    plan,
+                    view,
+                    meshes: match view.excluded {
+                        Some(k) => &passes.without[k],
+                        None => &passes.everything,
+                    },
+                    children: &children,
+                };
+                let buffer = &passes.buffers[index];
+                let rows = ViewRows {
+                    pass: &pass,
+                    buffer,
+                };
+                for y in 0..view.camera.height() {
+                    let row = (y * buffer.width) as usize;
+                    let covered: Vec<u32> = buffer
+                        .covered_span(y)
+                        .filter(|&x| buffer.is_covered(row + x as usize))
+                        .collect();
+                    for chunk in covered.chunks(LANES) {
+                        let mut group = PixelGroup::new();
+                        chunk.iter().for_each(|&x| _ = group.push(x));
+                        group.pad();
+                        let texels =
+                            buffer.attribute_lanes::<{ Attribute::BARYCENTRICS }>(&group.x, y);
+                        let triangles = (1..=LANES)
+                            .filter(|&i| {
+                                !texels.triangle[..i - 1].contains(&texels.triangle[i - 1])
+                            })
+                            .count();
+                        groups_by_triangles[triangles.min(4)] += 1;
+                        let (colors, aovs) = rows.shade_lanes(&texels);
+                        let colors = colors.to_lanes();
+                        for (i, t) in texels.to_texels().iter().enumerate() {
+                            let (color, aov) = rows.surface(t, &rows.triangle_surface(t.triangle));
+                            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                            assert_eq!(
+                                bits(colors[i]),
+                                bits(color),
+                                "{name}, view {index}, ({}, {y})",
+                                group.x[i]
+                            );
+                            assert_eq!(aovs[i], aov);
+                        }
+                    }
+                }
+            }
+        }
+        // Every path was taken: one, two, three and more triangles per group.
+        assert!(
+            groups_by_triangles[1..].iter().all(|&n| n > 0),
+            "{groups_by_triangles:?}"
+        );
     }
 }
