@@ -442,7 +442,10 @@ pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 
         corners[2][i] = map.texel(x0, y1);
         corners[3][i] = map.texel(x1, y1);
     }
-    let [t00, t10, t01, t11] = corners.map(|c| Vec3x8::from_lanes(&c));
+    // (Not `array::map`: its closure is not always inlined, and this runs per pixel.)
+    let [t00, t10, t01, t11] = &corners;
+    let (t00, t10) = (Vec3x8::from_lanes(t00), Vec3x8::from_lanes(t10));
+    let (t01, t11) = (Vec3x8::from_lanes(t01), Vec3x8::from_lanes(t11));
     let (gx, gy) = (F32x8::ONE - fx, F32x8::ONE - fy);
     let top = t00 * gx + t10 * fx;
     let bottom = t01 * gx + t11 * fx;
