@@ -1,5 +1,6 @@
 //! refract-core's per-pixel kernels over precomputed buffers of an analytic sphere (1024²):
-//! the cost of the math alone, without rasterisation; and the distance-map search over
+//! the cost of the math alone, without rasterisation; the `pvrr` map lookup; and the
+//! distance-map search over
 //! analytic layers.
 
 use std::hint::black_box;
@@ -206,5 +207,62 @@ fn distance_search(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernels, distance_search);
+/// The `pvrr` map lookup alone (`refract_core::pvrr::lookup`, one pixel at a time, and
+/// `lookup_x8`, eight): a 1024 × 1024 map read bilinearly at the positions a convex mirror's
+/// 512 × 512 pixels would read, a smooth magnified warp of the map (each map row read along a
+/// curve), as the eye view of `convex-mirror` does; one thread, the CPU backend's map type.
+fn pvrr_lookup(c: &mut Criterion) {
+    use glam::{Vec2, Vec3};
+    use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
+    use refract_core::pvrr::{lookup, lookup_x8};
+    use refract_cpu::pvrr::Image;
+    let map = Image {
+        width: 1024,
+        height: 1024,
+        texels: (0..1024 * 1024)
+            .map(|i| Vec3::new((i % 1024) as f32, (i / 1024) as f32, 1.0))
+            .collect(),
+    };
+    let side = 512;
+    let positions: Vec<Vec2> = (0..side * side)
+        .map(|i| {
+            let (u, v) = (
+                (i % side) as f32 / side as f32,
+                (i / side) as f32 / side as f32,
+            );
+            let (du, dv) = (u - 0.5, v - 0.5);
+            let bulge = 1.0 - 0.6 * (du * du + dv * dv);
+            Vec2::new(
+                512.0 + 1000.0 * du * bulge,
+                512.0 + 1000.0 * dv * bulge + 80.0 * du * du,
+            )
+        })
+        .collect();
+    let mut group = c.benchmark_group("core/pvrr_lookup");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(positions.len() as u64));
+    group.bench_function("lookup", |b| {
+        b.iter(|| {
+            positions
+                .iter()
+                .map(|st| lookup(&map, [black_box(*st); 3], Vec3::ONE).x)
+                .sum::<f32>()
+        })
+    });
+    group.bench_function("lookup_x8", |b| {
+        b.iter(|| {
+            positions
+                .chunks_exact(LANES)
+                .map(|st| {
+                    let st = Vec2x8::from_lanes(black_box(st.try_into().expect("eight")));
+                    let tint = Vec3x8::splat(Vec3::ONE);
+                    lookup_x8(&map, [st; 3], tint).x.reduce_add()
+                })
+                .sum::<f32>()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernels, distance_search, pvrr_lookup);
 criterion_main!(benches);

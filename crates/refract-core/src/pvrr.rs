@@ -378,6 +378,10 @@ pub trait MapTexels {
     fn size(&self) -> (u32, u32);
     /// Radiance of texel `(x, y)` (row-major from the top).
     fn texel(&self, x: u32, y: u32) -> Vec3;
+    /// A hint that texel `(x, y)` (inside the map) is about to be read: an implementation may
+    /// prefetch its memory. The default does nothing.
+    #[inline]
+    fn prefetch(&self, _x: u32, _y: u32) {}
 }
 
 /// Bilinear lookup of `map` at pixel position `st` (texel centres at `i + 0.5`), clamped to the
@@ -455,8 +459,13 @@ pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 
 /// [`lookup`] at eight pixels: lane `i` is `lookup(map, [st[0]_i, st[1]_i, st[2]_i], tint_i)`,
 /// bit for bit; the second and third channels' lookups are made only when some lane's
 /// coordinates differ per channel.
+///
+/// The lookups wait on memory (a map is megabytes, read along the curves a reflector's rows
+/// trace through it), so the texels the next eight pixels of a row will read, extrapolated
+/// linearly from these eight lanes' positions, are announced first ([`MapTexels::prefetch`]).
 #[inline]
 pub fn lookup_x8<M: MapTexels + ?Sized>(map: &M, st: [Vec2x8; 3], tint: Vec3x8) -> Vec3x8 {
+    prefetch_ahead(map, st[0]);
     let r = sample_bilinear_x8(map, st[0]);
     let equal = |a: Vec2x8, b: Vec2x8| a.x.simd_eq(b.x) & a.y.simd_eq(b.y);
     let shared: Mask = equal(st[1], st[0]) & equal(st[2], st[0]);
@@ -471,6 +480,24 @@ pub fn lookup_x8<M: MapTexels + ?Sized>(map: &M, st: [Vec2x8; 3], tint: Vec3x8) 
         z: b.z,
     };
     Vec3x8::select(shared, r, split) * tint
+}
+
+/// Announces the map rows the next eight pixels' lookups will likely read: lanes 8, 12 and
+/// 16 of the line through lane 0 and lane 7's positions (a hint; nothing is read).
+#[inline]
+fn prefetch_ahead<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) {
+    let (w, h) = map.size();
+    let (x, y) = (st.x.to_array(), st.y.to_array());
+    let (dx, dy) = ((x[7] - x[0]) / 7.0, (y[7] - y[0]) / 7.0);
+    for lane in [8.0, 12.0, 16.0] {
+        // The texel whose centre is at or left of and above the position, as the lookup's.
+        let (px, py) = (x[0] + dx * lane - 0.5, y[0] + dy * lane - 0.5);
+        if px >= 0.0 && py >= 0.0 && px < w as f32 && py < h as f32 {
+            let (px, py) = (px as u32, py as u32);
+            map.prefetch(px, py);
+            map.prefetch(px, (py + 1).min(h - 1));
+        }
+    }
 }
 
 /// [`mirror_tint`] at eight pixels, bit for bit.
