@@ -89,6 +89,11 @@ pub trait DistanceLayers {
     /// point): the specular object's layers (rays inside glass); the other geometry is opaque
     /// and only hit from the reference point's side.
     fn two_sided(&self, layer: usize) -> bool;
+    /// A hint that [`Self::distance`] is about to be read in these eight directions (the
+    /// linear search's next samples): an implementation may prefetch the texels' memory. The
+    /// default does nothing.
+    #[inline]
+    fn prefetch_x8(&self, _layer: usize, _dirs: &[Vec3; LANES]) {}
     /// [`Self::distance`] in eight directions (the linear search's lanes); an implementation
     /// may look them up together, with the same results.
     #[inline]
@@ -230,23 +235,34 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
     let two_sided = layers.two_sided(layer);
     let x_len = x.length();
     let (x8, r8) = (Vec3x8::splat(x), Vec3x8::splat(r));
-    let mut previous: Option<(f32, f32)> = None;
-    let mut first = 0u32;
-    while first <= steps {
+    // Samples `first..first + 8`: ray parameters and points.
+    let samples = |first: u32| {
         let mut index = [0.0f32; LANES];
         for (k, i) in index.iter_mut().enumerate() {
             *i = (first + k as u32) as f32;
         }
         let t = (F32x8::splat(t_lo) + F32x8::splat(dt) * F32x8::new(index)).min(F32x8::splat(t_hi));
         let d = F32x8::splat(a) * t / (F32x8::ONE - t);
-        let p = x8 + r8 * d;
+        (d, x8 + r8 * d)
+    };
+    let mut previous: Option<(f32, f32)> = None;
+    let mut first = 0u32;
+    let (mut d, mut p) = samples(0);
+    while first <= steps {
+        // The next eight samples' texels are announced before this group's are read: the
+        // search waits on memory (layers of megabytes).
+        let next = first + LANES as u32;
+        let (d_next, p_next) = samples(next);
+        if next <= steps {
+            layers.prefetch_x8(layer, &p_next.to_lanes());
+        }
         let p_lanes = p.to_lanes();
         let stored = layers.distance_x8(layer, &p_lanes);
         let p_len = p.length().to_array();
         let toward = p.dot(x8).to_array();
-        let d = d.to_array();
+        let d_lanes = d.to_array();
         for k in 0..LANES.min((steps - first + 1) as usize) {
-            let (d, p_len) = (d[k], p_len[k]);
+            let (d, p_len) = (d_lanes[k], p_len[k]);
             if stored[k] <= 0.0 || toward[k] > skip_cos * p_len * x_len {
                 previous = None;
             } else {
@@ -271,7 +287,7 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
                 return (None, first + k as u32 + 1);
             }
         }
-        first += LANES as u32;
+        (first, d, p) = (next, d_next, p_next);
     }
     (None, steps + 1)
 }

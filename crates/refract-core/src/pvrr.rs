@@ -465,10 +465,14 @@ pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 
 /// linearly from these eight lanes' positions, are announced first ([`MapTexels::prefetch`]).
 #[inline]
 pub fn lookup_x8<M: MapTexels + ?Sized>(map: &M, st: [Vec2x8; 3], tint: Vec3x8) -> Vec3x8 {
-    prefetch_ahead(map, st[0]);
-    let r = sample_bilinear_x8(map, st[0]);
     let equal = |a: Vec2x8, b: Vec2x8| a.x.simd_eq(b.x) & a.y.simd_eq(b.y);
     let shared: Mask = equal(st[1], st[0]) & equal(st[2], st[0]);
+    prefetch_ahead(map, st[0]);
+    if !shared.all() {
+        prefetch_ahead(map, st[1]);
+        prefetch_ahead(map, st[2]);
+    }
+    let r = sample_bilinear_x8(map, st[0]);
     if shared.all() {
         return r * tint;
     }

@@ -21,6 +21,7 @@ pub mod buffers;
 pub mod families;
 pub mod family;
 mod pixel_group;
+mod prefetch;
 pub mod raster;
 pub mod renderer;
 pub mod scene_meshes;

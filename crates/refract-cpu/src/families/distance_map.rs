@@ -17,7 +17,7 @@ use refract_core::distance_map::{
     DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
     TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, trace_path,
 };
-use refract_core::lanes::{Vec2x8, Vec3x8};
+use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::{Camera, CubeFace};
 use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, PixelLayers, RenderError, Scene,
@@ -25,6 +25,7 @@ use refract_scene::{
 };
 
 use crate::family::{CpuFamily, FrameCx};
+use crate::prefetch::prefetch;
 use crate::raster::{
     DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
 };
@@ -272,6 +273,20 @@ impl DistanceLayers for MapScene<'_> {
             return -1.0;
         };
         self.map.layers[layer].distance[cube_texel_index(face, texel, self.map.size) as usize]
+    }
+
+    /// Prefetches the eight texels' cache lines: a ray's samples are texels apart in layers of
+    /// megabytes.
+    #[inline]
+    fn prefetch_x8(&self, layer: usize, dirs: &[Vec3; LANES]) {
+        let distance = &self.map.layers[layer].distance;
+        for dir in dirs {
+            if let Some((face, texel)) = cube_texel(*dir, self.map.size)
+                && let Some(d) = distance.get(cube_texel_index(face, texel, self.map.size) as usize)
+            {
+                prefetch(d);
+            }
+        }
     }
 
     fn range(&self, layer: usize) -> Option<(f32, f32)> {

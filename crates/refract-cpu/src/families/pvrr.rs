@@ -22,6 +22,7 @@ use refract_scene::{
 use crate::distance_map::{surface_material, surface_rgb_x8};
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
+use crate::prefetch::prefetch;
 use crate::raster::{
     Attribute, DepthTest, Faces, SurfaceBuffer, Texel, TexelLanes, at_most_three, rasterize_into,
 };
@@ -49,23 +50,13 @@ impl MapTexels for Image {
         self.texels[(y * self.width + x) as usize]
     }
 
-    /// Prefetches the texel's cache line (x86-64; elsewhere nothing): the eye view's lookups
-    /// read a map of megabytes along curves the hardware prefetchers do not follow.
+    /// Prefetches the texel's cache line: the eye view's lookups read a map of megabytes
+    /// along curves the hardware prefetchers do not follow.
     #[inline]
     fn prefetch(&self, x: u32, y: u32) {
-        #[cfg(target_arch = "x86_64")]
         if let Some(texel) = self.texels.get((y * self.width + x) as usize) {
-            use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            // SAFETY: a prefetch is a hint: it reads nothing architecturally and cannot fault;
-            // the address is a texel of this map besides. SSE, which it needs, is part of
-            // every x86-64 CPU.
-            #[allow(unsafe_code)]
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(core::ptr::from_ref(texel).cast());
-            }
+            prefetch(texel);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (x, y);
     }
 }
 
