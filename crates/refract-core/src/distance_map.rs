@@ -252,8 +252,8 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
         // The next eight samples' texels are announced before this group's are read: the
         // search waits on memory (layers of megabytes).
         let next = first + LANES as u32;
-        let (d_next, p_next) = samples(next);
-        if next <= steps {
+        let upcoming = (next <= steps).then(|| samples(next));
+        if let Some((_, p_next)) = upcoming {
             layers.prefetch_x8(layer, &p_next.to_lanes());
         }
         let p_lanes = p.to_lanes();
@@ -287,7 +287,10 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
                 return (None, first + k as u32 + 1);
             }
         }
-        (first, d, p) = (next, d_next, p_next);
+        let Some(upcoming) = upcoming else {
+            break;
+        };
+        (first, (d, p)) = (next, upcoming);
     }
     (None, steps + 1)
 }

@@ -272,15 +272,6 @@ impl Vec2x8 {
         }
         lanes
     }
-
-    /// Lane-wise `if mask { a } else { b }`.
-    #[inline]
-    pub fn select(mask: Mask, a: Self, b: Self) -> Self {
-        Self {
-            x: mask.select(a.x, b.x),
-            y: mask.select(a.y, b.y),
-        }
-    }
 }
 
 /// [`crate::arctangent::atan2`] on eight lanes: the same operations, so the same bits.
