@@ -16,6 +16,7 @@ use crate::exit::{ExitNormalSource, TirPolicy, exit_normal_outside_silhouette, r
 use crate::interpolated_distance::{
     DistanceMode, approximate_distance, exit_point, incidence_angle, transmission_angle,
 };
+use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes, mask_lanes};
 use crate::optics::{face_forward_shading_normal, reflect, refract};
 use crate::vector::robust_normalize;
 
@@ -71,6 +72,38 @@ pub trait BackFaceSampler {
     /// pixel `(x, y)` covering `[x, x+1) × [y, y+1)`), or `None` where the buffer is empty
     /// (outside the refractor's silhouette, or outside the image).
     fn back_face(&self, uv_px: Vec2) -> Option<BackFaceSample>;
+
+    /// [`Self::back_face`] at eight positions at once (the lane kernels' lookups): lane `i`
+    /// holds `back_face(uv_px[i])` where `active` is set, nothing (not `found`) where it is
+    /// not. The default looks the lanes up one by one; a sampler may override it, giving the
+    /// same lanes.
+    #[inline]
+    fn back_faces_x8(&self, uv_px: Vec2x8, active: Mask) -> BackFaceLanes {
+        let (uv_px, active) = (uv_px.to_lanes(), mask_lanes(active));
+        let (mut n_ws, mut distance, mut found) =
+            ([Vec3::ZERO; LANES], [0.0; LANES], [false; LANES]);
+        for i in (0..LANES).filter(|i| active[*i]) {
+            if let Some(sample) = self.back_face(uv_px[i]) {
+                (n_ws[i], distance[i], found[i]) = (sample.n_ws, sample.distance, true);
+            }
+        }
+        BackFaceLanes {
+            n_ws: Vec3x8::from_lanes(&n_ws),
+            distance: F32x8::new(distance),
+            found: mask_from_lanes(found),
+        }
+    }
+}
+
+/// Eight [`BackFaceSample`]s as lanes ([`BackFaceSampler::back_faces_x8`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BackFaceLanes {
+    /// [`BackFaceSample::n_ws`] (any value where not `found`).
+    pub n_ws: Vec3x8,
+    /// [`BackFaceSample::distance`] (any value where not `found`).
+    pub distance: F32x8,
+    /// The lanes that found a sample.
+    pub found: Mask,
 }
 
 /// The front surface of the refractor at one pixel, as rasterised.

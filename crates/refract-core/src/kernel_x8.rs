@@ -17,7 +17,7 @@ use crate::kernel::{
     BackFaceSampler, DegenerateInput, FrontSurface, ImageSpaceParams, OneInterfacePath,
     TwoInterfacePath, one_interface, two_interface,
 };
-use crate::lanes::{F32x8, LANES, Mask, Vec3x8, atan2, le, lt, mask_lanes};
+use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, atan2, le, lt, mask_lanes};
 use crate::optics::FACE_FORWARD_EPSILON;
 use crate::vector::{UNIT_TOLERANCE, robust_normalize};
 
@@ -58,6 +58,9 @@ impl FrontLanes {
         }
     }
 }
+
+/// Every lane set.
+const ALL_LANES: Mask = F32x8::splat(f32::from_bits(u32::MAX));
 
 /// [`robust_normalize`]'s two common paths (already unit: `v`; otherwise `v · (1/√(v·v))`) and
 /// the lanes they cover; the other lanes need the scaled path of the scalar function.
@@ -198,7 +201,9 @@ struct TwoInterfaceSoa {
     view: Vec3x8,
     n1: Vec3x8,
     t1: Vec3x8,
-    d_v: [Option<f32>; LANES],
+    /// `d_V` where `d_v_ok`.
+    d_v: F32x8,
+    d_v_ok: Mask,
     d_tilde: F32x8,
     p2: Vec3x8,
     n2: Vec3x8,
@@ -226,21 +231,12 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     let e = entry(camera, p1, n1, eta);
     let d_n_ok = d_n.simd_ge(F32x8::ZERO) & d_n.is_finite();
 
-    // d_V at P1's own pixel (Wyman 2005a §3.1), looked up lane by lane; `‖P1 − eye‖` on
-    // lanes, as `Camera::distance_from_eye`.
-    let front_distance = (p1 - Vec3x8::splat(camera.eye())).length().to_array();
-    let mut d_v = [None; LANES];
-    let mut d_v_or_n = d_n.to_array();
-    for i in 0..LANES {
-        d_v[i] = back
-            .back_face(uv_px[i])
-            .map(|b| b.distance - front_distance[i])
-            .filter(|d| *d >= 0.0 && d.is_finite());
-        if let Some(d) = d_v[i] {
-            d_v_or_n[i] = d;
-        }
-    }
-    let d_v_or_n = F32x8::new(d_v_or_n);
+    // d_V at P1's own pixel (Wyman 2005a §3.1); `‖P1 − eye‖` on lanes, as
+    // `Camera::distance_from_eye`.
+    let own = back.back_faces_x8(Vec2x8::from_lanes(uv_px), ALL_LANES);
+    let d_v = own.distance - (p1 - Vec3x8::splat(camera.eye())).length();
+    let d_v_ok = own.found & d_v.simd_ge(F32x8::ZERO) & d_v.is_finite();
+    let d_v_or_n = d_v_ok.select(d_v, d_n);
 
     // d~ (Wyman 2005a §3.1).
     let theta_i = angle_between(-e.view, e.n1);
@@ -262,20 +258,25 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
 
     // N2 from the back faces at P~2's pixel (§3.2), else the silhouette fallback (§3.3).
     let (px, py, in_front) = world_to_pixel_xy(camera, p2);
-    let (px, py, in_front) = (px.to_array(), py.to_array(), mask_lanes(in_front));
-    let (mut sampled, mut sampled_n2) = ([false; LANES], [Vec3::ZERO; LANES]);
-    for i in 0..LANES {
-        let normal = in_front[i]
-            .then(|| back.back_face(Vec2::new(px[i], py[i])))
-            .flatten()
-            .and_then(|b| robust_normalize(b.n_ws));
-        if let Some(n) = normal {
-            (sampled[i], sampled_n2[i]) = (true, n);
+    let far = back.back_faces_x8(Vec2x8 { x: px, y: py }, in_front);
+    // `robust_normalize` of each sampled normal: its two common paths on lanes, the rare
+    // lanes (too long, too short, not finite) one by one.
+    let (mut sampled_n2, common) = normalize_common(far.n_ws);
+    let mut sampled_mask = far.found & common;
+    let rare = far.found & !common;
+    if rare.any() {
+        let (rare, raw) = (mask_lanes(rare), far.n_ws.to_lanes());
+        let (mut n2, mut sampled) = (sampled_n2.to_lanes(), mask_lanes(sampled_mask));
+        for i in (0..LANES).filter(|i| rare[*i]) {
+            if let Some(n) = robust_normalize(raw[i]) {
+                (n2[i], sampled[i]) = (n, true);
+            }
         }
+        sampled_n2 = Vec3x8::from_lanes(&n2);
+        sampled_mask = crate::lanes::mask_from_lanes(sampled);
     }
-    let sampled_mask = crate::lanes::mask_from_lanes(sampled);
-    let sampled_n2 = Vec3x8::from_lanes(&sampled_n2);
-    let n2 = if sampled.iter().all(|s| *s) {
+    let sampled = mask_lanes(sampled_mask);
+    let n2 = if sampled_mask.all() {
         sampled_n2
     } else {
         let look = Vec3x8::splat(camera.look_dir());
@@ -309,6 +310,7 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
         n1: e.n1,
         t1: e.t1,
         d_v,
+        d_v_ok,
         d_tilde,
         p2,
         n2,
@@ -379,6 +381,7 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
     let (view, n1, t1) = (soa.view.to_lanes(), soa.n1.to_lanes(), soa.t1.to_lanes());
     let (p2, n2, t2) = (soa.p2.to_lanes(), soa.n2.to_lanes(), soa.t2.to_lanes());
     let (d_tilde, tir_exit) = (soa.d_tilde.to_array(), mask_lanes(soa.tir_exit));
+    let (d_v, d_v_ok) = (soa.d_v.to_array(), mask_lanes(soa.d_v_ok));
     let mut paths = [Err(DegenerateInput::NonFiniteResult); LANES];
     for (i, path) in paths.iter_mut().enumerate() {
         if soa.scalar[i] {
@@ -392,7 +395,7 @@ pub fn two_interface_x8<S: BackFaceSampler + ?Sized>(
                 t1: t1[i],
                 tir_entry: false,
             },
-            d_v: soa.d_v[i],
+            d_v: d_v_ok[i].then_some(d_v[i]),
             d_tilde: d_tilde[i],
             p2: p2[i],
             n2: n2[i],
@@ -509,10 +512,19 @@ mod tests {
             if d.length_squared() > 1.0 {
                 return None;
             }
-            Some(BackFaceSample {
-                n_ws: Vec3::new(d.x, -d.y, -0.8 - 0.1 * d.x * d.y),
-                distance: 6.0 + 0.5 * d.length_squared(),
-            })
+            let n_ws = Vec3::new(d.x, -d.y, -0.8 - 0.1 * d.x * d.y);
+            let distance = 6.0 + 0.5 * d.length_squared();
+            // Scattered texels the normalisation and the d_V filter must treat apart: normals
+            // too short or too long for the one-division path, zero normals, back faces in
+            // front of the front surface (a negative d_V).
+            let (n_ws, distance) = match (uv.x as u32 + 7 * uv.y as u32) % 23 {
+                0 => (n_ws * 1e-20, distance),
+                1 => (n_ws * 1e20, distance),
+                2 => (Vec3::ZERO, distance),
+                3 => (n_ws, 2.0),
+                _ => (n_ws, distance),
+            };
+            Some(BackFaceSample { n_ws, distance })
         }
     }
 

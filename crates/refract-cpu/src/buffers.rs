@@ -3,8 +3,8 @@
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use refract_core::kernel::{BackFaceSample, BackFaceSampler};
-use refract_core::lanes::Vec3x8;
+use refract_core::kernel::{BackFaceLanes, BackFaceSample, BackFaceSampler};
+use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8};
 use refract_core::{BackSurface, Camera};
 use refract_scene::Refractor;
 
@@ -137,6 +137,44 @@ impl BackFaceSampler for BackFaces {
             distance: texel.distance,
         })
     }
+
+    /// [`Self::back_face`] on eight lanes: the bounds tested and the pixel indices computed on
+    /// lanes, then each lane's row extent checked and its texel loaded.
+    #[inline]
+    fn back_faces_x8(&self, uv_px: Vec2x8, active: Mask) -> BackFaceLanes {
+        let (w, h) = (self.buffer.width, self.buffer.height);
+        let zero = F32x8::ZERO;
+        let inside = active
+            & uv_px.x.simd_ge(zero)
+            & uv_px.y.simd_ge(zero)
+            & uv_px.x.simd_lt(F32x8::splat(w as f32))
+            & uv_px.y.simd_lt(F32x8::splat(h as f32));
+        let bits = inside.to_bitmask();
+        let mut texels = [BackTexel::EMPTY; LANES];
+        if bits != 0 {
+            // Inside the image the truncation is `as u32`'s.
+            let (x, y) = (
+                uv_px.x.trunc_int().to_array(),
+                uv_px.y.trunc_int().to_array(),
+            );
+            for (i, texel) in texels.iter_mut().enumerate() {
+                let (x, y) = (x[i] as u32, y[i] as u32);
+                if bits & (1 << i) != 0 && self.buffer.covered_span(y).contains(&x) {
+                    *texel = self.resolved[(y * w + x) as usize];
+                }
+            }
+        }
+        let (mut n_ws, mut distance) = ([Vec3::ZERO; LANES], [0.0; LANES]);
+        for (i, texel) in texels.iter().enumerate() {
+            (n_ws[i], distance[i]) = (texel.n_ws, texel.distance);
+        }
+        let distance = F32x8::new(distance);
+        BackFaceLanes {
+            n_ws: Vec3x8::from_lanes(&n_ws),
+            distance,
+            found: distance.simd_ge(zero),
+        }
+    }
 }
 
 /// [`front_faces`] into an existing buffer, reusing its memory.
@@ -148,4 +186,75 @@ pub fn front_faces_into(refractor: &Refractor, camera: &Camera, buffer: &mut Sur
         DepthTest::Nearest,
         buffer,
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use refract_core::CameraDesc;
+    use refract_geometry::shapes::uv_sphere;
+
+    /// The lane lookups are the scalar ones lane by lane: inside and outside the silhouette,
+    /// off the image, on pixel edges, NaN, and lanes left inactive.
+    #[test]
+    fn eight_lane_lookups_equal_the_scalar_lookups() {
+        let refractor = Refractor::new(uv_sphere(24, 12, 1.0).expect("sphere"), 1.5).expect("ok");
+        let desc = CameraDesc {
+            width: 61,
+            height: 47,
+            ..CameraDesc::default()
+        };
+        let camera = Camera::new(desc).expect("camera");
+        // First a closer view, so that texels outside this frame's row extents hold stale
+        // samples the lookups must not return.
+        let closer = Camera::new(CameraDesc {
+            eye: desc.eye * 0.5,
+            ..desc
+        })
+        .expect("camera");
+        let mut back = BackFaces::default();
+        back.render_into(&refractor, &closer, BackSurface::Furthest);
+        back.render_into(&refractor, &camera, BackSurface::Furthest);
+        // A golden-ratio walk over [−8, 69) × [−8, 55) hits every case many times.
+        let position = |k: usize| {
+            let (a, b) = (0.618_034 * k as f32, 0.754_877_7 * k as f32);
+            Vec2::new(77.0 * a.fract() - 8.0, 63.0 * b.fract() - 8.0)
+        };
+        let specials = [
+            Vec2::new(f32::NAN, 3.0),
+            Vec2::new(30.0, f32::NAN),
+            Vec2::new(61.0, 20.0),
+            Vec2::new(30.0, 47.0),
+            Vec2::new(-0.0, 0.0),
+            Vec2::new(30.0, 23.0),
+            Vec2::new(30.999_998, 23.5),
+            Vec2::new(f32::INFINITY, 1.0),
+        ];
+        let (mut found, mut missed) = (0, 0);
+        for group in 0..600 {
+            let uv: [Vec2; LANES] = if group == 0 {
+                specials
+            } else {
+                core::array::from_fn(|i| position(group * LANES + i))
+            };
+            let active: [bool; LANES] = core::array::from_fn(|i| (group + i) % 5 != 0);
+            let lanes = back.back_faces_x8(
+                Vec2x8::from_lanes(&uv),
+                refract_core::lanes::mask_from_lanes(active),
+            );
+            let (n, d) = (lanes.n_ws.to_lanes(), lanes.distance.to_array());
+            let hit = refract_core::lanes::mask_lanes(lanes.found);
+            for i in 0..LANES {
+                let scalar = active[i].then(|| back.back_face(uv[i])).flatten();
+                assert_eq!(hit[i], scalar.is_some(), "lane {i} at {}", uv[i]);
+                if let Some(s) = scalar {
+                    assert_eq!((n[i], d[i]), (s.n_ws, s.distance), "at {}", uv[i]);
+                    found += 1;
+                } else {
+                    missed += 1;
+                }
+            }
+        }
+        assert!(found > 500 && missed > 500, "{found} found, {missed} not");
+    }
 }
