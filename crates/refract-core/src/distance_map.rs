@@ -51,6 +51,45 @@ pub fn cube_texel(dir: Vec3, size: u32) -> Option<(CubeFace, UVec2)> {
     Some((face, UVec2::new(xy.x as u32, xy.y as u32)))
 }
 
+/// [`cube_texel`] then [`cube_texel_index`] of eight directions on lanes (the linear search's
+/// samples): lane `i` is `cube_texel(dirs[i], size).map(|(f, t)| cube_texel_index(f, t, size))`,
+/// the same operations per lane (the face chosen by selects), so the same texels.
+#[inline]
+pub fn cube_texel_indices_x8(dirs: Vec3x8, size: u32) -> [Option<u32>; LANES] {
+    let zero = F32x8::ZERO;
+    let (x, y, z) = (dirs.x, dirs.y, dirs.z);
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let valid = dirs.is_finite() & ax.max(ay).max(az).simd_gt(zero);
+    // `CubeFace::of_direction`'s major axis, ties to x, then y.
+    let x_major = ax.simd_ge(ay) & ax.simd_ge(az);
+    let y_major = !x_major & ay.simd_ge(az);
+    let (pos_x, pos_y, pos_z) = (x.simd_ge(zero), y.simd_ge(zero), z.simd_ge(zero));
+    let sc = x_major.select(pos_x.select(-z, z), y_major.select(x, pos_z.select(x, -x)));
+    let tc = x_major.select(-y, y_major.select(pos_y.select(z, -z), -y));
+    let ma = x_major.select(ax, y_major.select(ay, az));
+    let splat = F32x8::splat;
+    let face = x_major.select(
+        pos_x.select(splat(0.0), splat(1.0)),
+        y_major.select(
+            pos_y.select(splat(2.0), splat(3.0)),
+            pos_z.select(splat(4.0), splat(5.0)),
+        ),
+    );
+    let (half, n, max) = (splat(0.5), splat(size as f32), splat((size - 1) as f32));
+    // `(st · size).floor().clamp(0, size − 1)`: `|sc| ≤ ma`, so `sc / ma ∈ [−1, 1]` and the
+    // floor is never below 0; `min` is the clamp.
+    let texel = |q: F32x8| (((q / ma + F32x8::ONE) * half) * n).floor().min(max);
+    let (s, t) = (texel(sc).to_array(), texel(tc).to_array());
+    let (face, valid) = (face.to_array(), valid.to_bitmask());
+    let mut indices = [None; LANES];
+    for (i, index) in indices.iter_mut().enumerate() {
+        if valid & (1 << i) != 0 {
+            *index = Some((face[i] as u32 * size + t[i] as u32) * size + s[i] as u32);
+        }
+    }
+    indices
+}
+
 /// The (not normalised) direction through the centre of texel `texel` of face `face` of a
 /// `size × size` cube map: the major axis component ±1 and the two others in `(−1, 1)`; the
 /// inverse of [`cube_texel`].
@@ -93,14 +132,15 @@ pub trait DistanceLayers {
     /// linear search's next samples): an implementation may prefetch the texels' memory. The
     /// default does nothing.
     #[inline]
-    fn prefetch_x8(&self, _layer: usize, _dirs: &[Vec3; LANES]) {}
+    fn prefetch_x8(&self, _layer: usize, _dirs: &Vec3x8) {}
     /// [`Self::distance`] in eight directions (the linear search's lanes); an implementation
-    /// may look them up together, with the same results.
+    /// may look them up together (a cube map: [`cube_texel_indices_x8`]), with the same
+    /// results.
     #[inline]
-    fn distance_x8(&self, layer: usize, dirs: &[Vec3; LANES]) -> [f32; LANES] {
+    fn distance_x8(&self, layer: usize, dirs: &Vec3x8) -> [f32; LANES] {
         let mut out = [0.0; LANES];
-        for (o, d) in out.iter_mut().zip(dirs) {
-            *o = self.distance(layer, *d);
+        for (o, d) in out.iter_mut().zip(dirs.to_lanes()) {
+            *o = self.distance(layer, d);
         }
         out
     }
@@ -254,19 +294,23 @@ pub fn linear_search<L: DistanceLayers + ?Sized>(
         let next = first + LANES as u32;
         let upcoming = (next <= steps).then(|| samples(next));
         if let Some((_, p_next)) = upcoming {
-            layers.prefetch_x8(layer, &p_next.to_lanes());
+            layers.prefetch_x8(layer, &p_next);
         }
-        let p_lanes = p.to_lanes();
-        let stored = layers.distance_x8(layer, &p_lanes);
-        let p_len = p.length().to_array();
-        let toward = p.dot(x8).to_array();
+        let stored = F32x8::new(layers.distance_x8(layer, &p));
+        let p_len = p.length();
+        // Empty texels and samples within the start's skip cone break the bracket; the ratio
+        // `|p| / stored` of the others.
+        let split = stored.simd_le(F32x8::ZERO)
+            | p.dot(x8)
+                .simd_gt(F32x8::splat(skip_cos) * p_len * F32x8::splat(x_len));
+        let (split, ratios) = (split.to_bitmask(), (p_len / stored).to_array());
         let d_lanes = d.to_array();
         for k in 0..LANES.min((steps - first + 1) as usize) {
-            let (d, p_len) = (d_lanes[k], p_len[k]);
-            if stored[k] <= 0.0 || toward[k] > skip_cos * p_len * x_len {
+            let d = d_lanes[k];
+            if split & (1 << k) != 0 {
                 previous = None;
             } else {
-                let ratio = p_len / stored[k];
+                let ratio = ratios[k];
                 if let Some((d_prev, ratio_prev)) = previous
                     && (ratio_prev < 1.0) != (ratio < 1.0)
                     && (two_sided || ratio_prev < 1.0)
@@ -1041,6 +1085,56 @@ mod tests {
                 scalar_linear_search(&layers, layer, x, r, a, t_lo, t_hi, steps, skip_cos, stop);
             // Bit for bit (`PartialEq` on the floats, and the sample counts).
             proptest::prop_assert_eq!(lanes, scalar);
+        }
+    }
+
+    /// The lane texel lookup is `cube_texel` + `cube_texel_index` lane by lane: random
+    /// directions, the axes (both signs of zero), the cube's edges and corners (the major-axis
+    /// ties), texel borders, zero and non-finite directions, several face sizes.
+    #[test]
+    fn lane_cube_texels_equal_the_scalar_texels() {
+        let mut dirs = vec![
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+            Vec3::new(-0.0, 0.0, -1.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+            Vec3::new(0.0, -1.0, -1.0),
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(0.5, 0.25, -1.0),
+            Vec3::new(1.0, 0.999_999_9, 0.5),
+            Vec3::ZERO,
+            Vec3::new(f32::NAN, 1.0, 0.0),
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(1e-30, -2e-30, 3e-38),
+            Vec3::new(3e38, -2e38, 1e38),
+        ];
+        let mut state = 0x9e37_79b9_u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        for _ in 0..4000 {
+            dirs.push(Vec3::new(next(), next(), next()) * (1.0 + 9.0 * next().abs()));
+        }
+        while !dirs.len().is_multiple_of(LANES) {
+            dirs.push(Vec3::Y);
+        }
+        for size in [1, 7, 64, 512, 2048] {
+            for group in dirs.chunks_exact(LANES) {
+                let lanes: [Vec3; LANES] = group.try_into().expect("eight");
+                let indices = cube_texel_indices_x8(Vec3x8::from_lanes(&lanes), size);
+                for (dir, index) in lanes.iter().zip(indices) {
+                    let scalar = cube_texel(*dir, size).map(|(f, t)| cube_texel_index(f, t, size));
+                    assert_eq!(index, scalar, "{dir} at size {size}");
+                }
+            }
         }
     }
 

@@ -15,7 +15,8 @@ use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::distance_map::{
     DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
-    TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, trace_path,
+    TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, cube_texel_indices_x8,
+    trace_path,
 };
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::{Camera, CubeFace};
@@ -278,15 +279,32 @@ impl DistanceLayers for MapScene<'_> {
     /// Prefetches the eight texels' cache lines: a ray's samples are texels apart in layers of
     /// megabytes.
     #[inline]
-    fn prefetch_x8(&self, layer: usize, dirs: &[Vec3; LANES]) {
+    fn prefetch_x8(&self, layer: usize, dirs: &Vec3x8) {
         let distance = &self.map.layers[layer].distance;
-        for dir in dirs {
-            if let Some((face, texel)) = cube_texel(*dir, self.map.size)
-                && let Some(d) = distance.get(cube_texel_index(face, texel, self.map.size) as usize)
-            {
+        for index in cube_texel_indices_x8(*dirs, self.map.size)
+            .into_iter()
+            .flatten()
+        {
+            if let Some(d) = distance.get(index as usize) {
                 prefetch(d);
             }
         }
+    }
+
+    /// The eight texels located on lanes ([`cube_texel_indices_x8`]), then read.
+    #[inline]
+    fn distance_x8(&self, layer: usize, dirs: &Vec3x8) -> [f32; LANES] {
+        let distance = &self.map.layers[layer].distance;
+        let mut out = [-1.0; LANES];
+        for (o, index) in out
+            .iter_mut()
+            .zip(cube_texel_indices_x8(*dirs, self.map.size))
+        {
+            if let Some(index) = index {
+                *o = distance[index as usize];
+            }
+        }
+        out
     }
 
     fn range(&self, layer: usize) -> Option<(f32, f32)> {
@@ -543,5 +561,57 @@ impl CpuFamily for DistancePasses {
                 .for_each(|(i, c)| *c = shade(i).0);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane lookups of a rendered map are the scalar ones lane by lane, in every layer,
+    /// over directions of every face (and a zero and a non-finite one).
+    #[test]
+    fn eight_lane_distances_equal_the_scalar_distances() {
+        let scene = refract_eval::load_scene("glass-room")
+            .expect("glass-room")
+            .scene;
+        let mut map = DistanceMap::default();
+        map.prepare(&scene);
+        map.render(&scene, 4, 24).expect("map");
+        let lookup = MapScene {
+            map: &map,
+            scene: &scene,
+        };
+        let mut state = 0x2545_f491_u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let (mut filled, mut empty) = (0, 0);
+        for group in 0..400 {
+            let mut dirs: [Vec3; LANES] =
+                core::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            if group == 0 {
+                (dirs[0], dirs[1]) = (Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 1.0));
+            }
+            for layer in 0..lookup.layer_count() {
+                let lanes = lookup.distance_x8(layer, &Vec3x8::from_lanes(&dirs));
+                for (dir, lane) in dirs.iter().zip(lanes) {
+                    let scalar = lookup.distance(layer, *dir);
+                    assert_eq!(lane.to_bits(), scalar.to_bits(), "{dir} in layer {layer}");
+                    if scalar > 0.0 {
+                        filled += 1;
+                    } else {
+                        empty += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            filled > 1000 && empty > 100,
+            "{filled} filled, {empty} empty"
+        );
     }
 }
