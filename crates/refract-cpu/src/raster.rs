@@ -70,14 +70,6 @@ impl DepthTest {
             triangle: EMPTY,
         }
     }
-
-    #[inline]
-    fn passes(self, depth: f32, stored: f32) -> bool {
-        match self {
-            Self::Nearest => depth < stored,
-            Self::Furthest => depth > stored,
-        }
-    }
 }
 
 /// One pixel of the visibility buffer: the depth and id of the fragment that survived.
@@ -1189,6 +1181,27 @@ fn rasterize_band(
     test: DepthTest,
     floor: Option<&[f32]>,
 ) {
+    // One loop per depth test and peeling, so that the per-pixel loop has no branch on them.
+    match (test, floor) {
+        (DepthTest::Nearest, None) => scan_convert::<false, false>(triangles, bin, target, &[]),
+        (DepthTest::Furthest, None) => scan_convert::<true, false>(triangles, bin, target, &[]),
+        (DepthTest::Nearest, Some(floor)) => {
+            scan_convert::<false, true>(triangles, bin, target, floor);
+        }
+        (DepthTest::Furthest, Some(floor)) => {
+            scan_convert::<true, true>(triangles, bin, target, floor);
+        }
+    }
+}
+
+/// [`rasterize_band`] for one depth test (`FURTHEST`: Greater, else Less) and with or without
+/// a peeling `floor` (`PEEL`; else `floor` is not read).
+fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
+    triangles: &TriangleStore,
+    bin: &[u32],
+    target: BandTarget<'_>,
+    floor: &[f32],
+) {
     let BandTarget {
         first_row,
         width,
@@ -1236,13 +1249,16 @@ fn rasterize_band(
                 if depth > 1.0 {
                     continue; // beyond the far plane (the near plane is clipped geometrically)
                 }
-                if let Some(floor) = floor
-                    && depth <= floor[((y - first_row) * width + x) as usize]
-                {
+                if PEEL && depth <= floor[((y - first_row) * width + x) as usize] {
                     continue; // peeled: at or in front of the previous layer
                 }
                 let stored = &mut row[x as usize];
-                if test.passes(depth, stored.depth) {
+                let passes = if FURTHEST {
+                    depth > stored.depth
+                } else {
+                    depth < stored.depth
+                };
+                if passes {
                     *stored = Visibility {
                         depth,
                         triangle: id,
