@@ -19,6 +19,7 @@ use crate::fresnel::schlick;
 use crate::lanes::{F32x8, LANES, Vec3x8};
 use crate::optics::{reflect, refract};
 use crate::vector::angle_between;
+use wide::i32x8;
 
 /// Layers of one distance map at most (`layers` parameter).
 pub const MAX_LAYERS: usize = 8;
@@ -51,6 +52,10 @@ pub fn cube_texel(dir: Vec3, size: u32) -> Option<(CubeFace, UVec2)> {
     Some((face, UVec2::new(xy.x as u32, xy.y as u32)))
 }
 
+/// The largest face size whose texel indices [`cube_texel_indices_x8`] computes in `i32`
+/// lanes (`6·size² < 2³¹`); larger faces take the indices lane by lane.
+const MAX_LANE_INDEX_SIZE: u32 = 18_918;
+
 /// [`cube_texel`] then [`cube_texel_index`] of eight directions on lanes (the linear search's
 /// samples): lane `i` is `cube_texel(dirs[i], size).map(|(f, t)| cube_texel_index(f, t, size))`,
 /// the same operations per lane (the face chosen by selects), so the same texels.
@@ -79,12 +84,28 @@ pub fn cube_texel_indices_x8(dirs: Vec3x8, size: u32) -> [Option<u32>; LANES] {
     // `(st · size).floor().clamp(0, size − 1)`: `|sc| ≤ ma`, so `sc / ma ∈ [−1, 1]` and the
     // floor is never below 0; `min` is the clamp.
     let texel = |q: F32x8| (((q / ma + F32x8::ONE) * half) * n).floor().min(max);
-    let (s, t) = (texel(sc).to_array(), texel(tc).to_array());
-    let (face, valid) = (face.to_array(), valid.to_bitmask());
+    let valid = valid.to_bitmask();
     let mut indices = [None; LANES];
-    for (i, index) in indices.iter_mut().enumerate() {
-        if valid & (1 << i) != 0 {
-            *index = Some((face[i] as u32 * size + t[i] as u32) * size + s[i] as u32);
+    if size <= MAX_LANE_INDEX_SIZE {
+        // Small non-negative integers: the truncation is `as u32`'s; the index fits in `i32`.
+        let n = i32x8::splat(size as i32);
+        let (s, t, face) = (
+            texel(sc).trunc_int(),
+            texel(tc).trunc_int(),
+            face.trunc_int(),
+        );
+        let index = ((face * n + t) * n + s).to_array();
+        for (i, out) in indices.iter_mut().enumerate() {
+            if valid & (1 << i) != 0 {
+                *out = Some(index[i] as u32);
+            }
+        }
+    } else {
+        let (s, t, face) = (texel(sc).to_array(), texel(tc).to_array(), face.to_array());
+        for (i, out) in indices.iter_mut().enumerate() {
+            if valid & (1 << i) != 0 {
+                *out = Some((face[i] as u32 * size + t[i] as u32) * size + s[i] as u32);
+            }
         }
     }
     indices
@@ -1126,7 +1147,15 @@ mod tests {
         while !dirs.len().is_multiple_of(LANES) {
             dirs.push(Vec3::Y);
         }
-        for size in [1, 7, 64, 512, 2048] {
+        for size in [
+            1,
+            7,
+            64,
+            512,
+            2048,
+            MAX_LANE_INDEX_SIZE,
+            MAX_LANE_INDEX_SIZE + 1,
+        ] {
             for group in dirs.chunks_exact(LANES) {
                 let lanes: [Vec3; LANES] = group.try_into().expect("eight");
                 let indices = cube_texel_indices_x8(Vec3x8::from_lanes(&lanes), size);
