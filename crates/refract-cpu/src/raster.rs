@@ -228,7 +228,8 @@ impl ScreenTriangle {
     /// Screen-space barycentrics from the exact integer edge functions, scaled by 1/area in f64.
     #[inline]
     fn barycentrics(&self, e: [i64; 3]) -> [f32; 3] {
-        e.map(|e| (e as f64 * self.inv_area) as f32)
+        let l = |e: i64| (e as f64 * self.inv_area) as f32;
+        [l(e[0]), l(e[1]), l(e[2])]
     }
 
     /// [`Self::barycentrics`] at pixels `x` of row `y`, eight at once: along a row each edge
@@ -241,7 +242,11 @@ impl ScreenTriangle {
         let [a, b, c] = self.xy;
         let q = pixel_center_fixed(x[0], y);
         let start = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
-        let step = [c[1] - b[1], a[1] - c[1], b[1] - a[1]].map(|d| -d * SUBPIXEL);
+        let step = [
+            -(c[1] - b[1]) * SUBPIXEL,
+            -(a[1] - c[1]) * SUBPIXEL,
+            -(b[1] - a[1]) * SUBPIXEL,
+        ];
         let mut offset = [0.0f64; LANES];
         let mut reach = 0i64;
         for (o, &xi) in offset.iter_mut().zip(x) {
@@ -250,13 +255,16 @@ impl ScreenTriangle {
             *o = d as f64;
         }
         const EXACT: i64 = 1 << 53;
-        let exact = (0..3).all(|k| {
-            step[k]
+        // A plain loop: as an iterator adapter with a closure it was once not inlined (a call
+        // per group of eight in `perf`).
+        let mut exact = true;
+        for k in 0..3 {
+            let bound = step[k]
                 .checked_abs()
                 .and_then(|s| s.checked_mul(reach))
-                .and_then(|s| s.checked_add(start[k].checked_abs()?))
-                .is_some_and(|bound| bound < EXACT)
-        });
+                .and_then(|s| s.checked_add(start[k].checked_abs()?));
+            exact &= bound.is_some_and(|bound| bound < EXACT);
+        }
         let mut l = [[0.0f32; LANES]; 3];
         if exact {
             for k in 0..3 {
@@ -274,7 +282,7 @@ impl ScreenTriangle {
                 }
             }
         }
-        l.map(F32x8::new)
+        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
     }
 
     /// The window depth at a point with edge values `e`, linear in screen space: with
@@ -424,7 +432,10 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     if let Some((distinct, count)) = at_most_three(&triangles) {
         let mut lanes = texel_lanes_one_triangle::<ATTRIBUTES>(distinct[0], x, y);
         for &other in &distinct[1..count] {
-            let on_other = triangles.map(|t| core::ptr::eq(t, other));
+            let mut on_other = [false; LANES];
+            for (on, t) in on_other.iter_mut().zip(&triangles) {
+                *on = core::ptr::eq(*t, other);
+            }
             let values = texel_lanes_one_triangle::<ATTRIBUTES>(other, x, y);
             lanes = TexelLanes::select(on_other, &values, &lanes);
         }
@@ -484,7 +495,9 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
     y: u32,
 ) -> TexelLanes {
     let s = F32x8::splat;
-    let corner = |k: usize| &t.attributes[k];
+    let v = Vec3x8::splat;
+    // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group path.
+    let [c0, c1, c2] = &t.attributes;
     let depth = if ATTRIBUTES & Attribute::DEPTH != 0 {
         t.depths_x8(x, y)
     } else {
@@ -494,11 +507,11 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
         t.barycentrics_x8(x, y),
         depth,
         &CornersX8 {
-            inv_w: t.inv_w.map(s),
-            scalar: [0, 1, 2].map(|k| s(corner(k).scalar)),
-            p: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).p_ws)),
-            n: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).n_ws)),
-            bary: [0, 1, 2].map(|k| Vec3x8::splat(corner(k).bary)),
+            inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
+            scalar: [s(c0.scalar), s(c1.scalar), s(c2.scalar)],
+            p: [v(c0.p_ws), v(c1.p_ws), v(c2.p_ws)],
+            n: [v(c0.n_ws), v(c1.n_ws), v(c2.n_ws)],
+            bary: [v(c0.bary), v(c1.bary), v(c2.bary)],
         },
         [t.source; LANES],
     )

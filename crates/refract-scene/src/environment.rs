@@ -76,8 +76,12 @@ impl Environment {
             Self::Procedural => procedural_radiance_x8(dir),
             Self::Constant(c) => Vec3x8::splat(*c),
             Self::LatLong { .. } => {
-                let dirs = dir.to_lanes();
-                Vec3x8::from_lanes(&dirs.map(|d| self.radiance(d)))
+                // A loop, not `array::map`: its closure was once left as a call per lane.
+                let mut radiance = dir.to_lanes();
+                for r in &mut radiance {
+                    *r = self.radiance(*r);
+                }
+                Vec3x8::from_lanes(&radiance)
             }
         }
     }
