@@ -1267,7 +1267,8 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
             // Narrow triangles (dense meshes: a few pixels a row) test each pixel; solving the run
             // (three divisions) pays from about a group of eight pixels up.
-            let (first, last) = if columns > RUN_MIN_COLUMNS {
+            let solved = columns > RUN_MIN_COLUMNS;
+            let (first, last) = if solved {
                 match inside_run(e, step, bias, columns) {
                     Some(run) => run,
                     None => continue,
@@ -1277,21 +1278,14 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             };
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             let (mut first_written, mut last_written) = (u32::MAX, 0);
-            let mut e = [0, 1, 2].map(|k| e[k] + step[k] * first);
-            for x in t.min[0] + first as u32..=t.min[0] + last as u32 {
-                let f = e;
-                e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
-                // All three `e + bias ≥ 0` exactly when their bitwise OR is (no sign bit set);
-                // always true inside a solved run.
-                if ((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) < 0 {
-                    continue;
-                }
+            // The depth test and write of an inside pixel with edge values `f`.
+            let mut fragment = |x: u32, f: [i64; 3]| {
                 let depth = t.depth_from_edges(f);
                 if depth > 1.0 {
-                    continue; // beyond the far plane (the near plane is clipped geometrically)
+                    return; // beyond the far plane (the near plane is clipped geometrically)
                 }
                 if PEEL && depth <= floor[((y - first_row) * width + x) as usize] {
-                    continue; // peeled: at or in front of the previous layer
+                    return; // peeled: at or in front of the previous layer
                 }
                 let stored = &mut row[x as usize];
                 let passes = if FURTHEST {
@@ -1306,6 +1300,25 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
                     };
                     first_written = first_written.min(x);
                     last_written = x;
+                }
+            };
+            let mut e = [0, 1, 2].map(|k| e[k] + step[k] * first);
+            let pixels = t.min[0] + first as u32..=t.min[0] + last as u32;
+            if solved {
+                // Every pixel of a solved run is inside; the depth reads `e₀` and `e₁`.
+                for x in pixels {
+                    fragment(x, e);
+                    (e[0], e[1]) = (e[0] + step[0], e[1] + step[1]);
+                }
+            } else {
+                for x in pixels {
+                    let f = e;
+                    e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
+                    // All three `e + bias ≥ 0` exactly when their bitwise OR is (no sign bit
+                    // set).
+                    if ((f[0] + bias[0]) | (f[1] + bias[1]) | (f[2] + bias[2])) >= 0 {
+                        fragment(x, f);
+                    }
                 }
             }
             if first_written <= last_written {
