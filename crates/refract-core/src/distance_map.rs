@@ -16,10 +16,9 @@ use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::CubeFace;
 use crate::fresnel::schlick;
-use crate::lanes::{F32x8, LANES, Vec3x8};
+use crate::lanes::{F32x8, I32x8, LANES, Vec3x8};
 use crate::optics::{reflect, refract};
 use crate::vector::angle_between;
-use wide::i32x8;
 
 /// Layers of one distance map at most (`layers` parameter).
 pub const MAX_LAYERS: usize = 8;
@@ -88,7 +87,7 @@ pub fn cube_texel_indices_x8(dirs: Vec3x8, size: u32) -> [Option<u32>; LANES] {
     let mut indices = [None; LANES];
     if size <= MAX_LANE_INDEX_SIZE {
         // Small non-negative integers: the truncation is `as u32`'s; the index fits in `i32`.
-        let n = i32x8::splat(size as i32);
+        let n = I32x8::splat(size as i32);
         let (s, t, face) = (
             texel(sc).trunc_int(),
             texel(tc).trunc_int(),

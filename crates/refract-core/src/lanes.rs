@@ -35,6 +35,9 @@ pub type F32x8 = f32x8;
 /// A lane mask: all bits set where true (as `wide`'s comparisons return).
 pub type Mask = f32x8;
 
+/// Eight `i32` lanes (texel and patch indices).
+pub type I32x8 = wide::i32x8;
+
 /// Eight 3D vectors, one per lane.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vec3x8 {

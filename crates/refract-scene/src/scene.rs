@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
 use refract_core::distance_map::TexelMaterial;
 pub use refract_core::fresnel::Conductor;
-use refract_core::lanes::{F32x8, Vec2x8, Vec3x8};
+use refract_core::lanes::{F32x8, I32x8, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{MAX_PLANES, Plane};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
 
@@ -253,11 +253,14 @@ pub const COLOR_CHART: [[f32; 3]; 24] = [
     [0.031, 0.032, 0.032],
 ];
 
+/// [`Albedo::ColorChart`] outside the unit square: a mid grey.
+const COLOR_CHART_OUTSIDE: f32 = 0.18;
+
 /// [`Albedo::ColorChart`] at `uv`.
 #[inline]
 fn color_chart(uv: Vec2) -> Vec3 {
     if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
-        return Vec3::splat(0.18);
+        return Vec3::splat(COLOR_CHART_OUTSIDE);
     }
     let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
     Vec3::from_array(COLOR_CHART[row * 6 + col])
@@ -304,10 +307,22 @@ impl Albedo {
                 )
             }
             Self::ColorChart => {
-                let (u, v) = (uv.x.to_array(), uv.y.to_array());
-                let mut patches = [Vec3::ZERO; 8];
+                // `color_chart` with the range test and the patch index on lanes (inside the
+                // unit square `(u·6) as usize` is the truncation), then one load per lane.
+                let (zero, one) = (F32x8::ZERO, F32x8::ONE);
+                let inside =
+                    uv.x.simd_ge(zero) & uv.x.simd_lt(one) & uv.y.simd_ge(zero) & uv.y.simd_lt(one);
+                let (col, row) = (
+                    (uv.x * splat(6.0)).trunc_int(),
+                    (uv.y * splat(4.0)).trunc_int(),
+                );
+                let index = (row * I32x8::splat(6) + col).to_array();
+                let inside = inside.to_bitmask();
+                let mut patches = [Vec3::splat(COLOR_CHART_OUTSIDE); 8];
                 for (i, patch) in patches.iter_mut().enumerate() {
-                    *patch = color_chart(Vec2::new(u[i], v[i]));
+                    if inside & (1 << i) != 0 {
+                        *patch = Vec3::from_array(COLOR_CHART[index[i] as usize]);
+                    }
                 }
                 Vec3x8::from_lanes(&patches)
             }
@@ -708,6 +723,12 @@ mod tests {
             ),
             2 => Vec2::new(f32::NAN, 0.5),
             3 => Vec2::new(0.5, f32::INFINITY),
+            // Inside the unit square (the colour chart's patches), and on its patch edges.
+            4..=6 => Vec2::new(rng.next(), rng.next()),
+            7 => Vec2::new(
+                (rng.next() * 7.0).floor() / 6.0,
+                (rng.next() * 5.0).floor() / 4.0,
+            ),
             _ => Vec2::new(rng.range(-3.0, 4.0), rng.range(-3.0, 4.0)),
         })
     }
