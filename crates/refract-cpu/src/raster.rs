@@ -7,9 +7,7 @@
 //! triangle id, 8 bytes); the attributes of the surviving fragment are interpolated when a
 //! pixel is read ([`SurfaceBuffer::texel`], eight at a time with [`Band::attribute_lanes`],
 //! only the attributes asked for), so overdraw costs an edge test and a depth compare, never an
-//! interpolation. The window depth is the plane through the corners' depths over the exact
-//! integer edge values, in `f64` and rounded once (the scan conversion's and a texel's alike).
-//! A texel carries its perspective-correct barycentric weights in its mesh
+//! interpolation. A texel carries its perspective-correct barycentric weights in its mesh
 //! triangle, through near-plane clipping. A renderer can run its per-pixel work band by band
 //! right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
 //!
@@ -185,8 +183,8 @@ struct ScreenTriangle {
     xy: [[i64; 2]; 3],
     /// `1 / (twice the area in fixed point)`.
     inv_area: f64,
-    /// The window depth as a plane over the edge values ([`Self::depth_from_edges`]).
-    depth_plane: [f64; 3],
+    /// Window depth of each corner.
+    depth: [f32; 3],
     /// `1/w` of each corner.
     inv_w: [f32; 3],
     attributes: [Attributes; 3],
@@ -195,12 +193,6 @@ struct ScreenTriangle {
     max: [u32; 2],
     /// The mesh triangle it was set up from (clipped pieces share it).
     source: u32,
-}
-
-/// `[z₂, (z₀ − z₂)/2A, (z₁ − z₂)/2A]` of corner depths `z` ([`ScreenTriangle::depth_from_edges`]).
-fn depth_plane(depth: [f32; 3], inv_area: f64) -> [f64; 3] {
-    let z = depth.map(f64::from);
-    [z[2], (z[0] - z[2]) * inv_area, (z[1] - z[2]) * inv_area]
 }
 
 fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
@@ -285,25 +277,9 @@ impl ScreenTriangle {
         [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
     }
 
-    /// The window depth at a point with edge values `e`, linear in screen space: with
-    /// `λₖ = eₖ/2A` and `λ₂ = 1 − λ₀ − λ₁` (exact for the integer edge values),
-    /// `z = z₂ + e₀·(z₀ − z₂)/2A + e₁·(z₁ − z₂)/2A`, in `f64` and rounded once.
     #[inline]
-    fn depth_from_edges(&self, e: [i64; 3]) -> f32 {
-        let [z2, a0, a1] = self.depth_plane;
-        (z2 + e[0] as f64 * a0 + e[1] as f64 * a1) as f32
-    }
-
-    /// [`Self::depth_from_edges`] at pixels `x` of row `y`.
-    #[inline]
-    fn depths_x8(&self, x: &[u32; LANES], y: u32) -> F32x8 {
-        let [a, b, c] = self.xy;
-        let mut depth = [0.0; LANES];
-        for (d, &xi) in depth.iter_mut().zip(x) {
-            let q = pixel_center_fixed(xi, y);
-            *d = self.depth_from_edges([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
-        }
-        F32x8::new(depth)
+    fn depth_at(&self, l: [f32; 3]) -> f32 {
+        l[0] * self.depth[0] + l[1] * self.depth[1] + l[2] * self.depth[2]
     }
 
     /// The attributes at pixel `(x, y)`'s centre (inside or not): perspective-correct weights
@@ -311,8 +287,7 @@ impl ScreenTriangle {
     fn texel(&self, x: u32, y: u32) -> Texel {
         let p = pixel_center_fixed(x, y);
         let [a, b, c] = self.xy;
-        let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
-        let l = self.barycentrics(e);
+        let l = self.barycentrics([edge(b, c, p), edge(c, a, p), edge(a, b, p)]);
         let pw = [
             l[0] * self.inv_w[0],
             l[1] * self.inv_w[1],
@@ -322,7 +297,7 @@ impl ScreenTriangle {
         let pw = pw.map(|v| v * inv_sum);
         let [v0, v1, v2] = self.attributes;
         Texel {
-            depth: self.depth_from_edges(e),
+            depth: self.depth_at(l),
             p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
             n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
             scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
@@ -444,7 +419,7 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
     let (mut depth, mut inv_w, mut scalar) =
-        ([0.0f32; LANES], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        ([[0.0f32; LANES]; 3], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
     let (mut p, mut n) = ([[Vec3::ZERO; LANES]; 3], [[Vec3::ZERO; LANES]; 3]);
     let mut bary = [[Vec3::ZERO; LANES]; 3];
     let mut source = [0u32; LANES];
@@ -452,16 +427,15 @@ fn texel_lanes<const ATTRIBUTES: u8>(
         source[i] = t.source;
         let q = pixel_center_fixed(x[i], y);
         let [a, b, c] = t.xy;
-        let e = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
-        let li = t.barycentrics(e);
-        if ATTRIBUTES & Attribute::DEPTH != 0 {
-            depth[i] = t.depth_from_edges(e);
-        }
+        let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
         for k in 0..3 {
             l[k][i] = li[k];
             inv_w[k][i] = t.inv_w[k];
             p[k][i] = t.attributes[k].p_ws;
             n[k][i] = t.attributes[k].n_ws;
+            if ATTRIBUTES & Attribute::DEPTH != 0 {
+                depth[k][i] = t.depth[k];
+            }
             if ATTRIBUTES & Attribute::SCALAR != 0 {
                 scalar[k][i] = t.attributes[k].scalar;
             }
@@ -474,8 +448,8 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     let v = Vec3x8::from_lanes;
     interpolate_x8::<ATTRIBUTES>(
         [f(l[0]), f(l[1]), f(l[2])],
-        f(depth),
         &CornersX8 {
+            depth: [f(depth[0]), f(depth[1]), f(depth[2])],
             inv_w: [f(inv_w[0]), f(inv_w[1]), f(inv_w[2])],
             scalar: [f(scalar[0]), f(scalar[1]), f(scalar[2])],
             p: [v(&p[0]), v(&p[1]), v(&p[2])],
@@ -498,15 +472,10 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
     let v = Vec3x8::splat;
     // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group path.
     let [c0, c1, c2] = &t.attributes;
-    let depth = if ATTRIBUTES & Attribute::DEPTH != 0 {
-        t.depths_x8(x, y)
-    } else {
-        F32x8::ZERO
-    };
     interpolate_x8::<ATTRIBUTES>(
         t.barycentrics_x8(x, y),
-        depth,
         &CornersX8 {
+            depth: [s(t.depth[0]), s(t.depth[1]), s(t.depth[2])],
             inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
             scalar: [s(c0.scalar), s(c1.scalar), s(c2.scalar)],
             p: [v(c0.p_ws), v(c1.p_ws), v(c2.p_ws)],
@@ -558,6 +527,7 @@ impl Distinct for u32 {
 
 /// The corner values of eight lanes' triangles.
 struct CornersX8 {
+    depth: [F32x8; 3],
     inv_w: [F32x8; 3],
     scalar: [F32x8; 3],
     p: [Vec3x8; 3],
@@ -565,18 +535,21 @@ struct CornersX8 {
     bary: [Vec3x8; 3],
 }
 
-/// Eight texels from their screen-space barycentrics `l`, window depths (computed by the
-/// caller from the edge values, or zero) and corners: the attributes perspective-correct
-/// (`λᵢ/wᵢ` normalised), the normal renormalised.
+/// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
+/// space, the attributes perspective-correct (`λᵢ/wᵢ` normalised), the normal renormalised.
 #[inline(always)]
 fn interpolate_x8<const ATTRIBUTES: u8>(
     l: [F32x8; 3],
-    depth: F32x8,
     c: &CornersX8,
     source: [u32; LANES],
 ) -> TexelLanes {
     let [l0, l1, l2] = l;
     let wanted = |attribute: u8| ATTRIBUTES & attribute != 0;
+    let depth = if wanted(Attribute::DEPTH) {
+        l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2]
+    } else {
+        F32x8::ZERO
+    };
     let pw = [l0 * c.inv_w[0], l1 * c.inv_w[1], l2 * c.inv_w[2]];
     let inv_sum = F32x8::ONE / (pw[0] + pw[1] + pw[2]);
     let (w0, w1, w2) = (pw[0] * inv_sum, pw[1] * inv_sum, pw[2] * inv_sum);
@@ -726,11 +699,10 @@ fn setup(
     if x0 > x1 || y0 > y1 {
         return None;
     }
-    let inv_area = 1.0 / area as f64;
     Some(ScreenTriangle {
         xy,
-        inv_area,
-        depth_plane: depth_plane(depth, inv_area),
+        inv_area: 1.0 / area as f64,
+        depth,
         inv_w,
         attributes,
         min: [x0 as u32, y0 as u32],
@@ -1280,7 +1252,7 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             let (mut first_written, mut last_written) = (u32::MAX, 0);
             // The depth test and write of an inside pixel with edge values `f`.
             let mut fragment = |x: u32, f: [i64; 3]| {
-                let depth = t.depth_from_edges(f);
+                let depth = t.depth_at(t.barycentrics(f));
                 if depth > 1.0 {
                     return; // beyond the far plane (the near plane is clipped geometrically)
                 }
@@ -1305,10 +1277,10 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             let mut e = [0, 1, 2].map(|k| e[k] + step[k] * first);
             let pixels = t.min[0] + first as u32..=t.min[0] + last as u32;
             if solved {
-                // Every pixel of a solved run is inside; the depth reads `e₀` and `e₁`.
+                // Every pixel of a solved run is inside: no edge test.
                 for x in pixels {
                     fragment(x, e);
-                    (e[0], e[1]) = (e[0] + step[0], e[1] + step[1]);
+                    e = [e[0] + step[0], e[1] + step[1], e[2] + step[2]];
                 }
             } else {
                 for x in pixels {
@@ -1378,44 +1350,12 @@ mod tests {
         ScreenTriangle {
             xy,
             inv_area: 1.0 / area as f64,
-            depth_plane: depth_plane([0.5; 3], 1.0 / area as f64),
+            depth: [0.5; 3],
             inv_w: [1.0; 3],
             attributes: [corner; 3],
             min: [0, 0],
             max: [0, 0],
             source: 0,
-        }
-    }
-
-    proptest! {
-        /// The window depth from the edge values is the plane through the corners' depths:
-        /// exactly a corner's depth at that corner, and within one `f32` rounding of
-        /// `Σ λₖ·zₖ` (evaluated in `f64` from the exact edge values) everywhere else.
-        #[test]
-        fn depth_is_the_plane_through_the_corner_depths(
-            corners in proptest::array::uniform3(proptest::array::uniform2(-300_000i64..300_000)),
-            z in proptest::array::uniform3(0.0f32..1.0),
-            p in proptest::array::uniform2(-300_000i64..300_000),
-        ) {
-            let area = edge(corners[0], corners[1], corners[2]);
-            prop_assume!(area != 0);
-            let mut t = triangle(corners);
-            t.inv_area = 1.0 / area as f64;
-            t.depth_plane = depth_plane(z, t.inv_area);
-            let [a, b, c] = corners;
-            let edges = |q: [i64; 2]| [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
-            for (k, &corner) in corners.iter().enumerate() {
-                prop_assert_eq!(t.depth_from_edges(edges(corner)), z[k]);
-            }
-            let e = edges(p);
-            let terms = (0..3).map(|k| e[k] as f64 / area as f64 * f64::from(z[k]));
-            let (exact, magnitude): (f64, f64) =
-                terms.fold((0.0, 0.0), |(sum, m), v| (sum + v, m + v.abs()));
-            // One f32 rounding of the result, and f64 roundings of terms as large as λₖ·zₖ
-            // (points far outside a thin triangle).
-            let bound = f64::from(f32::EPSILON) * exact.abs() + 1e-14 * magnitude;
-            let depth = f64::from(t.depth_from_edges(e));
-            prop_assert!((depth - exact).abs() <= bound, "{} vs {}", depth, exact);
         }
     }
 
