@@ -1,7 +1,7 @@
 //! refract-core's per-pixel kernels over precomputed buffers of an analytic sphere (1024²):
 //! the cost of the math alone, without rasterisation; the `pvrr` map lookup; and the
 //! distance-map search over
-//! analytic layers.
+//! analytic layers, and its cube-map texel location.
 
 use std::hint::black_box;
 
@@ -207,6 +207,48 @@ fn distance_search(c: &mut Criterion) {
     group.finish();
 }
 
+/// Locating the linear search's samples in a cube map: `cube_texel` + `cube_texel_index` one
+/// direction at a time against `cube_texel_indices_x8`, eight (the same texels), over 1M
+/// directions spread over every face, one thread.
+fn cube_texels(c: &mut Criterion) {
+    use glam::Vec3;
+    use refract_core::distance_map::{cube_texel, cube_texel_index, cube_texel_indices_x8};
+    use refract_core::lanes::{LANES, Vec3x8};
+    const SIZE: u32 = 512;
+    let dirs: Vec<Vec3> = (0..1u32 << 20)
+        .map(|k| {
+            let z = (k as f32 + 0.5) / (1u32 << 20) as f32 * 2.0 - 1.0;
+            let phi = k as f32 * 2.399_963;
+            let s = (1.0 - z * z).sqrt();
+            Vec3::new(s * phi.cos(), z, s * phi.sin())
+        })
+        .collect();
+    let lanes: Vec<Vec3x8> = dirs
+        .chunks_exact(LANES)
+        .map(|d| Vec3x8::from_lanes(d.try_into().expect("eight")))
+        .collect();
+    let mut group = c.benchmark_group("core/cube_texels");
+    group.throughput(Throughput::Elements(dirs.len() as u64));
+    group.bench_function("scalar", |b| {
+        b.iter(|| {
+            dirs.iter()
+                .filter_map(|d| cube_texel(black_box(*d), SIZE))
+                .map(|(f, t)| cube_texel_index(f, t, SIZE))
+                .fold(0u32, u32::wrapping_add)
+        })
+    });
+    group.bench_function("x8", |b| {
+        b.iter(|| {
+            lanes
+                .iter()
+                .flat_map(|d| cube_texel_indices_x8(black_box(*d), SIZE))
+                .flatten()
+                .fold(0u32, u32::wrapping_add)
+        })
+    });
+    group.finish();
+}
+
 /// The `pvrr` map lookup alone (`refract_core::pvrr::lookup`, one pixel at a time, and
 /// `lookup_x8`, eight): a 1024 × 1024 map read bilinearly at the positions a convex mirror's
 /// 512 × 512 pixels would read, a smooth magnified warp of the map (each map row read along a
@@ -264,5 +306,5 @@ fn pvrr_lookup(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernels, distance_search, pvrr_lookup);
+criterion_group!(benches, kernels, distance_search, cube_texels, pvrr_lookup);
 criterion_main!(benches);
