@@ -582,17 +582,16 @@ mod tests {
             map: &map,
             scene: &scene,
         };
-        let mut state = 0x2545_f491_u32;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state as f32 / u32::MAX as f32 * 2.0 - 1.0
+        // Directions spread evenly over the sphere (a golden-angle spiral, shuffled in height
+        // so that a group's lanes land on different faces).
+        let spiral = |k: usize| {
+            let z = (k as f32 * 0.618_034).fract() * 2.0 - 1.0;
+            let (s, phi) = ((1.0 - z * z).sqrt(), k as f32 * 2.399_963);
+            Vec3::new(s * phi.cos(), z, s * phi.sin())
         };
         let (mut filled, mut empty) = (0, 0);
         for group in 0..400 {
-            let mut dirs: [Vec3; LANES] =
-                core::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            let mut dirs: [Vec3; LANES] = core::array::from_fn(|i| spiral(group * LANES + i));
             if group == 0 {
                 (dirs[0], dirs[1]) = (Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 1.0));
             }
