@@ -247,8 +247,8 @@ impl ScreenTriangle {
             *o = d as f64;
         }
         const EXACT: i64 = 1 << 53;
-        // A plain loop: as an iterator adapter with a closure it was once not inlined (a call
-        // per group of eight in `perf`).
+        // Plain loops and written-out arrays in this per-group path: `array::map` closures
+        // nearby were once left as calls by the compiler (performance.md, session 15).
         let mut exact = true;
         for k in 0..3 {
             let bound = step[k]
