@@ -59,6 +59,7 @@ pub mod kernel_x8;
 pub mod lanes;
 mod math;
 pub mod nearby_geometry;
+pub mod nearby_geometry_x8;
 pub mod optics;
 pub mod procedural_sky;
 pub mod pvrr;

@@ -18,6 +18,7 @@
 use glam::{UVec2, Vec3, Vec4};
 
 use crate::camera::{Camera, CameraDesc};
+use crate::lanes::{F32x8, I32x8, LANES, Mask, Vec3x8, mask_from_lanes};
 use crate::math;
 
 /// The camera of an NG texture with a guard band (beyond Wyman 2005b, which renders the NG
@@ -163,6 +164,48 @@ pub struct NearbySurface {
 pub trait NearbyGeometryTexture {
     /// The surface at texel `(x, y)` (inside the texture; the lookups check bounds).
     fn surface(&self, texel: UVec2) -> Option<NearbySurface>;
+
+    /// [`Self::surface`] at eight texels `(x[i], y[i])`, for the lanes set in `read` (each
+    /// inside the texture); the other lanes are not read and come back not found. The lane
+    /// lookups ([`crate::nearby_geometry_x8`]) read through this; the default reads lane by
+    /// lane.
+    #[inline]
+    fn surfaces_x8(&self, x: I32x8, y: I32x8, read: Mask) -> NearbySurfaceLanes {
+        let (x, y, read) = (x.to_array(), y.to_array(), read.to_bitmask());
+        let mut p = [[0.0; LANES]; 3];
+        let mut depth = [0.0; LANES];
+        let mut found = [false; LANES];
+        for i in 0..LANES {
+            if read & (1 << i) == 0 {
+                continue;
+            }
+            if let Some(s) = self.surface(UVec2::new(x[i] as u32, y[i] as u32)) {
+                (p[0][i], p[1][i], p[2][i]) = (s.p_ws.x, s.p_ws.y, s.p_ws.z);
+                depth[i] = s.depth;
+                found[i] = true;
+            }
+        }
+        NearbySurfaceLanes {
+            p_ws: Vec3x8 {
+                x: F32x8::new(p[0]),
+                y: F32x8::new(p[1]),
+                z: F32x8::new(p[2]),
+            },
+            depth: F32x8::new(depth),
+            found: mask_from_lanes(found),
+        }
+    }
+}
+
+/// Eight reads of the NG texture ([`NearbyGeometryTexture::surfaces_x8`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NearbySurfaceLanes {
+    /// [`NearbySurface::p_ws`] per lane (zero where not found).
+    pub p_ws: Vec3x8,
+    /// [`NearbySurface::depth`] per lane (zero where not found).
+    pub depth: F32x8,
+    /// The lanes read whose texel holds a surface.
+    pub found: Mask,
 }
 
 /// Where a lookup found nearby geometry.
@@ -237,6 +280,12 @@ impl ClipRay {
             width: camera.width() as f32,
             height: camera.height() as f32,
         }
+    }
+
+    /// `(c0, c1)` of `clip(t) = c0 + t c1`.
+    #[inline]
+    pub fn clip(&self) -> (Vec4, Vec4) {
+        (self.c0, self.c1)
     }
 
     /// The point at `t`.

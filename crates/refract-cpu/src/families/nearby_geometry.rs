@@ -2,7 +2,8 @@
 //! `iterative`, `iterative-seeded`): the three passes of §5 — the refractor's back faces, the
 //! nearby opaque objects from the eye into the NG texture (surface + colour per texel), and the
 //! front faces — then per pixel the two-interface kernel of Wyman 2005a and
-//! [`refract_core::nearby_geometry::find_nearby`].
+//! [`refract_core::nearby_geometry::find_nearby`], both eight refractor pixels at a time
+//! ([`two_interface_lanes`], [`find_nearby_x8`]).
 //!
 //! Every pixel is one of: the refractor in front of the objects (the refraction), an object
 //! seen directly (its NG texel), or the environment.
@@ -16,11 +17,12 @@ use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, two_interface_lanes};
-use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
+use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::{
-    NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, find_nearby, guard_band_camera,
+    NearbyGeometryTexture, NearbyLookup, NearbyResult, NearbySurface, Plane, guard_band_camera,
     view_depth,
 };
+use refract_core::nearby_geometry_x8::find_nearby_x8;
 use refract_scene::{
     Aov, Frame, LayerValue, NearbyParams, PixelLayers, RenderError, Scene, SceneMesh,
 };
@@ -436,7 +438,9 @@ impl PixelContext<'_> {
     }
 
     /// Eight pixels of row `y` the refractor covers: the lane kernel, then per lane the object
-    /// when one is nearer than the refractor there, else the lookup.
+    /// when one is nearer than the refractor there, else the lookup, the eight lookups on
+    /// lanes ([`find_nearby_x8`], bit-identical to the scalar
+    /// [`refract_core::nearby_geometry::find_nearby`]).
     fn refractor(
         &self,
         group: &PixelGroup,
@@ -460,19 +464,28 @@ impl PixelContext<'_> {
             paths.t2.to_lanes(),
             paths.n2.to_lanes(),
         );
+        // Per lane: the object's colour where it is nearer, black for a degenerate input or
+        // a path the TIR policy `black` absorbed, else a lookup.
+        let mut shown: [Option<(Vec3, NearbyAov)>; LANES] = [None; LANES];
+        let mut looked_up = [false; LANES];
         for i in 0..group.len {
-            let x = group.x[i] as usize;
             // The refractor wins only where it is strictly nearer (NaN: the object).
             let refractor_nearer = |depth: f32| view_depth(self.camera, p1[i]) < depth;
             let object = self
                 .nearby
                 .texel(UVec2::new(group.x[i], y) + self.pad)
                 .filter(|o| !refractor_nearer(o.surface.depth));
-            let (color, aov) = if let Some(object) = object {
-                (object.color, NearbyAov::NONE)
-            } else if paths.ok[i] {
-                self.lookup(NearbyAov {
-                    covered: true,
+            let covered = NearbyAov {
+                covered: true,
+                ..NearbyAov::NONE
+            };
+            shown[i] = if let Some(object) = object {
+                Some((object.color, NearbyAov::NONE))
+            } else if !paths.ok[i] {
+                // A degenerate input: black, no path.
+                Some((Vec3::ZERO, covered))
+            } else {
+                let aov = NearbyAov {
                     p2: p2[i],
                     t2: t2[i],
                     n2: n2[i],
@@ -482,18 +495,32 @@ impl PixelContext<'_> {
                         ExitNormalSource::SilhouetteFallback
                     }),
                     tir: paths.tir[i],
-                    ..NearbyAov::NONE
-                })
-            } else {
-                // A degenerate input: black, no path.
-                (
-                    Vec3::ZERO,
-                    NearbyAov {
-                        covered: true,
-                        ..NearbyAov::NONE
-                    },
-                )
+                    ..covered
+                };
+                // `T~2 = 0`: absorbed by the TIR policy `black`.
+                looked_up[i] = t2[i] != Vec3::ZERO;
+                Some((Vec3::ZERO, aov))
             };
+        }
+        let results = looked_up.contains(&true).then(|| {
+            find_nearby_x8(
+                self.ng_camera,
+                self.nearby,
+                self.planes,
+                self.lookup,
+                &paths.p2,
+                &paths.t2,
+                mask_from_lanes(looked_up),
+            )
+        });
+        for i in 0..group.len {
+            let Some((mut color, mut aov)) = shown[i] else {
+                continue;
+            };
+            if let (true, Some(results)) = (looked_up[i], &results) {
+                (color, aov) = self.shade_lookup(results[i], aov);
+            }
+            let x = group.x[i] as usize;
             colors[x] = color;
             if let Some(aovs) = aovs.as_deref_mut() {
                 aovs[x] = aov;
@@ -501,21 +528,10 @@ impl PixelContext<'_> {
         }
     }
 
-    /// The lookup of a refractor pixel whose two-interface path is in `aov`.
+    /// The colour a lookup's `result` shows for the pixel whose path is in `aov`: the hit
+    /// texel's colour, or the environment along `T~2` for a miss.
     #[inline]
-    fn lookup(&self, mut aov: NearbyAov) -> (Vec3, NearbyAov) {
-        if aov.t2 == Vec3::ZERO {
-            // Absorbed by the TIR policy `black`.
-            return (Vec3::ZERO, aov);
-        }
-        let result = find_nearby(
-            self.ng_camera,
-            self.nearby,
-            self.planes,
-            self.lookup,
-            aov.p2,
-            aov.t2,
-        );
+    fn shade_lookup(&self, result: NearbyResult, mut aov: NearbyAov) -> (Vec3, NearbyAov) {
         aov.iterations = result.iterations;
         aov.converged = result.converged;
         // A hit's surface was read by the lookup: only its colour and object remain to read.
