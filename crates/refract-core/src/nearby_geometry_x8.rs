@@ -65,6 +65,36 @@ impl ClipRayLanes {
         self.c0[3] + t * self.c1[3]
     }
 
+    /// [`ClipRay::segment`] on lanes: the clip-space Liang–Barsky clip of `t ≥ 0` against
+    /// `−w ≤ x, y ≤ w` and `0 ≤ z ≤ w`, each constraint `a0 + t a1 ≥ 0` in the scalar order,
+    /// `max`/`min` with the scalar's NaN rule (`wide`'s `max`/`min` return the other operand
+    /// for a NaN, as `f32::max`/`min`). Returns `(t0, t1)` and the lanes of `live` where the
+    /// segment exists.
+    #[inline]
+    fn segment(&self, live: Mask) -> (F32x8, F32x8, Mask) {
+        let (c0, c1) = (&self.c0, &self.c1);
+        let constraints = [
+            (c0[3] + c0[0], c1[3] + c1[0]),
+            (c0[3] - c0[0], c1[3] - c1[0]),
+            (c0[3] + c0[1], c1[3] + c1[1]),
+            (c0[3] - c0[1], c1[3] - c1[1]),
+            (c0[2], c1[2]),
+            (c0[3] - c0[2], c1[3] - c1[2]),
+        ];
+        let zero = F32x8::ZERO;
+        let (mut t0, mut t1) = (zero, F32x8::splat(f32::INFINITY));
+        let mut ok = live;
+        for (a0, a1) in constraints {
+            // Parallel to this plane: inside everywhere or nowhere (NaN: nowhere).
+            ok &= !(a1.simd_eq(zero) & !a0.simd_ge(zero));
+            let t = -a0 / a1;
+            t0 = a1.simd_gt(zero).select(t0.max(t), t0);
+            t1 = a1.simd_lt(zero).select(t1.min(t), t1);
+        }
+        ok &= t0.is_finite() & t1.is_finite() & t0.simd_lt(t1);
+        (t0, t1, ok)
+    }
+
     /// [`ClipRay::texel`]: the pixel position `(½(x/w + 1)·W, ½(1 − y/w)·H)` and window depth
     /// `z/w`, inside where `w > 0`, `0 ≤ x < W`, `0 ≤ y < H` and `0 ≤ z ≤ 1`; the texel is the
     /// floor (the scalar code's `as u32` of a non-negative number).
@@ -163,7 +193,7 @@ pub fn find_nearby_x8<T: NearbyGeometryTexture + ?Sized>(
             seeds,
             spacing,
         } => {
-            let start = best_seed(&rays, &scalar_rays, texture, active, seeds, spacing);
+            let start = best_seed(&rays, texture, active, seeds, spacing);
             iterate(&rays, texture, p2, start, iterations)
         }
     }
@@ -190,17 +220,12 @@ fn starts(t: &[Option<f32>; LANES], active: Mask) -> (F32x8, Mask) {
 /// texels; live where some seed found a surface.
 fn best_seed<T: NearbyGeometryTexture + ?Sized>(
     rays: &ClipRayLanes,
-    scalar_rays: &[ClipRay; LANES],
     texture: &T,
     active: Mask,
     k: u32,
     spacing: SeedSpacing,
 ) -> (F32x8, Mask) {
-    let active_lanes = mask_lanes(active);
-    let segments: [Option<(f32, f32)>; LANES] =
-        core::array::from_fn(|i| active_lanes[i].then(|| scalar_rays[i].segment()).flatten());
-    let (starts_t, live) = starts(&segments.map(|s| s.map(|s| s.0)), active);
-    let ends_t = F32x8::new(segments.map(|s| s.map_or(0.0, |s| s.1)));
+    let (starts_t, ends_t, live) = rays.segment(active);
     let (w0, w1) = (rays.depth(starts_t), rays.depth(ends_t));
     let mut best_error = F32x8::ZERO;
     let mut best_t = F32x8::ZERO;
@@ -491,5 +516,63 @@ mod tests {
             }
         }
         assert!(inside.iter().all(|&n| n > 500), "{inside:?}");
+    }
+
+    /// The lane segments are the scalar `ClipRay::segment`s: the same lanes have one and the
+    /// same ends, for rays in every direction, rays parallel to the frustum's planes (the axes
+    /// seen by a camera looking down −z, the zero direction), and origins inside, outside and
+    /// behind the view and not a number.
+    #[test]
+    fn lane_segments_equal_the_scalar_segments() {
+        let axis_camera = Camera::new(CameraDesc {
+            width: 64,
+            height: 64,
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            near: 0.1,
+            far: 12.0,
+            ..CameraDesc::default()
+        })
+        .expect("camera");
+        let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::ZERO];
+        let mut found = [0usize; 2];
+        for cam in [camera(64, 48), axis_camera] {
+            for origin in [
+                Vec3::new(0.1, 0.2, 0.5),
+                Vec3::new(0.0, 0.0, 3.0),
+                Vec3::new(30.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 20.0),
+                Vec3::new(f32::NAN, 0.0, 0.0),
+            ] {
+                for group in 0..60 {
+                    let dirs: [Vec3; LANES] = core::array::from_fn(|i| {
+                        let k = group * LANES + i;
+                        if k % 5 == 0 {
+                            axes[k / 5 % axes.len()]
+                        } else {
+                            spiral(k, 480)
+                        }
+                    });
+                    let scalar: [ClipRay; LANES] =
+                        core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
+                    let (t0, t1, ok) = ClipRayLanes::new(&cam, &scalar).segment(F32x8::splat(
+                        f32::from_bits(u32::MAX),
+                    ));
+                    let (t0, t1, ok) = (t0.to_array(), t1.to_array(), mask_lanes(ok));
+                    for i in 0..LANES {
+                        let lanes = ok[i].then_some((t0[i], t1[i]));
+                        let expected = scalar[i].segment();
+                        assert_eq!(
+                            lanes.map(|(a, b)| (a.to_bits(), b.to_bits())),
+                            expected.map(|(a, b)| (a.to_bits(), b.to_bits())),
+                            "ray {origin} + t {}",
+                            dirs[i]
+                        );
+                        found[usize::from(ok[i])] += 1;
+                    }
+                }
+            }
+        }
+        assert!(found.iter().all(|&n| n > 300), "{found:?}");
     }
 }
