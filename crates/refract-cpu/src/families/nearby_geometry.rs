@@ -19,7 +19,7 @@ use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, two_interface_lanes};
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::{
-    NearbyGeometryTexture, NearbyLookup, NearbyResult, NearbySurface, Plane, guard_band_camera,
+    NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, guard_band_camera,
     view_depth,
 };
 use refract_core::nearby_geometry_x8::find_nearby_x8;
@@ -464,9 +464,9 @@ impl PixelContext<'_> {
             paths.t2.to_lanes(),
             paths.n2.to_lanes(),
         );
-        // Per lane: the object's colour where it is nearer, black for a degenerate input or
-        // a path the TIR policy `black` absorbed, else a lookup.
-        let mut shown: [Option<(Vec3, NearbyAov)>; LANES] = [None; LANES];
+        // Per lane: the object where it is nearer, black for a degenerate input, else the
+        // path (a lookup, or black where the TIR policy `black` absorbed it: `T~2 = 0`).
+        let mut shown = [Shown::Degenerate; LANES];
         let mut looked_up = [false; LANES];
         for i in 0..group.len {
             // The refractor wins only where it is strictly nearer (NaN: the object).
@@ -475,31 +475,13 @@ impl PixelContext<'_> {
                 .nearby
                 .texel(UVec2::new(group.x[i], y) + self.pad)
                 .filter(|o| !refractor_nearer(o.surface.depth));
-            let covered = NearbyAov {
-                covered: true,
-                ..NearbyAov::NONE
-            };
             shown[i] = if let Some(object) = object {
-                Some((object.color, NearbyAov::NONE))
+                Shown::Object(object.color)
             } else if !paths.ok[i] {
-                // A degenerate input: black, no path.
-                Some((Vec3::ZERO, covered))
+                Shown::Degenerate
             } else {
-                let aov = NearbyAov {
-                    p2: p2[i],
-                    t2: t2[i],
-                    n2: n2[i],
-                    n2_source: Some(if paths.n2_from_back_face[i] {
-                        ExitNormalSource::BackFace
-                    } else {
-                        ExitNormalSource::SilhouetteFallback
-                    }),
-                    tir: paths.tir[i],
-                    ..covered
-                };
-                // `T~2 = 0`: absorbed by the TIR policy `black`.
                 looked_up[i] = t2[i] != Vec3::ZERO;
-                Some((Vec3::ZERO, aov))
+                Shown::Path
             };
         }
         let results = looked_up.contains(&true).then(|| {
@@ -514,39 +496,68 @@ impl PixelContext<'_> {
             )
         });
         for i in 0..group.len {
-            let Some((mut color, mut aov)) = shown[i] else {
+            let x = group.x[i] as usize;
+            let result = results.as_ref().filter(|_| looked_up[i]).map(|r| r[i]);
+            // A hit's surface was read by the lookup: only its colour and object remain.
+            let shaded = result
+                .and_then(|r| r.hit)
+                .and_then(|hit| Some((hit, self.nearby.shading(hit.texel)?)));
+            colors[x] = match (shown[i], shaded) {
+                (Shown::Object(color), _) => color,
+                (Shown::Degenerate, _) => Vec3::ZERO,
+                (Shown::Path, Some((_, (color, _)))) => color,
+                (Shown::Path, None) if looked_up[i] => self.scene.environment.radiance(t2[i]),
+                (Shown::Path, None) => Vec3::ZERO,
+            };
+            let Some(aovs) = aovs.as_deref_mut() else {
                 continue;
             };
-            if let (true, Some(results)) = (looked_up[i], &results) {
-                (color, aov) = self.shade_lookup(results[i], aov);
-            }
-            let x = group.x[i] as usize;
-            colors[x] = color;
-            if let Some(aovs) = aovs.as_deref_mut() {
-                aovs[x] = aov;
-            }
+            let covered = NearbyAov {
+                covered: true,
+                ..NearbyAov::NONE
+            };
+            aovs[x] = match shown[i] {
+                Shown::Object(_) => NearbyAov::NONE,
+                Shown::Degenerate => covered,
+                Shown::Path => {
+                    let (p_geom, ng_texel) = shaded.map_or(
+                        (NearbyAov::NONE.p_geom, NearbyAov::NONE.ng_texel),
+                        |(hit, (_, object))| {
+                            let texel = hit.texel.as_vec2();
+                            (hit.p_geom, Vec3::new(texel.x, texel.y, object as f32))
+                        },
+                    );
+                    NearbyAov {
+                        p2: p2[i],
+                        t2: t2[i],
+                        n2: n2[i],
+                        n2_source: Some(if paths.n2_from_back_face[i] {
+                            ExitNormalSource::BackFace
+                        } else {
+                            ExitNormalSource::SilhouetteFallback
+                        }),
+                        tir: paths.tir[i],
+                        p_geom,
+                        ng_texel,
+                        iterations: result.map_or(0, |r| r.iterations),
+                        converged: result.is_some_and(|r| r.converged),
+                        ..covered
+                    }
+                }
+            };
         }
     }
+}
 
-    /// The colour a lookup's `result` shows for the pixel whose path is in `aov`: the hit
-    /// texel's colour, or the environment along `T~2` for a miss.
-    #[inline]
-    fn shade_lookup(&self, result: NearbyResult, mut aov: NearbyAov) -> (Vec3, NearbyAov) {
-        aov.iterations = result.iterations;
-        aov.converged = result.converged;
-        // A hit's surface was read by the lookup: only its colour and object remain to read.
-        match result
-            .hit
-            .and_then(|hit| Some((hit, self.nearby.shading(hit.texel)?)))
-        {
-            Some((hit, (color, object))) => {
-                aov.p_geom = hit.p_geom;
-                aov.ng_texel = Vec3::new(hit.texel.x as f32, hit.texel.y as f32, object as f32);
-                (color, aov)
-            }
-            None => (self.scene.environment.radiance(aov.t2), aov),
-        }
-    }
+/// What a refractor pixel shows before its lookup.
+#[derive(Clone, Copy, Debug)]
+enum Shown {
+    /// An object nearer than the refractor: its NG texel's colour.
+    Object(Vec3),
+    /// A degenerate input to the kernel: black, no path.
+    Degenerate,
+    /// The refracted path: the lookup's colour (black where the TIR policy absorbed it).
+    Path,
 }
 
 #[cfg(test)]
