@@ -200,9 +200,9 @@ pub trait NearbyGeometryTexture {
 /// Eight reads of the NG texture ([`NearbyGeometryTexture::surfaces_x8`]).
 #[derive(Clone, Copy, Debug)]
 pub struct NearbySurfaceLanes {
-    /// [`NearbySurface::p_ws`] per lane (zero where not found).
+    /// [`NearbySurface::p_ws`] per lane (unspecified where not found).
     pub p_ws: Vec3x8,
-    /// [`NearbySurface::depth`] per lane (zero where not found).
+    /// [`NearbySurface::depth`] per lane (unspecified where not found).
     pub depth: F32x8,
     /// The lanes read whose texel holds a surface.
     pub found: Mask,

@@ -124,8 +124,10 @@ impl ClipRayLanes {
     }
 }
 
-/// The texture read at the texels under `rays` at `t`, in the lanes of `live`.
-#[inline]
+/// The texture read at the texels under `rays` at `t`, in the lanes of `live`. (Always
+/// inlined: returned through memory its result cost about a sixth of the lookups'
+/// instructions.)
+#[inline(always)]
 fn lookup<T: NearbyGeometryTexture + ?Sized>(
     rays: &ClipRayLanes,
     texture: &T,
@@ -534,7 +536,15 @@ mod tests {
             ..CameraDesc::default()
         })
         .expect("camera");
-        let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::ZERO];
+        let axes = [
+            Vec3::X,
+            -Vec3::X,
+            Vec3::Y,
+            -Vec3::Y,
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::ZERO,
+        ];
         let mut found = [0usize; 2];
         for cam in [camera(64, 48), axis_camera] {
             for origin in [
@@ -547,7 +557,7 @@ mod tests {
                 for group in 0..60 {
                     let dirs: [Vec3; LANES] = core::array::from_fn(|i| {
                         let k = group * LANES + i;
-                        if k % 5 == 0 {
+                        if k.is_multiple_of(5) {
                             axes[k / 5 % axes.len()]
                         } else {
                             spiral(k, 480)
@@ -555,9 +565,8 @@ mod tests {
                     });
                     let scalar: [ClipRay; LANES] =
                         core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
-                    let (t0, t1, ok) = ClipRayLanes::new(&cam, &scalar).segment(F32x8::splat(
-                        f32::from_bits(u32::MAX),
-                    ));
+                    let (t0, t1, ok) = ClipRayLanes::new(&cam, &scalar)
+                        .segment(F32x8::splat(f32::from_bits(u32::MAX)));
                     let (t0, t1, ok) = (t0.to_array(), t1.to_array(), mask_lanes(ok));
                     for i in 0..LANES {
                         let lanes = ok[i].then_some((t0[i], t1[i]));

@@ -17,10 +17,10 @@ use refract_core::exit::ExitNormalSource;
 use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, two_interface_lanes};
-use refract_core::lanes::{LANES, Vec2x8, Vec3x8, mask_from_lanes};
+use refract_core::lanes::{F32x8, I32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::{
-    NearbyGeometryTexture, NearbyLookup, NearbySurface, Plane, guard_band_camera,
-    view_depth,
+    NearbyGeometryTexture, NearbyLookup, NearbySurface, NearbySurfaceLanes, Plane,
+    guard_band_camera, view_depth,
 };
 use refract_core::nearby_geometry_x8::find_nearby_x8;
 use refract_scene::{
@@ -80,6 +80,32 @@ impl NearbyGeometryTexture for NearbyTexture {
             p_ws: s.truncate(),
             depth: s.w,
         })
+    }
+
+    /// The scalar reads without a branch per lane: every lane loads (a lane not read or
+    /// outside the texture loads [`EMPTY_SURFACE`]) and the depth's sign decides on lanes.
+    #[inline]
+    fn surfaces_x8(&self, x: I32x8, y: I32x8, read: Mask) -> NearbySurfaceLanes {
+        let (x, y, read) = (x.to_array(), y.to_array(), read.to_bitmask());
+        let mut columns = [[0.0; LANES]; 4];
+        for i in 0..LANES {
+            let texel = UVec2::new(x[i] as u32, y[i] as u32);
+            let s = match self.index(texel).and_then(|at| self.surfaces.get(at)) {
+                Some(s) if read & (1 << i) != 0 => *s,
+                _ => EMPTY_SURFACE,
+            };
+            (columns[0][i], columns[1][i], columns[2][i], columns[3][i]) = (s.x, s.y, s.z, s.w);
+        }
+        let depth = F32x8::new(columns[3]);
+        NearbySurfaceLanes {
+            p_ws: Vec3x8 {
+                x: F32x8::new(columns[0]),
+                y: F32x8::new(columns[1]),
+                z: F32x8::new(columns[2]),
+            },
+            depth,
+            found: depth.simd_ge(F32x8::ZERO),
+        }
     }
 }
 
@@ -600,5 +626,47 @@ mod tests {
             }
         }
         assert!(object_texels > 1000, "{object_texels} object texels");
+    }
+
+    /// The texture's eight-lane reads are its scalar reads: found where the scalar read finds
+    /// a surface (inside the texture, not empty, lane read), with the same position and depth;
+    /// lanes not read, texels past the right edge or the last row, and empty texels are not
+    /// found.
+    #[test]
+    fn eight_lane_surface_reads_equal_the_scalar_reads() {
+        let scene = refract_eval::load_scene("chart").expect("chart").scene;
+        let camera = scene.camera(70, 50).expect("camera");
+        let meshes = SceneMeshes::objects(&scene);
+        let mut texture = NearbyTexture::default();
+        texture.render_into(&scene, &meshes, &camera);
+        let mut found = [0usize; 2];
+        // Every texel once, and texels past each edge.
+        let texels: Vec<(i32, i32)> = (-1..52)
+            .flat_map(|y| (-1..73).map(move |x| (x, y)))
+            .collect();
+        for (group, chunk) in texels.chunks_exact(LANES).enumerate() {
+            let x: [i32; LANES] = core::array::from_fn(|i| chunk[i].0);
+            let y: [i32; LANES] = core::array::from_fn(|i| chunk[i].1);
+            let read: [bool; LANES] = core::array::from_fn(|i| (group + i) % 5 != 0);
+            let lanes = texture.surfaces_x8(I32x8::new(x), I32x8::new(y), mask_from_lanes(read));
+            let (p, depth) = (lanes.p_ws.to_lanes(), lanes.depth.to_array());
+            let lane_found = refract_core::lanes::mask_lanes(lanes.found);
+            for i in 0..LANES {
+                let expected = read[i]
+                    .then(|| texture.surface(UVec2::new(x[i] as u32, y[i] as u32)))
+                    .flatten();
+                let got = lane_found[i].then_some((p[i], depth[i]));
+                assert_eq!(
+                    got.map(|(p, d)| (p.to_array().map(f32::to_bits), d.to_bits())),
+                    expected.map(|s| (s.p_ws.to_array().map(f32::to_bits), s.depth.to_bits())),
+                    "texel ({}, {}), read {}",
+                    x[i],
+                    y[i],
+                    read[i]
+                );
+                found[usize::from(got.is_some())] += 1;
+            }
+        }
+        assert!(found.iter().all(|&n| n > 300), "{found:?}");
     }
 }
