@@ -1,8 +1,8 @@
 //! Kakimoto et al. 2007 on the CPU backend at 1024²: the per-frame plan alone (per-vertex rays
 //! by BVH, virtual viewpoints, view volumes, texture coordinates) and whole colour-only frames
-//! (every view rasterised and shaded eight pixels at a time), on the reflection,
-//! multiple-reflection and lens scenes of the paper's §5, with maps sized from the footprint
-//! and fixed at 1024 texels.
+//! (every view rasterised, the pixels that are shown or read shaded eight at a time), on the
+//! reflection, multiple-reflection and lens scenes of the paper's §5, with maps sized from the
+//! footprint and fixed at 1024 texels.
 
 use std::sync::Arc;
 

@@ -5,10 +5,16 @@
 //! In each view the diffuse objects are shaded, empty pixels show the environment, and a
 //! reflector's pixel interpolates its vertices' map positions (perspective-correct
 //! barycentrics) and reads its map bilinearly (§3.1 step 4).
+//!
+//! Before any view is rendered, each view's reflector triangles mark the texels of their maps
+//! that a lookup can read ([`demand`]); a map view then shades only those texels, so a frame's
+//! colours are those of shading every texel, bit for bit, for less work.
+
+mod demand;
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes, mask_lanes};
@@ -28,8 +34,10 @@ use crate::raster::{
 };
 use crate::scene_meshes::SceneMeshes;
 use crate::shade::environment_run;
+use demand::Demand;
 
-/// A rendered view's radiance, row-major from the top.
+/// A rendered view's radiance, row-major from the top. A map holds the texels the frame's
+/// lookups read; the others keep unspecified values.
 #[derive(Default)]
 pub struct Image {
     /// Width in texels.
@@ -85,6 +93,8 @@ pub struct PvrrPasses {
     everything: SceneMeshes,
     without: Vec<SceneMeshes>,
     buffers: Vec<SurfaceBuffer>,
+    /// Per view, the texels the frame shows (the eye: all) or reads (a map).
+    demand: Vec<Demand>,
     images: Vec<Image>,
     aovs: Vec<PvrrAov>,
 }
@@ -121,7 +131,18 @@ impl CpuFamily for PvrrPasses {
         let plan = self.planner.plan(scene, camera, params)?;
         let views = plan.views.len();
         self.buffers.resize_with(views, SurfaceBuffer::new);
+        self.demand.resize_with(views, Demand::default);
         self.images.resize_with(views, Image::default);
+        for (index, view) in plan.views.iter().enumerate() {
+            let (width, height) = (view.camera.width(), view.camera.height());
+            match index {
+                0 => self.demand[0].fill(width, height),
+                _ => self.demand[index].clear(height),
+            }
+        }
+        for view in &plan.views {
+            mark_map_reads(scene, plan, view, &self.demand);
+        }
         for index in (1..views).rev() {
             let (done, rest) = self.images.split_at_mut(index + 1);
             let image = &mut done[index];
@@ -146,7 +167,9 @@ impl CpuFamily for PvrrPasses {
                 meshes,
                 children: &children,
             };
-            render_view(&pass, &mut self.buffers[index], &mut image.texels, None);
+            let demand = &self.demand[index];
+            let buffer = &mut self.buffers[index];
+            render_view(&pass, buffer, demand, &mut image.texels, None);
         }
         let (width, height) = (camera.width(), camera.height());
         frame.resize_for_overwrite(width, height);
@@ -173,6 +196,7 @@ impl CpuFamily for PvrrPasses {
         render_view(
             &eye,
             &mut self.buffers[0],
+            &self.demand[0],
             &mut frame.color,
             with_aovs.then_some(&mut self.aovs[..]),
         );
@@ -189,7 +213,8 @@ impl PvrrPasses {
         self.planner.last()
     }
 
-    /// The map of view `view` (≥ 1) of the last frame.
+    /// The map of view `view` (≥ 1) of the last frame: shaded where the frame's lookups could
+    /// read it (see [`Image`]), unspecified elsewhere.
     pub fn map(&self, view: usize) -> Option<&Image> {
         (view >= 1).then(|| self.images.get(view)).flatten()
     }
@@ -254,10 +279,12 @@ struct ViewPass<'a> {
     children: &'a ChildMaps<'a>,
 }
 
-/// Renders `pass`'s view into `out` (one radiance per pixel) and, for the eye, its AOVs.
+/// Renders `pass`'s view and shades its demanded pixels into `out` (one radiance per pixel)
+/// and, for the eye, its AOVs.
 fn render_view(
     pass: &ViewPass<'_>,
     buffer: &mut SurfaceBuffer,
+    demand: &Demand,
     out: &mut [Vec3],
     aovs: Option<&mut [PvrrAov]>,
 ) {
@@ -265,7 +292,11 @@ fn render_view(
     let raster = pass.meshes.raster();
     rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);
     let width = camera.width() as usize;
-    let rows = ViewRows { pass, buffer };
+    let rows = ViewRows {
+        pass,
+        buffer,
+        demand,
+    };
     match aovs {
         Some(aovs) => out
             .par_chunks_mut(width)
@@ -286,14 +317,22 @@ fn render_view(
 struct ViewRows<'a> {
     pass: &'a ViewPass<'a>,
     buffer: &'a SurfaceBuffer,
+    /// The pixels to shade.
+    demand: &'a Demand,
 }
 
 impl ViewRows<'_> {
     fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [PvrrAov]>) {
-        // Outside the row's covered span every pixel sees the environment: runs of eight.
-        let span = self.buffer.covered_span(y);
-        let width = colors.len() as u32;
-        for run in [0..span.start, span.end..width] {
+        let (wanted, covered) = (self.demand.span(y), self.buffer.covered_span(y));
+        let span = covered.start.max(wanted.start)..covered.end.min(wanted.end);
+        // Outside the row's covered span every wanted pixel sees the environment: runs of
+        // eight.
+        let (runs, span) = if span.is_empty() {
+            ([wanted, 0..0], 0..0)
+        } else {
+            ([wanted.start..span.start, span.end..wanted.end], span)
+        };
+        for run in runs {
             if let Some(aovs) = aovs.as_deref_mut() {
                 aovs[run.start as usize..run.end as usize].fill(PvrrAov::default());
             }
@@ -550,6 +589,68 @@ impl ViewRows<'_> {
     }
 }
 
+/// Marks in `maps` (one [`Demand`] per view of the plan) every texel that `view`'s lookups
+/// can read. A pixel of a reflector's triangle looks its map up only where every corner it
+/// weighs is mapped (its interpolated state is 0, the others' are positive), at a convex
+/// combination of those corners' map positions (§3.1 step 4, each channel's for dispersion,
+/// §4.5); so each triangle marks the rectangle around its mapped corners' positions, widened
+/// by a texel on each side for the bilinear footprint and the rounding of the interpolation.
+/// A triangle whose corners all lie outside one side of the view's frustum covers no pixel
+/// and marks nothing.
+fn mark_map_reads(scene: &Scene, plan: &PvrrPlan, view: &PvrrView, maps: &[Demand]) {
+    let world_to_clip = view.camera.world_to_clip();
+    for draw in &view.draws {
+        let Some(map) = draw.map else {
+            continue;
+        };
+        let Some(mesh) = scene.mesh(plan.reflectors[draw.reflector].mesh) else {
+            continue;
+        };
+        let camera = &plan.views[map].camera;
+        let (width, height) = (camera.width(), camera.height());
+        let demand = &maps[map];
+        for triangle in &mesh.triangles {
+            let clip = triangle.map(|v| world_to_clip * mesh.positions[v as usize].extend(1.0));
+            if outside_one_plane(&clip) {
+                continue;
+            }
+            let corners = triangle.map(|v| draw.vertices[v as usize]);
+            let mapped = corners.iter().filter(|c| c.state <= 0.0);
+            let positions = mapped.flat_map(|c| c.st.map(Vec2::from_array));
+            let Some((lo, hi)) = positions.fold(None, |bounds, st| {
+                let (lo, hi) = bounds.unwrap_or((st, st));
+                Some((lo.min(st), hi.max(st)))
+            }) else {
+                continue;
+            };
+            if !(lo.is_finite() && hi.is_finite()) {
+                // (`min`/`max` drop a NaN: any non-finite position is caught here.)
+                demand.mark([0, width - 1], [0, height - 1]);
+                continue;
+            }
+            let texel = |v: f32, margin: f32, size: u32| {
+                ((v - 0.5).floor() + margin).clamp(0.0, (size - 1) as f32) as u32
+            };
+            demand.mark(
+                [texel(lo.x, -1.0, width), texel(hi.x, 2.0, width)],
+                [texel(lo.y, -1.0, height), texel(hi.y, 2.0, height)],
+            );
+        }
+    }
+}
+
+/// Whether clip-space points `clip` all lie outside one of the frustum's side planes
+/// (`|x| ≤ w`, `|y| ≤ w`) or behind its near plane (`z ≥ 0`), so that a triangle through them
+/// covers no pixel (a conservative test: a triangle across a corner of the frustum passes).
+fn outside_one_plane(clip: &[Vec4; 3]) -> bool {
+    let all = |outside: fn(&Vec4) -> bool| clip.iter().all(outside);
+    all(|c| c.x > c.w)
+        || all(|c| c.x < -c.w)
+        || all(|c| c.y > c.w)
+        || all(|c| c.y < -c.w)
+        || all(|c| c.z < 0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -606,6 +707,7 @@ mod tests {
                 let rows = ViewRows {
                     pass: &pass,
                     buffer,
+                    demand: &passes.demand[index],
                 };
                 for y in 0..view.camera.height() {
                     let row = (y * buffer.width) as usize;
@@ -647,5 +749,60 @@ mod tests {
             groups_by_triangles[1..].iter().all(|&n| n > 0),
             "{groups_by_triangles:?}"
         );
+    }
+
+    /// Maps shade only what the frame's lookups read, and the frame is the same as shading
+    /// everything: every map texel is set to NaN between two renders of the same frame, and
+    /// the second frame must equal the first bit for bit (a lookup of a texel the demand
+    /// missed would read the NaN); some texels of some map must have stayed NaN (the demand
+    /// skipped them). Mirrors, a stack of maps, two mirrors sharing vertices, the lens with
+    /// chromatic aberration, and the stack with a map size too small for the view.
+    #[test]
+    fn maps_shade_what_lookups_read_and_frames_equal_the_fully_shaded_ones() {
+        for (name, dispersion, resolution) in [
+            ("convex-mirror", 0, 128),
+            ("mirror-stack", 0, 128),
+            ("mirror-stack", 0, 24),
+            ("adjacent-mirrors", 0, 96),
+            ("spectacles", 100, 512),
+            ("spectacles", 10, 128),
+            ("spectacles", 0, 64),
+        ] {
+            let scene = Arc::new(refract_eval::load_scene(name).expect(name).scene);
+            let camera = scene.camera(120, 96).expect("camera");
+            let params = PvrrParams {
+                resolution,
+                dispersion,
+                ..PvrrParams::DEFAULT
+            };
+            let mut passes = PvrrPasses::default();
+            passes.prepare(&scene);
+            let cx = FrameCx {
+                scene: &scene,
+                camera: &camera,
+                method: MethodId::Pvrr,
+                outputs: FrameOutputs::Color,
+            };
+            let (mut first, mut second) = (Frame::default(), Frame::default());
+            passes.render(&cx, &params, &mut first).expect("frame");
+            for image in &mut passes.images {
+                image.texels.fill(Vec3::NAN);
+            }
+            passes.render(&cx, &params, &mut second).expect("frame");
+            let bits = |frame: &Frame| -> Vec<[u32; 3]> {
+                frame
+                    .color
+                    .iter()
+                    .map(|c| c.to_array().map(f32::to_bits))
+                    .collect()
+            };
+            assert!(first.color.iter().all(|c| c.is_finite()), "{name}");
+            assert_eq!(bits(&first), bits(&second), "{name}, maps of {resolution}");
+            let skipped = passes.images[1..]
+                .iter()
+                .map(|image| image.texels.iter().filter(|t| t.is_nan()).count())
+                .sum::<usize>();
+            assert!(skipped > 0, "{name}: every map texel was shaded");
+        }
     }
 }
