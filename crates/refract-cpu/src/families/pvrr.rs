@@ -656,6 +656,35 @@ mod tests {
     use super::*;
     use refract_scene::MethodId;
 
+    /// `name` at 120 × 96 with maps of `resolution` texels and `dispersion`, its passes
+    /// prepared.
+    fn set_up(
+        name: &str,
+        resolution: u32,
+        dispersion: u32,
+    ) -> (Arc<Scene>, Camera, PvrrParams, PvrrPasses) {
+        let scene = Arc::new(refract_eval::load_scene(name).expect(name).scene);
+        let camera = scene.camera(120, 96).expect("camera");
+        let params = PvrrParams {
+            resolution,
+            dispersion,
+            ..PvrrParams::DEFAULT
+        };
+        let mut passes = PvrrPasses::default();
+        passes.prepare(&scene);
+        (scene, camera, params, passes)
+    }
+
+    /// A colour-only frame of `scene` seen by `camera`.
+    fn color_frame<'a>(scene: &'a Scene, camera: &'a Camera) -> FrameCx<'a> {
+        FrameCx {
+            scene,
+            camera,
+            method: MethodId::Pvrr,
+            outputs: FrameOutputs::Color,
+        }
+    }
+
     /// Every surface pixel of every view (the eye and each map) shaded on lanes is lane by
     /// lane the scalar shading's, bit for bit: a convex mirror with its map, a stack of maps,
     /// and a lens with chromatic aberration (three map positions per vertex), whose views hold
@@ -669,21 +698,8 @@ mod tests {
             ("mirror-stack", 0),
             ("spectacles", 10),
         ] {
-            let scene = Arc::new(refract_eval::load_scene(name).expect(name).scene);
-            let camera = scene.camera(120, 96).expect("camera");
-            let params = PvrrParams {
-                resolution: 128,
-                dispersion,
-                ..PvrrParams::DEFAULT
-            };
-            let mut passes = PvrrPasses::default();
-            passes.prepare(&scene);
-            let cx = FrameCx {
-                scene: &scene,
-                camera: &camera,
-                method: MethodId::Pvrr,
-                outputs: FrameOutputs::Color,
-            };
+            let (scene, camera, params, mut passes) = set_up(name, 128, dispersion);
+            let cx = color_frame(&scene, &camera);
             passes
                 .render(&cx, &params, &mut Frame::default())
                 .expect("frame");
@@ -768,21 +784,8 @@ mod tests {
             ("spectacles", 10, 128),
             ("spectacles", 0, 64),
         ] {
-            let scene = Arc::new(refract_eval::load_scene(name).expect(name).scene);
-            let camera = scene.camera(120, 96).expect("camera");
-            let params = PvrrParams {
-                resolution,
-                dispersion,
-                ..PvrrParams::DEFAULT
-            };
-            let mut passes = PvrrPasses::default();
-            passes.prepare(&scene);
-            let cx = FrameCx {
-                scene: &scene,
-                camera: &camera,
-                method: MethodId::Pvrr,
-                outputs: FrameOutputs::Color,
-            };
+            let (scene, camera, params, mut passes) = set_up(name, resolution, dispersion);
+            let cx = color_frame(&scene, &camera);
             let (mut first, mut second) = (Frame::default(), Frame::default());
             passes.render(&cx, &params, &mut first).expect("frame");
             for image in &mut passes.images {
