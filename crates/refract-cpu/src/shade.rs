@@ -321,6 +321,27 @@ pub(crate) fn environment_run(
     }
 }
 
+/// The environment seen directly by the pixels of `group` (of row `y` of `camera`), written to
+/// `colors`: their rays and radiances on lanes, each the bits of [`Camera::pixel_ray`] and
+/// [`Environment::radiance`] for its pixel.
+pub(crate) fn environment_group(
+    camera: &Camera,
+    environment: &Environment,
+    group: &PixelGroup,
+    y: u32,
+    colors: &mut [Vec3],
+) {
+    let mut uv = [Vec2::ZERO; LANES];
+    for (uv, &x) in uv.iter_mut().zip(&group.x) {
+        *uv = Camera::pixel_center(x, y);
+    }
+    let dirs = camera.pixel_ray_dir_x8(Vec2x8::from_lanes(&uv));
+    let radiance = environment.radiance_x8(dirs).to_lanes();
+    for (&x, &color) in group.x.iter().zip(&radiance).take(group.len) {
+        colors[x as usize] = color;
+    }
+}
+
 /// `0, 1, …, 7`: lane `i`'s offset in a run of neighbouring pixels.
 const LANE_INDEX: F32x8 = F32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
 

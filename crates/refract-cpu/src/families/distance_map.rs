@@ -9,14 +9,15 @@
 //! what the searches read, 4 bytes) and the rasteriser's visibility (which triangle), from
 //! which the normal and material of a hit are interpolated once per hit.
 
+mod eye_pass;
+
 use std::sync::Arc;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::distance_map::{
-    DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, PathStart, TexelMaterial,
-    TexelSurface, cube_texel, cube_texel_direction, cube_texel_index, cube_texel_indices_x8,
-    trace_path,
+    DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, TexelMaterial, TexelSurface,
+    cube_texel, cube_texel_direction, cube_texel_index, cube_texel_indices_x8,
 };
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::{Camera, CubeFace};
@@ -31,6 +32,7 @@ use crate::raster::{
     DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
 };
 use crate::scene_meshes::SceneMeshes;
+use eye_pass::EyePass;
 
 /// What geometry a layer holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -518,47 +520,21 @@ impl CpuFamily for DistancePasses {
             map: &self.map,
             scene,
         };
-        let center = self.map.center;
-        let everything = &self.everything;
-        let buffer = &self.camera;
-        let path = params.path;
-        let shade = |i: usize| -> (Vec3, DistanceAov) {
-            let (x, y) = (i as u32 % width, i as u32 / width);
-            let Some(t) = buffer.texel(i) else {
-                let dir = camera.pixel_ray(Camera::pixel_center(x, y)).dir;
-                return (scene.environment.radiance(dir), DistanceAov::default());
-            };
-            let (mesh, triangle) = everything.source(t.triangle);
-            let w = t.barycentrics;
-            let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
-            if material.ior == 0.0 {
-                return (material.rgb, DistanceAov::default());
-            }
-            let v = (t.p_ws - camera.eye()).normalize();
-            let start = PathStart {
-                x: t.p_ws - center,
-                v,
-                n: t.n_ws,
-                material,
-                layer: Some(start_layer(mesh, t.p_ws, t.n_ws, center)),
-            };
-            let result = trace_path(&map_scene, &start, &path);
-            (result.radiance, DistanceAov::of(&result))
+        let eye = EyePass {
+            scene,
+            camera,
+            buffer: &self.camera,
+            everything: &self.everything,
+            map: &map_scene,
+            path: &params.path,
         };
+        let rows = frame.color.par_chunks_mut(width as usize).enumerate();
         if with_aovs {
-            frame
-                .color
-                .par_iter_mut()
-                .zip(self.aovs.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (c, a))| (*c, *a) = shade(i));
+            rows.zip(self.aovs.par_chunks_mut(width as usize))
+                .for_each(|((y, colors), aovs)| eye.row(y as u32, colors, Some(aovs)));
             frame.write_row_layers(cx.method, &self.aovs)?;
         } else {
-            frame
-                .color
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(i, c)| *c = shade(i).0);
+            rows.for_each(|(y, colors)| eye.row(y as u32, colors, None));
         }
         Ok(())
     }

@@ -16,7 +16,6 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
-use refract_core::Camera;
 use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes, mask_lanes};
 use refract_core::pvrr::PvrrVertex;
 use refract_core::pvrr::{MapTexels, lookup, lookup_x8, mirror_tint, mirror_tint_x8};
@@ -27,13 +26,13 @@ use refract_scene::{
 
 use crate::distance_map::{surface_material, surface_rgb_x8};
 use crate::family::{CpuFamily, FrameCx};
-use crate::pixel_group::PixelGroup;
+use crate::pixel_group::{PixelGroup, for_each_group};
 use crate::prefetch::prefetch;
 use crate::raster::{
     Attribute, DepthTest, Faces, SurfaceBuffer, Texel, TexelLanes, at_most_three, rasterize_into,
 };
 use crate::scene_meshes::SceneMeshes;
-use crate::shade::environment_run;
+use crate::shade::{environment_group, environment_run};
 use demand::Demand;
 
 /// A rendered view's radiance, row-major from the top. A map holds the texels the frame's
@@ -339,28 +338,12 @@ impl ViewRows<'_> {
             let camera = &self.pass.view.camera;
             environment_run(camera, &self.pass.scene.environment, run, y, colors);
         }
-        let mut surface = PixelGroup::new();
-        let mut background = PixelGroup::new();
         let row = (y as usize) * colors.len();
-        for x in span {
-            if self.buffer.is_covered(row + x as usize) {
-                if surface.push(x) {
-                    self.surfaces(&surface, y, colors, aovs.as_deref_mut());
-                    surface.len = 0;
-                }
-            } else if background.push(x) {
-                self.background(&background, y, colors, aovs.as_deref_mut());
-                background.len = 0;
-            }
-        }
-        if surface.len > 0 {
-            surface.pad();
-            self.surfaces(&surface, y, colors, aovs.as_deref_mut());
-        }
-        if background.len > 0 {
-            background.pad();
-            self.background(&background, y, colors, aovs);
-        }
+        let covered = |x: u32| self.buffer.is_covered(row + x as usize);
+        for_each_group(span, covered, |group, covered| match covered {
+            true => self.surfaces(group, y, colors, aovs.as_deref_mut()),
+            false => self.background(group, y, colors, aovs.as_deref_mut()),
+        });
     }
 
     /// Eight pixels that see the environment.
@@ -371,19 +354,8 @@ impl ViewRows<'_> {
         colors: &mut [Vec3],
         aovs: Option<&mut [PvrrAov]>,
     ) {
-        let mut uv = [Vec2::ZERO; LANES];
-        for (uv, &x) in uv.iter_mut().zip(&group.x) {
-            *uv = Camera::pixel_center(x, y);
-        }
-        let dirs = self
-            .pass
-            .view
-            .camera
-            .pixel_ray_dir_x8(Vec2x8::from_lanes(&uv));
-        let radiance = self.pass.scene.environment.radiance_x8(dirs).to_lanes();
-        for (&x, &color) in group.x.iter().zip(&radiance).take(group.len) {
-            colors[x as usize] = color;
-        }
+        let (camera, environment) = (&self.pass.view.camera, &self.pass.scene.environment);
+        environment_group(camera, environment, group, y, colors);
         if let Some(aovs) = aovs {
             for &x in group.x.iter().take(group.len) {
                 aovs[x as usize] = PvrrAov::default();
@@ -654,6 +626,7 @@ fn outside_one_plane(clip: &[Vec4; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use refract_core::Camera;
     use refract_scene::MethodId;
 
     /// `name` at 120 × 96 with maps of `resolution` texels and `dispersion`, its passes
