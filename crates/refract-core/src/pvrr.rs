@@ -437,23 +437,19 @@ pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let (x0, y0) = (x0.to_array(), y0.to_array());
-    let mut corners = [[Vec3::ZERO; LANES]; 4];
+    let (fx, fy) = (fx.to_array(), fy.to_array());
+    // Each lane's four texels weighed where they are loaded (the scalar function's
+    // operations): gathering them into lanes first costs a transpose through memory.
+    let mut out = [Vec3::ZERO; LANES];
     for i in 0..LANES {
         let (x0, y0) = (x0[i] as u32, y0[i] as u32);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-        corners[0][i] = map.texel(x0, y0);
-        corners[1][i] = map.texel(x1, y0);
-        corners[2][i] = map.texel(x0, y1);
-        corners[3][i] = map.texel(x1, y1);
+        let (fx, fy) = (fx[i], fy[i]);
+        let top = map.texel(x0, y0) * (1.0 - fx) + map.texel(x1, y0) * fx;
+        let bottom = map.texel(x0, y1) * (1.0 - fx) + map.texel(x1, y1) * fx;
+        out[i] = top * (1.0 - fy) + bottom * fy;
     }
-    // (Not `array::map`: its closure is not always inlined, and this runs per pixel.)
-    let [t00, t10, t01, t11] = &corners;
-    let (t00, t10) = (Vec3x8::from_lanes(t00), Vec3x8::from_lanes(t10));
-    let (t01, t11) = (Vec3x8::from_lanes(t01), Vec3x8::from_lanes(t11));
-    let (gx, gy) = (F32x8::ONE - fx, F32x8::ONE - fy);
-    let top = t00 * gx + t10 * fx;
-    let bottom = t01 * gx + t11 * fx;
-    top * gy + bottom * fy
+    Vec3x8::from_lanes(&out)
 }
 
 /// [`lookup`] at eight pixels: lane `i` is `lookup(map, [st[0]_i, st[1]_i, st[2]_i], tint_i)`,

@@ -22,7 +22,7 @@ use refract_scene::Environment;
 use crate::buffers::BackFaces;
 use crate::image_space::MethodAov;
 use crate::nearby_geometry::{NearbyTexel, NearbyTexture};
-use crate::pixel_group::PixelGroup;
+use crate::pixel_group::{PixelGroup, for_each_group};
 use crate::raster::{Attribute, Band, SurfaceBuffer, Texel, TexelLanes};
 
 /// What the per-pixel work of a frame reads.
@@ -339,6 +339,58 @@ pub(crate) fn environment_group(
     let radiance = environment.radiance_x8(dirs).to_lanes();
     for (&x, &color) in group.x.iter().zip(&radiance).take(group.len) {
         colors[x as usize] = color;
+    }
+}
+
+/// A rasterised view seen row by row: what [`ViewRow::shade`] reads.
+pub(crate) struct ViewRow<'a> {
+    pub camera: &'a Camera,
+    pub environment: &'a Environment,
+    pub buffer: &'a SurfaceBuffer,
+}
+
+impl ViewRow<'_> {
+    /// Shades pixels `wanted` of row `y` into `colors` (the row) and, when given, `aovs`: the
+    /// pixels outside the row's covered span see the environment (runs of eight neighbours,
+    /// no per-pixel test); those inside are gathered eight at a time ([`for_each_group`]),
+    /// the groups that see the environment shaded here ([`environment_group`]) and those that
+    /// see a surface handed to `surfaces`. Pixels that see the environment get `A::default()`
+    /// as their AOVs. Every pixel gets the bits of shading it alone, however it is grouped.
+    pub fn shade<A: Copy + Default>(
+        &self,
+        y: u32,
+        wanted: Range<u32>,
+        colors: &mut [Vec3],
+        mut aovs: Option<&mut [A]>,
+        mut surfaces: impl FnMut(&PixelGroup, &mut [Vec3], Option<&mut [A]>),
+    ) {
+        let covered = self.buffer.covered_span(y);
+        let span = covered.start.max(wanted.start)..covered.end.min(wanted.end);
+        let (runs, span) = if span.is_empty() {
+            ([wanted, 0..0], 0..0)
+        } else {
+            ([wanted.start..span.start, span.end..wanted.end], span)
+        };
+        for run in runs {
+            if let Some(aovs) = aovs.as_deref_mut() {
+                aovs[run.start as usize..run.end as usize].fill(A::default());
+            }
+            environment_run(self.camera, self.environment, run, y, colors);
+        }
+        let row = (y as usize) * colors.len();
+        let covered = |x: u32| self.buffer.is_covered(row + x as usize);
+        for_each_group(span, covered, |group, covered| {
+            if covered {
+                surfaces(group, colors, aovs.as_deref_mut());
+                return;
+            }
+            environment_group(self.camera, self.environment, group, y, colors);
+            if let Some(aovs) = aovs.as_deref_mut() {
+                for &x in group.x.iter().take(group.len) {
+                    aovs[x as usize] = A::default();
+                }
+            }
+        });
     }
 }
 

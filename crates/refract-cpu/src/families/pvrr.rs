@@ -26,13 +26,13 @@ use refract_scene::{
 
 use crate::distance_map::{surface_material, surface_rgb_x8};
 use crate::family::{CpuFamily, FrameCx};
-use crate::pixel_group::{PixelGroup, for_each_group};
+use crate::pixel_group::PixelGroup;
 use crate::prefetch::prefetch;
 use crate::raster::{
     Attribute, DepthTest, Faces, SurfaceBuffer, Texel, TexelLanes, at_most_three, rasterize_into,
 };
 use crate::scene_meshes::SceneMeshes;
-use crate::shade::{environment_group, environment_run};
+use crate::shade::ViewRow;
 use demand::Demand;
 
 /// A rendered view's radiance, row-major from the top. A map holds the texels the frame's
@@ -321,46 +321,19 @@ struct ViewRows<'a> {
 }
 
 impl ViewRows<'_> {
-    fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [PvrrAov]>) {
-        let (wanted, covered) = (self.demand.span(y), self.buffer.covered_span(y));
-        let span = covered.start.max(wanted.start)..covered.end.min(wanted.end);
-        // Outside the row's covered span every wanted pixel sees the environment: runs of
-        // eight.
-        let (runs, span) = if span.is_empty() {
-            ([wanted, 0..0], 0..0)
-        } else {
-            ([wanted.start..span.start, span.end..wanted.end], span)
+    fn row(&self, y: u32, colors: &mut [Vec3], aovs: Option<&mut [PvrrAov]>) {
+        let view = ViewRow {
+            camera: &self.pass.view.camera,
+            environment: &self.pass.scene.environment,
+            buffer: self.buffer,
         };
-        for run in runs {
-            if let Some(aovs) = aovs.as_deref_mut() {
-                aovs[run.start as usize..run.end as usize].fill(PvrrAov::default());
-            }
-            let camera = &self.pass.view.camera;
-            environment_run(camera, &self.pass.scene.environment, run, y, colors);
-        }
-        let row = (y as usize) * colors.len();
-        let covered = |x: u32| self.buffer.is_covered(row + x as usize);
-        for_each_group(span, covered, |group, covered| match covered {
-            true => self.surfaces(group, y, colors, aovs.as_deref_mut()),
-            false => self.background(group, y, colors, aovs.as_deref_mut()),
-        });
-    }
-
-    /// Eight pixels that see the environment.
-    fn background(
-        &self,
-        group: &PixelGroup,
-        y: u32,
-        colors: &mut [Vec3],
-        aovs: Option<&mut [PvrrAov]>,
-    ) {
-        let (camera, environment) = (&self.pass.view.camera, &self.pass.scene.environment);
-        environment_group(camera, environment, group, y, colors);
-        if let Some(aovs) = aovs {
-            for &x in group.x.iter().take(group.len) {
-                aovs[x as usize] = PvrrAov::default();
-            }
-        }
+        view.shade(
+            y,
+            self.demand.span(y),
+            colors,
+            aovs,
+            |group, colors, aovs| self.surfaces(group, y, colors, aovs),
+        );
     }
 
     /// Eight pixels that see a surface, shaded on lanes ([`Self::shade_lanes`]).

@@ -12,10 +12,10 @@ use refract_core::lanes::{LANES, Vec3x8, mask_from_lanes};
 use refract_scene::{Scene, SceneMesh};
 
 use super::{DistanceAov, MapScene, start_layer, surface_material, surface_rgb_x8};
-use crate::pixel_group::{PixelGroup, for_each_group};
+use crate::pixel_group::PixelGroup;
 use crate::raster::{Attribute, SurfaceBuffer, Texel, TexelLanes, at_most_three};
 use crate::scene_meshes::SceneMeshes;
-use crate::shade::{environment_group, environment_run};
+use crate::shade::ViewRow;
 
 /// What the eye pass of one frame reads.
 pub(super) struct EyePass<'a> {
@@ -32,38 +32,16 @@ pub(super) struct EyePass<'a> {
 
 impl EyePass<'_> {
     /// Row `y`: its colours and, for an AOV frame, its AOVs.
-    pub fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [DistanceAov]>) {
-        // Outside the row's covered span every pixel sees the environment: runs of eight.
-        let span = self.buffer.covered_span(y);
+    pub fn row(&self, y: u32, colors: &mut [Vec3], aovs: Option<&mut [DistanceAov]>) {
+        let view = ViewRow {
+            camera: self.camera,
+            environment: &self.scene.environment,
+            buffer: self.buffer,
+        };
         let width = colors.len() as u32;
-        for run in [0..span.start, span.end..width] {
-            if let Some(aovs) = aovs.as_deref_mut() {
-                aovs[run.start as usize..run.end as usize].fill(DistanceAov::default());
-            }
-            environment_run(self.camera, &self.scene.environment, run, y, colors);
-        }
-        let row = (y as usize) * colors.len();
-        let covered = |x: u32| self.buffer.is_covered(row + x as usize);
-        for_each_group(span, covered, |group, covered| match covered {
-            true => self.surfaces(group, y, colors, aovs.as_deref_mut()),
-            false => self.background(group, y, colors, aovs.as_deref_mut()),
+        view.shade(y, 0..width, colors, aovs, |group, colors, aovs| {
+            self.surfaces(group, y, colors, aovs)
         });
-    }
-
-    /// Eight pixels that see the environment.
-    fn background(
-        &self,
-        group: &PixelGroup,
-        y: u32,
-        colors: &mut [Vec3],
-        aovs: Option<&mut [DistanceAov]>,
-    ) {
-        environment_group(self.camera, &self.scene.environment, group, y, colors);
-        if let Some(aovs) = aovs {
-            for &x in group.x.iter().take(group.len) {
-                aovs[x as usize] = DistanceAov::default();
-            }
-        }
     }
 
     /// Eight pixels that see a surface: the diffuse ones shaded on lanes per triangle, the
@@ -78,7 +56,6 @@ impl EyePass<'_> {
         let lanes = self
             .buffer
             .attribute_lanes::<{ Attribute::BARYCENTRICS }>(&group.x, y);
-        let texels = lanes.to_texels();
         let mut diffuse = [false; LANES];
         let mut color = Vec3x8::ZERO;
         if let Some((distinct, count)) = at_most_three(&lanes.triangle) {
@@ -94,11 +71,14 @@ impl EyePass<'_> {
             }
         }
         let color = color.to_lanes();
+        // The texels one by one only for the pixels that start a path.
+        let traced = diffuse[..group.len].iter().any(|d| !d);
+        let texels = traced.then(|| lanes.to_texels());
         for i in 0..group.len {
             let x = group.x[i];
-            let (c, aov) = match diffuse[i] {
-                true => (color[i], DistanceAov::default()),
-                false => self.pixel(x, y, Some(&texels[i])),
+            let (c, aov) = match (diffuse[i], &texels) {
+                (false, Some(texels)) => self.pixel(x, y, Some(&texels[i])),
+                _ => (color[i], DistanceAov::default()),
             };
             colors[x as usize] = c;
             if let Some(aovs) = aovs.as_deref_mut() {
