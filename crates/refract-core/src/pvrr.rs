@@ -422,7 +422,9 @@ pub fn mirror_tint(f0: Vec3, n: Vec3, v: Vec3) -> Vec3 {
 }
 
 /// [`sample_bilinear`] at eight positions: lane `i` is `sample_bilinear(map, st_i)`, bit for
-/// bit (the same operations on lanes; the four texels of each lane gathered one by one).
+/// bit. The footprints (clamp, floor, fractions) are placed on lanes; each lane's four texels
+/// are weighed as they are loaded, with the scalar function's operations (gathering them into
+/// lanes first cost a transpose through memory: performance.md, session 18).
 #[inline]
 pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 {
     let (w, h) = map.size();
@@ -438,8 +440,6 @@ pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 
     let (fx, fy) = (x - x0, y - y0);
     let (x0, y0) = (x0.to_array(), y0.to_array());
     let (fx, fy) = (fx.to_array(), fy.to_array());
-    // Each lane's four texels weighed where they are loaded (the scalar function's
-    // operations): gathering them into lanes first costs a transpose through memory.
     let mut out = [Vec3::ZERO; LANES];
     for i in 0..LANES {
         let (x0, y0) = (x0[i] as u32, y0[i] as u32);
