@@ -71,14 +71,16 @@ impl EyePass<'_> {
             }
         }
         let color = color.to_lanes();
-        // The texels one by one only for the pixels that start a path.
-        let traced = diffuse[..group.len].iter().any(|d| !d);
-        let texels = traced.then(|| lanes.to_texels());
+        // The texels one by one only when a pixel starts a path.
+        let mut texels = None;
         for i in 0..group.len {
             let x = group.x[i];
-            let (c, aov) = match (diffuse[i], &texels) {
-                (false, Some(texels)) => self.pixel(x, y, Some(&texels[i])),
-                _ => (color[i], DistanceAov::default()),
+            let (c, aov) = match diffuse[i] {
+                true => (color[i], DistanceAov::default()),
+                false => {
+                    let texels = texels.get_or_insert_with(|| lanes.to_texels());
+                    self.pixel(x, y, Some(&texels[i]))
+                }
             };
             colors[x as usize] = c;
             if let Some(aovs) = aovs.as_deref_mut() {
