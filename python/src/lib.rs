@@ -29,6 +29,10 @@ pyo3::create_exception!(
 /// The extension module.
 #[pymodule]
 fn _refract(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // An older CPU than the build's instruction set: an ImportError that says how to rebuild,
+    // rather than an illegal instruction later.
+    refract_cpu::check_instruction_set()
+        .map_err(|e| pyo3::exceptions::PyImportError::new_err(e.to_string()))?;
     m.add("RenderError", m.py().get_type::<RenderError>())?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<frame::Frame>()?;

@@ -236,6 +236,15 @@ fn print_methods() {
 }
 
 fn main() -> ExitCode {
+    // First, before code compiled for the build's instruction set runs (x86-64-v3 by default):
+    // an older CPU gets a message instead of an illegal instruction.
+    refract_cpu::instruction_set::exit_if_unsupported();
+    run()
+}
+
+/// The command line's command.
+#[inline(never)]
+fn run() -> ExitCode {
     let cli = Cli::parse();
     if let Some(policy) = cli.ray_query {
         refract_gpu::RayQueryPolicy::choose(match policy {

@@ -20,6 +20,7 @@
 pub mod buffers;
 pub mod families;
 pub mod family;
+pub mod instruction_set;
 mod pixel_group;
 mod prefetch;
 pub mod raster;
@@ -34,6 +35,7 @@ pub use family::{CpuFamily, FrameCx};
 pub use image_space::{
     FrameBuffers, ImageSpacePasses, render_buffers, render_buffers_into, shade_into,
 };
+pub use instruction_set::{UnsupportedCpu, check_instruction_set};
 pub use raster::{
     BAND_ROWS, Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, band_pixels, rasterize,
     rasterize_bands, rasterize_into,
