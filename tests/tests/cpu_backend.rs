@@ -579,7 +579,8 @@ fn image_space_methods_draw_the_objects_the_reference_sees() {
 
 /// Eight texels resolved at once equal the scalar resolve bit for bit: on the torus's small
 /// triangles (lanes on different triangles) and on the sphere at 640², whose triangles span
-/// ~20 pixels (most groups on one triangle: the incremental edge functions); with only some
+/// ~20 pixels (most groups eight neighbours on one triangle: the path that compares their ids in
+/// the visibility buffer and looks the triangle up once); with only some
 /// attributes asked for, those keep their bits and the others are zero.
 #[test]
 fn eight_lane_texels_equal_scalar_texels() {

@@ -576,6 +576,32 @@ fn interpolate_x8<const ATTRIBUTES: u8>(
     }
 }
 
+/// The texels of pixels `x` of row `y` (`row` starts at the row's first pixel): eight
+/// neighbours inside one triangle (most groups) take one triangle lookup, compared as ids
+/// straight from the visibility buffer; other groups go through [`gather_triangles`] and
+/// [`texel_lanes`], which give the same bits for such a group.
+///
+/// # Panics
+/// If one of the pixels is empty.
+#[inline]
+fn row_texel_lanes<const ATTRIBUTES: u8>(
+    row: &[Visibility],
+    triangles: &TriangleStore,
+    x: &[u32; LANES],
+    y: u32,
+) -> TexelLanes {
+    let first = x[0] as usize;
+    let neighbours = (0..LANES).all(|i| x[i] as usize == first + i);
+    if neighbours && first + LANES <= row.len() {
+        let run = &row[first..first + LANES];
+        let id = run[0].triangle;
+        if id != EMPTY && run.iter().all(|v| v.triangle == id) {
+            return texel_lanes_one_triangle::<ATTRIBUTES>(triangles.get(id), x, y);
+        }
+    }
+    texel_lanes::<ATTRIBUTES>(gather_triangles(row, triangles, x, y), x, y)
+}
+
 /// The triangles seen at pixels `x` of a row (`row` starts at the row's first pixel).
 ///
 /// # Panics
@@ -860,11 +886,7 @@ impl SurfaceBuffer {
     #[inline]
     pub fn attribute_lanes<const ATTRIBUTES: u8>(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = (y * self.width) as usize;
-        texel_lanes::<ATTRIBUTES>(
-            gather_triangles(&self.visibility[row..], &self.triangles, x, y),
-            x,
-            y,
-        )
+        row_texel_lanes::<ATTRIBUTES>(&self.visibility[row..], &self.triangles, x, y)
     }
 
     /// The pixels of row `y` between its first and last covered pixel: no pixel outside is
@@ -937,11 +959,7 @@ impl Band<'_> {
     #[inline]
     pub fn attribute_lanes<const ATTRIBUTES: u8>(&self, x: &[u32; LANES], y: u32) -> TexelLanes {
         let row = ((y - self.first_row) * self.width) as usize;
-        texel_lanes::<ATTRIBUTES>(
-            gather_triangles(&self.visibility[row..], self.triangles, x, y),
-            x,
-            y,
-        )
+        row_texel_lanes::<ATTRIBUTES>(&self.visibility[row..], self.triangles, x, y)
     }
 
     /// The pixels of row `y` (an image row inside this band) between its first and last
