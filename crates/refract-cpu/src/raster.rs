@@ -193,6 +193,10 @@ struct ScreenTriangle {
     max: [u32; 2],
     /// The mesh triangle it was set up from (clipped pieces share it).
     source: u32,
+    /// Every edge value at the pixels of the bounds, and up to [`LANES`] pixels past their
+    /// right end, is below 2⁵³ in magnitude: exact in `f64`, so eight neighbours' barycentrics
+    /// need no per-group check ([`Self::barycentrics_neighbours_x8`]).
+    neighbours_exact: bool,
 }
 
 fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
@@ -272,6 +276,32 @@ impl ScreenTriangle {
                 for k in 0..3 {
                     l[k][i] = li[k];
                 }
+            }
+        }
+        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
+    }
+
+    /// [`Self::barycentrics_x8`] at the eight neighbours `x0..x0 + 8` of row `y`, for a
+    /// triangle whose edge values there are exact in `f64` (`neighbours_exact`): lane `i` is
+    /// `(eₖ(x0) + i·stepₖ)·(1/area)` rounded to `f32`, the operations of the general path with
+    /// its offsets `0..8` known, so the same bits.
+    #[inline(always)]
+    fn barycentrics_neighbours_x8(&self, x0: u32, y: u32) -> [F32x8; 3] {
+        const OFFSETS: [f64; LANES] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+        debug_assert!(self.neighbours_exact);
+        let [a, b, c] = self.xy;
+        let q = pixel_center_fixed(x0, y);
+        let start = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
+        let step = [
+            -(c[1] - b[1]) * SUBPIXEL,
+            -(a[1] - c[1]) * SUBPIXEL,
+            -(b[1] - a[1]) * SUBPIXEL,
+        ];
+        let mut l = [[0.0f32; LANES]; 3];
+        for k in 0..3 {
+            let (e0, s) = (start[k] as f64, step[k] as f64);
+            for i in 0..LANES {
+                l[k][i] = ((e0 + OFFSETS[i] * s) * self.inv_area) as f32;
             }
         }
         [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
@@ -468,12 +498,18 @@ fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
     x: &[u32; LANES],
     y: u32,
 ) -> TexelLanes {
+    interpolate_one_triangle::<ATTRIBUTES>(t, t.barycentrics_x8(x, y))
+}
+
+/// [`interpolate_x8`] of eight lanes on triangle `t` with screen-space barycentrics `l`.
+#[inline(always)]
+fn interpolate_one_triangle<const ATTRIBUTES: u8>(t: &ScreenTriangle, l: [F32x8; 3]) -> TexelLanes {
     let s = F32x8::splat;
     let v = Vec3x8::splat;
     // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group path.
     let [c0, c1, c2] = &t.attributes;
     interpolate_x8::<ATTRIBUTES>(
-        t.barycentrics_x8(x, y),
+        l,
         &CornersX8 {
             depth: [s(t.depth[0]), s(t.depth[1]), s(t.depth[2])],
             inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
@@ -596,7 +632,12 @@ fn row_texel_lanes<const ATTRIBUTES: u8>(
         let run = &row[first..first + LANES];
         let id = run[0].triangle;
         if id != EMPTY && run.iter().all(|v| v.triangle == id) {
-            return texel_lanes_one_triangle::<ATTRIBUTES>(triangles.get(id), x, y);
+            let t = triangles.get(id);
+            let l = match t.neighbours_exact {
+                true => t.barycentrics_neighbours_x8(x[0], y),
+                false => t.barycentrics_x8(x, y),
+            };
+            return interpolate_one_triangle::<ATTRIBUTES>(t, l);
         }
     }
     texel_lanes::<ATTRIBUTES>(gather_triangles(row, triangles, x, y), x, y)
@@ -734,6 +775,28 @@ fn setup(
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
         source,
+        neighbours_exact: edges_exact_in_f64(xy, [x0, x1 + LANES as i64], [y0, y1]),
+    })
+}
+
+/// Whether the edge functions of a triangle with corners `xy` stay below 2⁵³ in magnitude at
+/// the centres of pixels `columns[0]..=columns[1]` × `rows[0]..=rows[1]` (computed in `i128`;
+/// an edge function is linear, so its largest magnitude is at a corner of the rectangle).
+fn edges_exact_in_f64(xy: [[i64; 2]; 3], columns: [i64; 2], rows: [i64; 2]) -> bool {
+    const EXACT: i128 = 1 << 53;
+    let edge_wide = |a: [i64; 2], b: [i64; 2], p: [i64; 2]| {
+        let w = |v: i64| i128::from(v);
+        (w(b[0]) - w(a[0])) * (w(p[1]) - w(a[1])) - (w(b[1]) - w(a[1])) * (w(p[0]) - w(a[0]))
+    };
+    let center = |pixel: i64| pixel * SUBPIXEL + SUBPIXEL / 2;
+    let [a, b, c] = xy;
+    columns.iter().all(|&x| {
+        rows.iter().all(|&y| {
+            let q = [center(x), center(y)];
+            [edge_wide(b, c, q), edge_wide(c, a, q), edge_wide(a, b, q)]
+                .iter()
+                .all(|e| e.abs() < EXACT)
+        })
     })
 }
 
@@ -1374,6 +1437,7 @@ mod tests {
             min: [0, 0],
             max: [0, 0],
             source: 0,
+            neighbours_exact: false,
         }
     }
 
@@ -1402,6 +1466,46 @@ mod tests {
                 }
             }
         }
+    }
+
+    proptest! {
+        /// Eight neighbours' barycentrics from the triangle-level exactness test have the
+        /// scalar function's bits wherever that test passes; it passes on screen-sized
+        /// triangles and fails where the edge values pass 2⁵³.
+        #[test]
+        fn neighbour_barycentrics_equal_the_scalar_ones(
+            corners in proptest::array::uniform3(proptest::array::uniform2(-(1i64 << 29)..(1i64 << 29))),
+            near in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
+            far in proptest::bool::ANY,
+            x0 in 0u32..1000,
+            y in 0u32..1000,
+        ) {
+            let xy = if far { corners } else { near };
+            let exact = edges_exact_in_f64(xy, [i64::from(x0), i64::from(x0) + 7], [i64::from(y); 2]);
+            prop_assert!(far || exact, "on-screen corners are exact");
+            if exact {
+                let t = ScreenTriangle { neighbours_exact: true, ..triangle(xy) };
+                let lanes = t.barycentrics_neighbours_x8(x0, y).map(|l| l.to_array());
+                let [a, b, c] = t.xy;
+                for (x, i) in (x0..).zip(0..LANES) {
+                    let q = pixel_center_fixed(x, y);
+                    let scalar = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+                    for (lanes, scalar) in lanes.iter().zip(scalar) {
+                        prop_assert_eq!(lanes[i].to_bits(), scalar.to_bits());
+                    }
+                }
+            }
+        }
+    }
+
+    /// Corners far enough off screen make edge values pass 2⁵³: not exact.
+    #[test]
+    fn far_corners_are_not_exact_in_f64() {
+        let far = 1i64 << 40;
+        let xy = [[0, 0], [far, 0], [0, far]];
+        assert!(!edges_exact_in_f64(xy, [0, 8], [0, 0]));
+        let near = [[0, 0], [1 << 18, 0], [0, 1 << 18]];
+        assert!(edges_exact_in_f64(near, [0, 1000], [0, 1000]));
     }
 
     /// Steps of zero (an edge parallel to the rows) keep or drop the whole row.
