@@ -21,7 +21,7 @@ use core::ops::Range;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
-use refract_core::lanes::{F32x8, LANES, Vec3x8, mask_from_lanes};
+use refract_core::lanes::{F32x8, LANES, Mask, Vec3x8, mask_from_lanes};
 use refract_geometry::Mesh;
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
@@ -372,26 +372,6 @@ pub struct TexelLanes {
 }
 
 impl TexelLanes {
-    /// Lane `i` from `a` where `take_a[i]`, else from `b`.
-    #[inline]
-    fn select(take_a: [bool; LANES], a: &Self, b: &Self) -> Self {
-        let mask = mask_from_lanes(take_a);
-        let mut triangle = b.triangle;
-        for i in 0..LANES {
-            if take_a[i] {
-                triangle[i] = a.triangle[i];
-            }
-        }
-        Self {
-            depth: mask.select(a.depth, b.depth),
-            p_ws: Vec3x8::select(mask, a.p_ws, b.p_ws),
-            n_ws: Vec3x8::select(mask, a.n_ws, b.n_ws),
-            scalar: mask.select(a.scalar, b.scalar),
-            barycentrics: Vec3x8::select(mask, a.barycentrics, b.barycentrics),
-            triangle,
-        }
-    }
-
     /// The texel of each lane.
     pub fn to_texels(&self) -> [Texel; LANES] {
         let (depth, scalar) = (self.depth.to_array(), self.scalar.to_array());
@@ -432,19 +412,30 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     y: u32,
 ) -> TexelLanes {
     // At most three triangles (one: inside a triangle; two or three: straddling one or two
-    // edges, the common mixed cases): each evaluated on every lane with the vector path, then
-    // each lane takes its own triangle's values.
+    // edges, the common mixed cases): each triangle's barycentrics on every lane with the
+    // vector path, then each lane takes its own triangle's barycentrics and corners, and one
+    // interpolation runs on all lanes (the operations of the one-triangle path, so its bits).
     if let Some((distinct, count)) = at_most_three(&triangles) {
-        let mut lanes = texel_lanes_one_triangle::<ATTRIBUTES>(distinct[0], x, y);
+        let first = distinct[0];
+        let mut l = first.barycentrics_x8(x, y);
+        let mut corners = CornersX8::of(first);
         for &other in &distinct[1..count] {
             let mut on_other = [false; LANES];
             for (on, t) in on_other.iter_mut().zip(&triangles) {
                 *on = core::ptr::eq(*t, other);
             }
-            let values = texel_lanes_one_triangle::<ATTRIBUTES>(other, x, y);
-            lanes = TexelLanes::select(on_other, &values, &lanes);
+            let on_other = mask_from_lanes(on_other);
+            let l_other = other.barycentrics_x8(x, y);
+            for (l, l_other) in l.iter_mut().zip(l_other) {
+                *l = on_other.select(l_other, *l);
+            }
+            corners = CornersX8::select(on_other, &CornersX8::of(other), &corners);
         }
-        return lanes;
+        let mut source = [0; LANES];
+        for (source, t) in source.iter_mut().zip(&triangles) {
+            *source = t.source;
+        }
+        return interpolate_x8::<ATTRIBUTES>(l, &corners, source);
     }
     // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
     let mut l = [[0.0f32; LANES]; 3];
@@ -490,36 +481,12 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     )
 }
 
-/// [`texel_lanes`] where every lane sees the same triangle (most groups of eight, inside a
-/// triangle larger than the group): its corners loaded once and splat, the same operations
-/// per lane, so the same bits.
-fn texel_lanes_one_triangle<const ATTRIBUTES: u8>(
-    t: &ScreenTriangle,
-    x: &[u32; LANES],
-    y: u32,
-) -> TexelLanes {
-    interpolate_one_triangle::<ATTRIBUTES>(t, t.barycentrics_x8(x, y))
-}
-
-/// [`interpolate_x8`] of eight lanes on triangle `t` with screen-space barycentrics `l`.
+/// [`interpolate_x8`] of eight lanes on triangle `t` (most groups of eight, inside a triangle
+/// larger than the group) with screen-space barycentrics `l`: its corners loaded once and
+/// splat, the operations of [`texel_lanes`], so the same bits.
 #[inline(always)]
 fn interpolate_one_triangle<const ATTRIBUTES: u8>(t: &ScreenTriangle, l: [F32x8; 3]) -> TexelLanes {
-    let s = F32x8::splat;
-    let v = Vec3x8::splat;
-    // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group path.
-    let [c0, c1, c2] = &t.attributes;
-    interpolate_x8::<ATTRIBUTES>(
-        l,
-        &CornersX8 {
-            depth: [s(t.depth[0]), s(t.depth[1]), s(t.depth[2])],
-            inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
-            scalar: [s(c0.scalar), s(c1.scalar), s(c2.scalar)],
-            p: [v(c0.p_ws), v(c1.p_ws), v(c2.p_ws)],
-            n: [v(c0.n_ws), v(c1.n_ws), v(c2.n_ws)],
-            bary: [v(c0.bary), v(c1.bary), v(c2.bary)],
-        },
-        [t.source; LANES],
-    )
+    interpolate_x8::<ATTRIBUTES>(l, &CornersX8::of(t), [t.source; LANES])
 }
 
 /// The distinct values of eight lanes (triangles, triangle ids), in lane order, and how many
@@ -569,6 +536,53 @@ struct CornersX8 {
     p: [Vec3x8; 3],
     n: [Vec3x8; 3],
     bary: [Vec3x8; 3],
+}
+
+impl CornersX8 {
+    /// Triangle `t`'s corners in every lane.
+    #[inline(always)]
+    fn of(t: &ScreenTriangle) -> Self {
+        let s = F32x8::splat;
+        let v = Vec3x8::splat;
+        // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group
+        // path.
+        let [c0, c1, c2] = &t.attributes;
+        CornersX8 {
+            depth: [s(t.depth[0]), s(t.depth[1]), s(t.depth[2])],
+            inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
+            scalar: [s(c0.scalar), s(c1.scalar), s(c2.scalar)],
+            p: [v(c0.p_ws), v(c1.p_ws), v(c2.p_ws)],
+            n: [v(c0.n_ws), v(c1.n_ws), v(c2.n_ws)],
+            bary: [v(c0.bary), v(c1.bary), v(c2.bary)],
+        }
+    }
+
+    /// `a`'s corners where `take_a` is set, `b`'s elsewhere.
+    #[inline(always)]
+    fn select(take_a: Mask, a: &Self, b: &Self) -> Self {
+        let f = |a: [F32x8; 3], b: [F32x8; 3]| {
+            [
+                take_a.select(a[0], b[0]),
+                take_a.select(a[1], b[1]),
+                take_a.select(a[2], b[2]),
+            ]
+        };
+        let v = |a: [Vec3x8; 3], b: [Vec3x8; 3]| {
+            [
+                Vec3x8::select(take_a, a[0], b[0]),
+                Vec3x8::select(take_a, a[1], b[1]),
+                Vec3x8::select(take_a, a[2], b[2]),
+            ]
+        };
+        CornersX8 {
+            depth: f(a.depth, b.depth),
+            inv_w: f(a.inv_w, b.inv_w),
+            scalar: f(a.scalar, b.scalar),
+            p: v(a.p, b.p),
+            n: v(a.n, b.n),
+            bary: v(a.bary, b.bary),
+        }
+    }
 }
 
 /// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
