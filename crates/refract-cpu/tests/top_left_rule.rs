@@ -181,6 +181,12 @@ proptest! {
         let camera = camera();
         // Spokes at increasing angles summing to one full turn.
         let total: f32 = gaps.iter().sum();
+        // A fan tiles the plane only if every gap between neighbouring spokes is under half a
+        // turn: a triangle between spokes further apart covers the convex angle between them,
+        // not the reflex one the fan needs, and leaves a wedge uncovered (five gaps drawn from
+        // 0.2..1.2 can make one 3.5 rad wide; the saved case `cy = 3, gaps = [0.2, 0.2, 0.2,
+        // 0.2, 1.04]` is such a fan, not a rasteriser defect).
+        prop_assume!(gaps.iter().all(|g| *g < 0.45 * total));
         let mut angle = 0.0;
         let angles: Vec<f32> = gaps.iter().map(|g| {
             let a = angle;
