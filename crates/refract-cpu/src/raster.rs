@@ -228,6 +228,52 @@ impl ScreenTriangle {
         [l(e[0]), l(e[1]), l(e[2])]
     }
 
+    /// The three edge functions at the centre of pixel `(x, y)` (exact integers).
+    #[inline]
+    fn edges_at(&self, x: u32, y: u32) -> [i64; 3] {
+        let [a, b, c] = self.xy;
+        let q = pixel_center_fixed(x, y);
+        [edge(b, c, q), edge(c, a, q), edge(a, b, q)]
+    }
+
+    /// What each edge function gains from one pixel to the next on its right: `−Δy·SUBPIXEL`.
+    #[inline]
+    fn edge_steps(&self) -> [i64; 3] {
+        let [a, b, c] = self.xy;
+        [
+            -(c[1] - b[1]) * SUBPIXEL,
+            -(a[1] - c[1]) * SUBPIXEL,
+            -(b[1] - a[1]) * SUBPIXEL,
+        ]
+    }
+
+    /// [`Self::barycentrics`] at the centre of pixel `(x, y)`.
+    #[inline]
+    fn barycentrics_at(&self, x: u32, y: u32) -> [f32; 3] {
+        self.barycentrics(self.edges_at(x, y))
+    }
+
+    /// Eight lanes' barycentrics from the edge values `start` at one pixel, the `step` per
+    /// pixel and each lane's pixel `offset` from it: `(startₖ + offsetᵢ·stepₖ)·(1/area)` in
+    /// `f64`, rounded to `f32`. Exact, so [`Self::barycentrics`]' bits, while every
+    /// `|startₖ| + |offsetᵢ·stepₖ|` is below 2⁵³ (the callers' check).
+    #[inline(always)]
+    fn barycentrics_offsets_x8(
+        &self,
+        start: [i64; 3],
+        step: [i64; 3],
+        offset: &[f64; LANES],
+    ) -> [F32x8; 3] {
+        let mut l = [[0.0f32; LANES]; 3];
+        for k in 0..3 {
+            let (e0, s) = (start[k] as f64, step[k] as f64);
+            for i in 0..LANES {
+                l[k][i] = ((e0 + offset[i] * s) * self.inv_area) as f32;
+            }
+        }
+        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
+    }
+
     /// [`Self::barycentrics`] at pixels `x` of row `y`, eight at once: along a row each edge
     /// function steps by an exact integer per pixel, so lane `i`'s value is lane 0's plus
     /// `(xᵢ − x₀)·step`, computed in `f64`, where every integer below 2⁵³ is exact: the same
@@ -235,14 +281,7 @@ impl ScreenTriangle {
     /// whose edge values could reach 2⁵³ (vertices far off screen) takes the scalar path.
     #[inline(always)]
     fn barycentrics_x8(&self, x: &[u32; LANES], y: u32) -> [F32x8; 3] {
-        let [a, b, c] = self.xy;
-        let q = pixel_center_fixed(x[0], y);
-        let start = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
-        let step = [
-            -(c[1] - b[1]) * SUBPIXEL,
-            -(a[1] - c[1]) * SUBPIXEL,
-            -(b[1] - a[1]) * SUBPIXEL,
-        ];
+        let (start, step) = (self.edges_at(x[0], y), self.edge_steps());
         let mut offset = [0.0f64; LANES];
         let mut reach = 0i64;
         for (o, &xi) in offset.iter_mut().zip(x) {
@@ -261,21 +300,14 @@ impl ScreenTriangle {
                 .and_then(|s| s.checked_add(start[k].checked_abs()?));
             exact &= bound.is_some_and(|bound| bound < EXACT);
         }
-        let mut l = [[0.0f32; LANES]; 3];
         if exact {
+            return self.barycentrics_offsets_x8(start, step, &offset);
+        }
+        let mut l = [[0.0f32; LANES]; 3];
+        for (i, &xi) in x.iter().enumerate() {
+            let li = self.barycentrics_at(xi, y);
             for k in 0..3 {
-                let (e0, s) = (start[k] as f64, step[k] as f64);
-                for i in 0..LANES {
-                    l[k][i] = ((e0 + offset[i] * s) * self.inv_area) as f32;
-                }
-            }
-        } else {
-            for (i, &xi) in x.iter().enumerate() {
-                let q = pixel_center_fixed(xi, y);
-                let li = self.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
-                for k in 0..3 {
-                    l[k][i] = li[k];
-                }
+                l[k][i] = li[k];
             }
         }
         [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
@@ -289,22 +321,7 @@ impl ScreenTriangle {
     fn barycentrics_neighbours_x8(&self, x0: u32, y: u32) -> [F32x8; 3] {
         const OFFSETS: [f64; LANES] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
         debug_assert!(self.neighbours_exact);
-        let [a, b, c] = self.xy;
-        let q = pixel_center_fixed(x0, y);
-        let start = [edge(b, c, q), edge(c, a, q), edge(a, b, q)];
-        let step = [
-            -(c[1] - b[1]) * SUBPIXEL,
-            -(a[1] - c[1]) * SUBPIXEL,
-            -(b[1] - a[1]) * SUBPIXEL,
-        ];
-        let mut l = [[0.0f32; LANES]; 3];
-        for k in 0..3 {
-            let (e0, s) = (start[k] as f64, step[k] as f64);
-            for i in 0..LANES {
-                l[k][i] = ((e0 + OFFSETS[i] * s) * self.inv_area) as f32;
-            }
-        }
-        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
+        self.barycentrics_offsets_x8(self.edges_at(x0, y), self.edge_steps(), &OFFSETS)
     }
 
     #[inline]
@@ -315,9 +332,7 @@ impl ScreenTriangle {
     /// The attributes at pixel `(x, y)`'s centre (inside or not): perspective-correct weights
     /// `λᵢ/wᵢ` normalised, as the scan conversion computed the depth.
     fn texel(&self, x: u32, y: u32) -> Texel {
-        let p = pixel_center_fixed(x, y);
-        let [a, b, c] = self.xy;
-        let l = self.barycentrics([edge(b, c, p), edge(c, a, p), edge(a, b, p)]);
+        let l = self.barycentrics_at(x, y);
         let pw = [
             l[0] * self.inv_w[0],
             l[1] * self.inv_w[1],
@@ -446,9 +461,7 @@ fn texel_lanes<const ATTRIBUTES: u8>(
     let mut source = [0u32; LANES];
     for (i, t) in triangles.iter().enumerate() {
         source[i] = t.source;
-        let q = pixel_center_fixed(x[i], y);
-        let [a, b, c] = t.xy;
-        let li = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+        let li = t.barycentrics_at(x[i], y);
         for k in 0..3 {
             l[k][i] = li[k];
             inv_w[k][i] = t.inv_w[k];
@@ -1326,12 +1339,11 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
         // `e > 0 || (e == 0 && top_left)` is `e + bias ≥ 0` with bias −1, or 0 on a top-left
         // edge. Each row's inside pixels are one run; on wide triangles it is found from the
         // three edges at once ([`inside_run`]), so the loop below visits only them.
-        let step = [-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1])].map(|d| d * SUBPIXEL);
+        let step = t.edge_steps();
         let bias = [tl0, tl1, tl2].map(|tl| i64::from(tl) - 1);
         let columns = i64::from(t.max[0] - t.min[0]) + 1;
         for y in t.min[1].max(first_row)..=t.max[1].min(last_row) {
-            let p = pixel_center_fixed(t.min[0], y);
-            let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
+            let e = t.edges_at(t.min[0], y);
             // Narrow triangles (dense meshes: a few pixels a row) test each pixel; solving the run
             // (three divisions) pays from about a group of eight pixels up.
             let solved = columns > RUN_MIN_COLUMNS;
@@ -1455,6 +1467,14 @@ mod tests {
         }
     }
 
+    /// The barycentrics at pixel `(x, y)` written out from the edge functions: the oracle of
+    /// the lane paths.
+    fn scalar_barycentrics(t: &ScreenTriangle, x: u32, y: u32) -> [f32; 3] {
+        let [a, b, c] = t.xy;
+        let q = pixel_center_fixed(x, y);
+        t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)])
+    }
+
     proptest! {
         /// Eight pixels' barycentrics at once have the scalar function's bits, for on-screen
         /// triangles (the exact `f64` path) and for corners far off screen, where the edge
@@ -1471,10 +1491,8 @@ mod tests {
             let t = triangle(if far { corners } else { near });
             let x = offsets.map(|o| x0 + o);
             let lanes = t.barycentrics_x8(&x, y).map(|l| l.to_array());
-            let [a, b, c] = t.xy;
             for (i, &xi) in x.iter().enumerate() {
-                let q = pixel_center_fixed(xi, y);
-                let scalar = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+                let scalar = scalar_barycentrics(&t, xi, y);
                 for k in 0..3 {
                     prop_assert_eq!(lanes[k][i].to_bits(), scalar[k].to_bits());
                 }
@@ -1500,10 +1518,8 @@ mod tests {
             if exact {
                 let t = ScreenTriangle { neighbours_exact: true, ..triangle(xy) };
                 let lanes = t.barycentrics_neighbours_x8(x0, y).map(|l| l.to_array());
-                let [a, b, c] = t.xy;
                 for (x, i) in (x0..).zip(0..LANES) {
-                    let q = pixel_center_fixed(x, y);
-                    let scalar = t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)]);
+                    let scalar = scalar_barycentrics(&t, x, y);
                     for (lanes, scalar) in lanes.iter().zip(scalar) {
                         prop_assert_eq!(lanes[i].to_bits(), scalar.to_bits());
                     }
