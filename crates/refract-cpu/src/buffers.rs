@@ -139,8 +139,9 @@ impl BackFaceSampler for BackFaces {
     }
 
     /// [`Self::back_face`] on eight lanes: the bounds tested and the pixel indices computed on
-    /// lanes, then each lane's row extent checked and its texel loaded.
-    #[inline]
+    /// lanes, then each lane's row extent checked and its texel loaded (inlined into the
+    /// kernel: a call would make it spill its live lanes around each lookup).
+    #[inline(always)]
     fn back_faces_x8(&self, uv_px: Vec2x8, active: Mask) -> BackFaceLanes {
         let (w, h) = (self.buffer.width, self.buffer.height);
         let zero = F32x8::ZERO;
