@@ -7,7 +7,10 @@
 //! triangle id, 8 bytes); the attributes of the surviving fragment are interpolated when a
 //! pixel is read ([`SurfaceBuffer::texel`], eight at a time with [`Band::attribute_lanes`],
 //! only the attributes asked for), so overdraw costs an edge test and a depth compare, never an
-//! interpolation. A texel carries its perspective-correct barycentric weights in its mesh
+//! interpolation. As on a GPU, each triangle's attributes are set up once as planes in screen
+//! space (`1/w` and each attribute over `w`), so a pixel evaluates one multiply-add pair per
+//! attribute and divides once; the window depth stays interpolated from the exact integer edge
+//! functions. A texel carries its perspective-correct barycentric weights in its mesh
 //! triangle, through near-plane clipping. A renderer can run its per-pixel work band by band
 //! right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
 //!
@@ -175,8 +178,65 @@ struct Attributes {
     bary: Vec3,
 }
 
-/// A triangle set up for scan conversion: fixed-point screen positions (`y` down), and what
-/// perspective-correct interpolation needs.
+/// A per-pixel quantity of a triangle as an affine function of the pixel centre: its value at
+/// the centre of the triangle's anchor pixel and what it gains per pixel to the right (`dx`)
+/// and per row down (`dy`). Set up in `f64` and rounded once; evaluated in `f32` as
+/// `(at_anchor + dy·Δy) + dx·Δx`, one row value shared by the row's pixels, the same
+/// operations in the scalar and the eight-lane paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Plane {
+    at_anchor: f32,
+    dx: f32,
+    dy: f32,
+}
+
+impl Plane {
+    /// `Σₖ vₖ·λₖ` over the corners' values `v` and the barycentric planes `l` (`f64`).
+    fn of(v: [f64; 3], l: &[[f64; 3]; 3]) -> Self {
+        let sum = |i: usize| v[0] * l[0][i] + v[1] * l[1][i] + v[2] * l[2][i];
+        Self {
+            at_anchor: sum(0) as f32,
+            dx: sum(1) as f32,
+            dy: sum(2) as f32,
+        }
+    }
+
+    /// The value at the anchor's column of the row `dy` rows below the anchor.
+    #[inline(always)]
+    fn row(self, dy: f32) -> f32 {
+        self.at_anchor + self.dy * dy
+    }
+
+    /// The value `dx` pixels right of the anchor's column, from the row's value.
+    #[inline(always)]
+    fn at(self, row: f32, dx: f32) -> f32 {
+        row + self.dx * dx
+    }
+
+    /// [`Self::at`] on eight lanes: each lane `row + dx·Δxᵢ`, the same bits.
+    #[inline(always)]
+    fn at_x8(self, row: f32, dx: F32x8) -> F32x8 {
+        F32x8::splat(row) + F32x8::splat(self.dx) * dx
+    }
+}
+
+/// A triangle's attributes as [`Plane`]s for perspective-correct interpolation: `1/w` and each
+/// attribute over `w` (`a/w` is affine in screen space), so that a pixel's attribute is
+/// `(a/w)(x, y) / (1/w)(x, y)`: one division per pixel, whatever the number of attributes.
+/// (The window depth is not a plane: it is interpolated from the exact barycentrics, see
+/// [`ScreenTriangle::depth_at`].)
+#[derive(Clone, Copy, Debug, Default)]
+struct AttributePlanes {
+    inv_w: Plane,
+    p_ws: [Plane; 3],
+    /// The normal over `w`; normalised without the division, which only scales it.
+    n_ws: [Plane; 3],
+    scalar: Plane,
+    bary: [Plane; 3],
+}
+
+/// A triangle set up for scan conversion: fixed-point screen positions (`y` down) for the
+/// coverage test and the depth, and its attributes as planes about an anchor pixel.
 #[derive(Clone, Copy, Debug)]
 struct ScreenTriangle {
     /// Fixed-point pixel coordinates of the corners, in clockwise-on-screen order.
@@ -185,18 +245,16 @@ struct ScreenTriangle {
     inv_area: f64,
     /// Window depth of each corner.
     depth: [f32; 3],
-    /// `1/w` of each corner.
-    inv_w: [f32; 3],
-    attributes: [Attributes; 3],
+    /// The pixel the planes are set up about: the one holding the corners' centroid,
+    /// clamped to the bounds (near every pixel the triangle covers, so that the planes are
+    /// evaluated without large cancellations).
+    anchor: [i32; 2],
+    planes: AttributePlanes,
     /// Pixel bounds, inclusive.
     min: [u32; 2],
     max: [u32; 2],
     /// The mesh triangle it was set up from (clipped pieces share it).
     source: u32,
-    /// Every edge value at the pixels of the bounds, and up to [`LANES`] pixels past their
-    /// right end, is below 2⁵³ in magnitude: exact in `f64`, so eight neighbours' barycentrics
-    /// need no per-group check ([`Self::barycentrics_neighbours_x8`]).
-    neighbours_exact: bool,
 }
 
 fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
@@ -220,12 +278,52 @@ fn pixel_center_fixed(x: u32, y: u32) -> [i64; 2] {
     ]
 }
 
+/// A triangle's quantities at pixel centres, before the perspective division (position,
+/// normal, scalar and barycentrics over `w`).
+#[derive(Clone, Copy, Debug)]
+struct PlaneValues {
+    depth: f32,
+    inv_w: f32,
+    p_ws: Vec3,
+    n_ws: Vec3,
+    scalar: f32,
+    bary: Vec3,
+}
+
+/// [`PlaneValues`] of eight pixels, as lanes; the attributes not asked for are zero.
+#[derive(Clone, Copy, Debug)]
+struct PlaneValuesX8 {
+    depth: F32x8,
+    inv_w: F32x8,
+    p_ws: Vec3x8,
+    n_ws: Vec3x8,
+    scalar: F32x8,
+    bary: Vec3x8,
+}
+
+impl PlaneValuesX8 {
+    /// `a`'s lanes where `take_a` is set, `b`'s elsewhere.
+    #[inline(always)]
+    fn select(take_a: Mask, a: &Self, b: &Self) -> Self {
+        Self {
+            depth: take_a.select(a.depth, b.depth),
+            inv_w: take_a.select(a.inv_w, b.inv_w),
+            p_ws: Vec3x8::select(take_a, a.p_ws, b.p_ws),
+            n_ws: Vec3x8::select(take_a, a.n_ws, b.n_ws),
+            scalar: take_a.select(a.scalar, b.scalar),
+            bary: Vec3x8::select(take_a, a.bary, b.bary),
+        }
+    }
+}
+
 impl ScreenTriangle {
-    /// Screen-space barycentrics from the exact integer edge functions, scaled by 1/area in f64.
-    #[inline]
-    fn barycentrics(&self, e: [i64; 3]) -> [f32; 3] {
-        let l = |e: i64| (e as f64 * self.inv_area) as f32;
-        [l(e[0]), l(e[1]), l(e[2])]
+    /// The rows from the anchor to row `y`, and the columns from it to `x`, as `f32` (exact).
+    #[inline(always)]
+    fn offsets(&self, x: u32, y: u32) -> (f32, f32) {
+        (
+            (x as i32 - self.anchor[0]) as f32,
+            (y as i32 - self.anchor[1]) as f32,
+        )
     }
 
     /// The three edge functions at the centre of pixel `(x, y)` (exact integers).
@@ -247,106 +345,95 @@ impl ScreenTriangle {
         ]
     }
 
-    /// [`Self::barycentrics`] at the centre of pixel `(x, y)`.
+    /// The window depth at the centre of pixel `(x, y)`: `Σₖ λₖ·depthₖ` in `f32` with the
+    /// screen-space barycentrics `λₖ = eₖ / area` from the exact integer edge functions, scaled
+    /// in `f64` and rounded. Not a plane: the distance maps turn window depths into distances,
+    /// which magnifies their last bits (performance.md, session 20).
     #[inline]
-    fn barycentrics_at(&self, x: u32, y: u32) -> [f32; 3] {
-        self.barycentrics(self.edges_at(x, y))
+    fn depth_at(&self, x: u32, y: u32) -> f32 {
+        self.depth_from_edges(self.edges_at(x, y))
     }
 
-    /// Eight lanes' barycentrics from the edge values `start` at one pixel, the `step` per
-    /// pixel and each lane's pixel `offset` from it: `(startₖ + offsetᵢ·stepₖ)·(1/area)` in
-    /// `f64`, rounded to `f32`. Exact, so [`Self::barycentrics`]' bits, while every
-    /// `|startₖ| + |offsetᵢ·stepₖ|` is below 2⁵³ (the callers' check).
-    #[inline(always)]
-    fn barycentrics_offsets_x8(
-        &self,
-        start: [i64; 3],
-        step: [i64; 3],
-        offset: &[f64; LANES],
-    ) -> [F32x8; 3] {
-        let mut l = [[0.0f32; LANES]; 3];
-        for k in 0..3 {
-            let (e0, s) = (start[k] as f64, step[k] as f64);
-            for i in 0..LANES {
-                l[k][i] = ((e0 + offset[i] * s) * self.inv_area) as f32;
-            }
-        }
-        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
-    }
-
-    /// [`Self::barycentrics`] at pixels `x` of row `y`, eight at once: along a row each edge
-    /// function steps by an exact integer per pixel, so lane `i`'s value is lane 0's plus
-    /// `(xᵢ − x₀)·step`, computed in `f64`, where every integer below 2⁵³ is exact: the same
-    /// integers, scaled and rounded as the scalar function does, so the same bits. A triangle
-    /// whose edge values could reach 2⁵³ (vertices far off screen) takes the scalar path.
-    #[inline(always)]
-    fn barycentrics_x8(&self, x: &[u32; LANES], y: u32) -> [F32x8; 3] {
-        let (start, step) = (self.edges_at(x[0], y), self.edge_steps());
-        let mut offset = [0.0f64; LANES];
-        let mut reach = 0i64;
-        for (o, &xi) in offset.iter_mut().zip(x) {
-            let d = i64::from(xi) - i64::from(x[0]);
-            reach = reach.max(d.abs());
-            *o = d as f64;
-        }
-        const EXACT: i64 = 1 << 53;
-        // Plain loops and written-out arrays in this per-group path: `array::map` closures
-        // nearby were once left as calls by the compiler (performance.md, session 15).
-        let mut exact = true;
-        for k in 0..3 {
-            let bound = step[k]
-                .checked_abs()
-                .and_then(|s| s.checked_mul(reach))
-                .and_then(|s| s.checked_add(start[k].checked_abs()?));
-            exact &= bound.is_some_and(|bound| bound < EXACT);
-        }
-        if exact {
-            return self.barycentrics_offsets_x8(start, step, &offset);
-        }
-        let mut l = [[0.0f32; LANES]; 3];
-        for (i, &xi) in x.iter().enumerate() {
-            let li = self.barycentrics_at(xi, y);
-            for k in 0..3 {
-                l[k][i] = li[k];
-            }
-        }
-        [F32x8::new(l[0]), F32x8::new(l[1]), F32x8::new(l[2])]
-    }
-
-    /// [`Self::barycentrics_x8`] at the eight neighbours `x0..x0 + 8` of row `y`, for a
-    /// triangle whose edge values there are exact in `f64` (`neighbours_exact`): lane `i` is
-    /// `(eₖ(x0) + i·stepₖ)·(1/area)` rounded to `f32`, the operations of the general path with
-    /// its offsets `0..8` known, so the same bits.
-    #[inline(always)]
-    fn barycentrics_neighbours_x8(&self, x0: u32, y: u32) -> [F32x8; 3] {
-        const OFFSETS: [f64; LANES] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
-        debug_assert!(self.neighbours_exact);
-        self.barycentrics_offsets_x8(self.edges_at(x0, y), self.edge_steps(), &OFFSETS)
-    }
-
+    /// [`Self::depth_at`] from the edge functions `e` at the pixel.
     #[inline]
-    fn depth_at(&self, l: [f32; 3]) -> f32 {
-        l[0] * self.depth[0] + l[1] * self.depth[1] + l[2] * self.depth[2]
+    fn depth_from_edges(&self, e: [i64; 3]) -> f32 {
+        let l = |e: i64| (e as f64 * self.inv_area) as f32;
+        l(e[0]) * self.depth[0] + l(e[1]) * self.depth[1] + l(e[2]) * self.depth[2]
     }
 
-    /// The attributes at pixel `(x, y)`'s centre (inside or not): perspective-correct weights
-    /// `λᵢ/wᵢ` normalised, as the scan conversion computed the depth.
+    /// Every quantity at the centre of pixel `(x, y)`, before the perspective division.
+    #[inline]
+    fn values(&self, x: u32, y: u32) -> PlaneValues {
+        let (dx, dy) = self.offsets(x, y);
+        let at = |plane: Plane| plane.at(plane.row(dy), dx);
+        let at3 = |p: [Plane; 3]| Vec3::new(at(p[0]), at(p[1]), at(p[2]));
+        let planes = &self.planes;
+        PlaneValues {
+            depth: self.depth_at(x, y),
+            inv_w: at(planes.inv_w),
+            p_ws: at3(planes.p_ws),
+            n_ws: at3(planes.n_ws),
+            scalar: at(planes.scalar),
+            bary: at3(planes.bary),
+        }
+    }
+
+    /// [`Self::values`] at pixels `x` of row `y`, eight at once (lane `i`: pixel `x[i]`, the
+    /// same bits); only the position, the normal, `1/w` and the [`Attribute`]s in
+    /// `ATTRIBUTES`, the others zero.
+    #[inline(always)]
+    fn values_x8<const ATTRIBUTES: u8>(&self, x: &[u32; LANES], y: u32) -> PlaneValuesX8 {
+        let dy = (y as i32 - self.anchor[1]) as f32;
+        let mut dx = [0.0f32; LANES];
+        for (dx, &x) in dx.iter_mut().zip(x) {
+            *dx = (x as i32 - self.anchor[0]) as f32;
+        }
+        let dx = F32x8::new(dx);
+        let at = |plane: Plane| plane.at_x8(plane.row(dy), dx);
+        let at3 = |p: [Plane; 3]| Vec3x8 {
+            x: at(p[0]),
+            y: at(p[1]),
+            z: at(p[2]),
+        };
+        let wanted = |attribute: u8| ATTRIBUTES & attribute != 0;
+        let planes = &self.planes;
+        PlaneValuesX8 {
+            depth: match wanted(Attribute::DEPTH) {
+                true => {
+                    let mut depth = [0.0f32; LANES];
+                    for (depth, &x) in depth.iter_mut().zip(x) {
+                        *depth = self.depth_at(x, y);
+                    }
+                    F32x8::new(depth)
+                }
+                false => F32x8::ZERO,
+            },
+            inv_w: at(planes.inv_w),
+            p_ws: at3(planes.p_ws),
+            n_ws: at3(planes.n_ws),
+            scalar: match wanted(Attribute::SCALAR) {
+                true => at(planes.scalar),
+                false => F32x8::ZERO,
+            },
+            bary: match wanted(Attribute::BARYCENTRICS) {
+                true => at3(planes.bary),
+                false => Vec3x8::ZERO,
+            },
+        }
+    }
+
+    /// The attributes at pixel `(x, y)`'s centre (inside or not): the planes over `w` divided
+    /// by the plane of `1/w` (perspective-correct), the normal renormalised, the depth as the
+    /// scan conversion computed it.
     fn texel(&self, x: u32, y: u32) -> Texel {
-        let l = self.barycentrics_at(x, y);
-        let pw = [
-            l[0] * self.inv_w[0],
-            l[1] * self.inv_w[1],
-            l[2] * self.inv_w[2],
-        ];
-        let inv_sum = 1.0 / (pw[0] + pw[1] + pw[2]);
-        let pw = pw.map(|v| v * inv_sum);
-        let [v0, v1, v2] = self.attributes;
+        let v = self.values(x, y);
+        let inv = 1.0 / v.inv_w;
         Texel {
-            depth: self.depth_at(l),
-            p_ws: pw[0] * v0.p_ws + pw[1] * v1.p_ws + pw[2] * v2.p_ws,
-            n_ws: (pw[0] * v0.n_ws + pw[1] * v1.n_ws + pw[2] * v2.n_ws).normalize_or_zero(),
-            scalar: pw[0] * v0.scalar + pw[1] * v1.scalar + pw[2] * v2.scalar,
-            barycentrics: pw[0] * v0.bary + pw[1] * v1.bary + pw[2] * v2.bary,
+            depth: v.depth,
+            p_ws: v.p_ws * inv,
+            n_ws: v.n_ws.normalize_or_zero(),
+            scalar: v.scalar * inv,
+            barycentrics: v.bary * inv,
             triangle: self.source,
         }
     }
@@ -415,91 +502,66 @@ impl TexelLanes {
 }
 
 /// [`ScreenTriangle::texel`] for eight pixels (lane `i`: triangle `triangles[i]`, pixel
-/// `(x[i], y)`): the barycentrics lane by lane, the interpolation on eight SIMD lanes with the
-/// same operations in the same order, so each texel has the scalar function's bits.
+/// `(x[i], y)`): the planes evaluated with the same operations lane by lane, the division
+/// and the normalisation on eight SIMD lanes, so each texel has the scalar function's bits.
 ///
 /// Only the attributes in `ATTRIBUTES` ([`Attribute`] bits) beside the position and the normal
-/// are gathered and interpolated; the others are zero.
+/// are evaluated; the others are zero.
 #[inline]
 fn texel_lanes<const ATTRIBUTES: u8>(
     triangles: [&ScreenTriangle; LANES],
     x: &[u32; LANES],
     y: u32,
 ) -> TexelLanes {
+    let mut source = [0; LANES];
+    for (source, t) in source.iter_mut().zip(&triangles) {
+        *source = t.source;
+    }
     // At most three triangles (one: inside a triangle; two or three: straddling one or two
-    // edges, the common mixed cases): each triangle's barycentrics on every lane with the
-    // vector path, then each lane takes its own triangle's barycentrics and corners, and one
-    // interpolation runs on all lanes (the operations of the one-triangle path, so its bits).
+    // edges, the common mixed cases): each triangle's planes on every lane, each lane keeping
+    // its own triangle's values.
     if let Some((distinct, count)) = at_most_three(&triangles) {
-        let first = distinct[0];
-        let mut l = first.barycentrics_x8(x, y);
-        let mut corners = CornersX8::of(first);
+        let mut values = distinct[0].values_x8::<ATTRIBUTES>(x, y);
         for &other in &distinct[1..count] {
             let mut on_other = [false; LANES];
             for (on, t) in on_other.iter_mut().zip(&triangles) {
                 *on = core::ptr::eq(*t, other);
             }
             let on_other = mask_from_lanes(on_other);
-            let l_other = other.barycentrics_x8(x, y);
-            for (l, l_other) in l.iter_mut().zip(l_other) {
-                *l = on_other.select(l_other, *l);
-            }
-            corners = CornersX8::select(on_other, &CornersX8::of(other), &corners);
+            let theirs = other.values_x8::<ATTRIBUTES>(x, y);
+            values = PlaneValuesX8::select(on_other, &theirs, &values);
         }
-        let mut source = [0; LANES];
-        for (source, t) in source.iter_mut().zip(&triangles) {
-            *source = t.source;
-        }
-        return interpolate_x8::<ATTRIBUTES>(l, &corners, source);
+        return divide_x8::<ATTRIBUTES>(&values, source);
     }
-    // Gathers into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
-    let mut l = [[0.0f32; LANES]; 3];
-    let (mut depth, mut inv_w, mut scalar) =
-        ([[0.0f32; LANES]; 3], [[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-    let (mut p, mut n) = ([[Vec3::ZERO; LANES]; 3], [[Vec3::ZERO; LANES]; 3]);
-    let mut bary = [[Vec3::ZERO; LANES]; 3];
-    let mut source = [0u32; LANES];
+    // Lane by lane into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
+    let (mut depth, mut inv_w, mut scalar) = ([0.0f32; LANES], [0.0f32; LANES], [0.0; LANES]);
+    let (mut p, mut n, mut bary) = (
+        [Vec3::ZERO; LANES],
+        [Vec3::ZERO; LANES],
+        [Vec3::ZERO; LANES],
+    );
     for (i, t) in triangles.iter().enumerate() {
-        source[i] = t.source;
-        let li = t.barycentrics_at(x[i], y);
-        for k in 0..3 {
-            l[k][i] = li[k];
-            inv_w[k][i] = t.inv_w[k];
-            p[k][i] = t.attributes[k].p_ws;
-            n[k][i] = t.attributes[k].n_ws;
-            if ATTRIBUTES & Attribute::DEPTH != 0 {
-                depth[k][i] = t.depth[k];
-            }
-            if ATTRIBUTES & Attribute::SCALAR != 0 {
-                scalar[k][i] = t.attributes[k].scalar;
-            }
-            if ATTRIBUTES & Attribute::BARYCENTRICS != 0 {
-                bary[k][i] = t.attributes[k].bary;
-            }
+        let v = t.values(x[i], y);
+        (inv_w[i], p[i], n[i]) = (v.inv_w, v.p_ws, v.n_ws);
+        if ATTRIBUTES & Attribute::DEPTH != 0 {
+            depth[i] = v.depth;
+        }
+        if ATTRIBUTES & Attribute::SCALAR != 0 {
+            scalar[i] = v.scalar;
+        }
+        if ATTRIBUTES & Attribute::BARYCENTRICS != 0 {
+            bary[i] = v.bary;
         }
     }
-    let f = F32x8::new;
-    let v = Vec3x8::from_lanes;
-    interpolate_x8::<ATTRIBUTES>(
-        [f(l[0]), f(l[1]), f(l[2])],
-        &CornersX8 {
-            depth: [f(depth[0]), f(depth[1]), f(depth[2])],
-            inv_w: [f(inv_w[0]), f(inv_w[1]), f(inv_w[2])],
-            scalar: [f(scalar[0]), f(scalar[1]), f(scalar[2])],
-            p: [v(&p[0]), v(&p[1]), v(&p[2])],
-            n: [v(&n[0]), v(&n[1]), v(&n[2])],
-            bary: [v(&bary[0]), v(&bary[1]), v(&bary[2])],
-        },
-        source,
-    )
-}
-
-/// [`interpolate_x8`] of eight lanes on triangle `t` (most groups of eight, inside a triangle
-/// larger than the group) with screen-space barycentrics `l`: its corners loaded once and
-/// splat, the operations of [`texel_lanes`], so the same bits.
-#[inline(always)]
-fn interpolate_one_triangle<const ATTRIBUTES: u8>(t: &ScreenTriangle, l: [F32x8; 3]) -> TexelLanes {
-    interpolate_x8::<ATTRIBUTES>(l, &CornersX8::of(t), [t.source; LANES])
+    let values = PlaneValuesX8 {
+        depth: F32x8::new(depth),
+        inv_w: F32x8::new(inv_w),
+        p_ws: Vec3x8::from_lanes(&p),
+        n_ws: Vec3x8::from_lanes(&n),
+        scalar: F32x8::new(scalar),
+        bary: Vec3x8::from_lanes(&bary),
+    };
+    divide_x8::<ATTRIBUTES>(&values, source)
 }
 
 /// The distinct values of eight lanes (triangles, triangle ids), in lane order, and how many
@@ -541,100 +603,24 @@ impl Distinct for u32 {
     }
 }
 
-/// The corner values of eight lanes' triangles.
-struct CornersX8 {
-    depth: [F32x8; 3],
-    inv_w: [F32x8; 3],
-    scalar: [F32x8; 3],
-    p: [Vec3x8; 3],
-    n: [Vec3x8; 3],
-    bary: [Vec3x8; 3],
-}
-
-impl CornersX8 {
-    /// Triangle `t`'s corners in every lane.
-    #[inline(always)]
-    fn of(t: &ScreenTriangle) -> Self {
-        let s = F32x8::splat;
-        let v = Vec3x8::splat;
-        // Written out: `[0, 1, 2].map(..)` closures were once left as calls in this per-group
-        // path.
-        let [c0, c1, c2] = &t.attributes;
-        CornersX8 {
-            depth: [s(t.depth[0]), s(t.depth[1]), s(t.depth[2])],
-            inv_w: [s(t.inv_w[0]), s(t.inv_w[1]), s(t.inv_w[2])],
-            scalar: [s(c0.scalar), s(c1.scalar), s(c2.scalar)],
-            p: [v(c0.p_ws), v(c1.p_ws), v(c2.p_ws)],
-            n: [v(c0.n_ws), v(c1.n_ws), v(c2.n_ws)],
-            bary: [v(c0.bary), v(c1.bary), v(c2.bary)],
-        }
-    }
-
-    /// `a`'s corners where `take_a` is set, `b`'s elsewhere.
-    #[inline(always)]
-    fn select(take_a: Mask, a: &Self, b: &Self) -> Self {
-        let f = |a: [F32x8; 3], b: [F32x8; 3]| {
-            [
-                take_a.select(a[0], b[0]),
-                take_a.select(a[1], b[1]),
-                take_a.select(a[2], b[2]),
-            ]
-        };
-        let v = |a: [Vec3x8; 3], b: [Vec3x8; 3]| {
-            [
-                Vec3x8::select(take_a, a[0], b[0]),
-                Vec3x8::select(take_a, a[1], b[1]),
-                Vec3x8::select(take_a, a[2], b[2]),
-            ]
-        };
-        CornersX8 {
-            depth: f(a.depth, b.depth),
-            inv_w: f(a.inv_w, b.inv_w),
-            scalar: f(a.scalar, b.scalar),
-            p: v(a.p, b.p),
-            n: v(a.n, b.n),
-            bary: v(a.bary, b.bary),
-        }
-    }
-}
-
-/// Eight texels from their screen-space barycentrics `l` and corners: depth linear in screen
-/// space, the attributes perspective-correct (`λᵢ/wᵢ` normalised), the normal renormalised.
+/// Eight texels from their plane values: [`ScreenTriangle::texel`]'s perspective division
+/// and normalisation on lanes, the same operations, so the same bits.
 #[inline(always)]
-fn interpolate_x8<const ATTRIBUTES: u8>(
-    l: [F32x8; 3],
-    c: &CornersX8,
-    source: [u32; LANES],
-) -> TexelLanes {
-    let [l0, l1, l2] = l;
-    let wanted = |attribute: u8| ATTRIBUTES & attribute != 0;
-    let depth = if wanted(Attribute::DEPTH) {
-        l0 * c.depth[0] + l1 * c.depth[1] + l2 * c.depth[2]
-    } else {
-        F32x8::ZERO
-    };
-    let pw = [l0 * c.inv_w[0], l1 * c.inv_w[1], l2 * c.inv_w[2]];
-    let inv_sum = F32x8::ONE / (pw[0] + pw[1] + pw[2]);
-    let (w0, w1, w2) = (pw[0] * inv_sum, pw[1] * inv_sum, pw[2] * inv_sum);
-    let p_ws = c.p[0] * w0 + c.p[1] * w1 + c.p[2] * w2;
-    let (n_ws, n_ok) = (c.n[0] * w0 + c.n[1] * w1 + c.n[2] * w2).try_normalize();
-    let n_ws = Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO);
-    let scalar = if wanted(Attribute::SCALAR) {
-        w0 * c.scalar[0] + w1 * c.scalar[1] + w2 * c.scalar[2]
-    } else {
-        F32x8::ZERO
-    };
-    let barycentrics = if wanted(Attribute::BARYCENTRICS) {
-        c.bary[0] * w0 + c.bary[1] * w1 + c.bary[2] * w2
-    } else {
-        Vec3x8::ZERO
-    };
+fn divide_x8<const ATTRIBUTES: u8>(v: &PlaneValuesX8, source: [u32; LANES]) -> TexelLanes {
+    let inv = F32x8::ONE / v.inv_w;
+    let (n_ws, n_ok) = v.n_ws.try_normalize();
     TexelLanes {
-        depth,
-        p_ws,
-        n_ws,
-        scalar,
-        barycentrics,
+        depth: v.depth,
+        p_ws: v.p_ws * inv,
+        n_ws: Vec3x8::select(n_ok, n_ws, Vec3x8::ZERO),
+        scalar: match ATTRIBUTES & Attribute::SCALAR != 0 {
+            true => v.scalar * inv,
+            false => F32x8::ZERO,
+        },
+        barycentrics: match ATTRIBUTES & Attribute::BARYCENTRICS != 0 {
+            true => v.bary * inv,
+            false => Vec3x8::ZERO,
+        },
         triangle: source,
     }
 }
@@ -660,11 +646,7 @@ fn row_texel_lanes<const ATTRIBUTES: u8>(
         let id = run[0].triangle;
         if id != EMPTY && run.iter().all(|v| v.triangle == id) {
             let t = triangles.get(id);
-            let l = match t.neighbours_exact {
-                true => t.barycentrics_neighbours_x8(x[0], y),
-                false => t.barycentrics_x8(x, y),
-            };
-            return interpolate_one_triangle::<ATTRIBUTES>(t, l);
+            return divide_x8::<ATTRIBUTES>(&t.values_x8::<ATTRIBUTES>(x, y), [t.source; LANES]);
         }
     }
     texel_lanes::<ATTRIBUTES>(gather_triangles(row, triangles, x, y), x, y)
@@ -793,38 +775,69 @@ fn setup(
     if x0 > x1 || y0 > y1 {
         return None;
     }
+    let (min, max) = ([x0, y0], [x1, y1]);
+    // The pixel holding the centroid (in `i128`: corners far off screen), inside the bounds.
+    let anchor = |k: usize| {
+        let sum: i128 = xy.iter().map(|v| i128::from(v[k])).sum();
+        let pixel = (sum / 3).div_euclid(i128::from(SUBPIXEL));
+        pixel.clamp(i128::from(min[k]), i128::from(max[k])) as i64
+    };
+    let anchor = [anchor(0), anchor(1)];
     Some(ScreenTriangle {
         xy,
         inv_area: 1.0 / area as f64,
         depth,
-        inv_w,
-        attributes,
+        anchor: [anchor[0] as i32, anchor[1] as i32],
+        planes: attribute_planes(xy, area, anchor, inv_w, &attributes),
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
         source,
-        neighbours_exact: edges_exact_in_f64(xy, [x0, x1 + LANES as i64], [y0, y1]),
     })
 }
 
-/// Whether the edge functions of a triangle with corners `xy` stay below 2⁵³ in magnitude at
-/// the centres of pixels `columns[0]..=columns[1]` × `rows[0]..=rows[1]` (computed in `i128`;
-/// an edge function is linear, so its largest magnitude is at a corner of the rectangle).
-fn edges_exact_in_f64(xy: [[i64; 2]; 3], columns: [i64; 2], rows: [i64; 2]) -> bool {
-    const EXACT: i128 = 1 << 53;
-    let edge_wide = |a: [i64; 2], b: [i64; 2], p: [i64; 2]| {
-        let w = |v: i64| i128::from(v);
-        (w(b[0]) - w(a[0])) * (w(p[1]) - w(a[1])) - (w(b[1]) - w(a[1])) * (w(p[0]) - w(a[0]))
-    };
-    let center = |pixel: i64| pixel * SUBPIXEL + SUBPIXEL / 2;
+/// The planes of a triangle with corners `xy` (clockwise, twice its area `area` in fixed
+/// point) about the pixel `anchor`: its screen-space barycentrics `λₖ = eₖ / area` (edge
+/// functions, exact at the anchor) and their steps per pixel, in `f64`; then each quantity
+/// as `Σₖ vₖ·λₖ`: `1/w` with `vₖ = 1/wₖ` and every attribute `a` with `vₖ = aₖ/wₖ`.
+fn attribute_planes(
+    xy: [[i64; 2]; 3],
+    area: i64,
+    anchor: [i64; 2],
+    inv_w: [f32; 3],
+    attributes: &[Attributes; 3],
+) -> AttributePlanes {
     let [a, b, c] = xy;
-    columns.iter().all(|&x| {
-        rows.iter().all(|&y| {
-            let q = [center(x), center(y)];
-            [edge_wide(b, c, q), edge_wide(c, a, q), edge_wide(a, b, q)]
-                .iter()
-                .all(|e| e.abs() < EXACT)
-        })
-    })
+    let q = [
+        anchor[0] * SUBPIXEL + SUBPIXEL / 2,
+        anchor[1] * SUBPIXEL + SUBPIXEL / 2,
+    ];
+    let inv_area = 1.0 / area as f64;
+    let s = SUBPIXEL as f64;
+    // Edge `from → to` at the anchor, and per pixel right (−Δy) and down (+Δx), over the area.
+    let barycentric = |from: [i64; 2], to: [i64; 2]| {
+        [
+            edge(from, to, q) as f64 * inv_area,
+            -((to[1] - from[1]) as f64) * s * inv_area,
+            (to[0] - from[0]) as f64 * s * inv_area,
+        ]
+    };
+    let l = [barycentric(b, c), barycentric(c, a), barycentric(a, b)];
+    let iw = inv_w.map(f64::from);
+    let over_w = |v: [f32; 3]| Plane::of([0, 1, 2].map(|k| f64::from(v[k]) * iw[k]), &l);
+    let over_w3 = |v: [Vec3; 3]| {
+        [
+            over_w(v.map(|v| v.x)),
+            over_w(v.map(|v| v.y)),
+            over_w(v.map(|v| v.z)),
+        ]
+    };
+    AttributePlanes {
+        inv_w: Plane::of(iw, &l),
+        p_ws: over_w3(attributes.map(|a| a.p_ws)),
+        n_ws: over_w3(attributes.map(|a| a.n_ws)),
+        scalar: over_w(attributes.map(|a| a.scalar)),
+        bary: over_w3(attributes.map(|a| a.bary)),
+    }
 }
 
 /// The set-up triangles of one frame, stored per input chunk (the chunks' memory is reused
@@ -1359,7 +1372,7 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             let (mut first_written, mut last_written) = (u32::MAX, 0);
             // The depth test and write of an inside pixel with edge values `f`.
             let mut fragment = |x: u32, f: [i64; 3]| {
-                let depth = t.depth_at(t.barycentrics(f));
+                let depth = t.depth_from_edges(f);
                 if depth > 1.0 {
                     return; // beyond the far plane (the near plane is clipped geometrically)
                 }
@@ -1445,97 +1458,145 @@ mod tests {
         }
     }
 
-    /// A screen triangle with corners `xy` (fixed point) for barycentric tests.
-    fn triangle(xy: [[i64; 2]; 3]) -> ScreenTriangle {
-        let area = edge(xy[0], xy[1], xy[2]).abs().max(1);
-        let corner = Attributes {
-            p_ws: Vec3::ZERO,
-            n_ws: Vec3::Z,
-            scalar: 0.0,
-            bary: Vec3::X,
-        };
-        ScreenTriangle {
+    /// A screen triangle with corners `xy` (fixed point, made clockwise), its planes set up
+    /// from the corners' depths, `1/w` and attributes; `None` when the corners are collinear.
+    fn triangle(
+        mut xy: [[i64; 2]; 3],
+        inv_w: [f32; 3],
+        mut attributes: [Attributes; 3],
+    ) -> Option<ScreenTriangle> {
+        let mut inv_w = inv_w;
+        let mut area = edge(xy[0], xy[1], xy[2]);
+        if area == 0 {
+            return None;
+        }
+        if area < 0 {
+            xy.swap(1, 2);
+            inv_w.swap(1, 2);
+            attributes.swap(1, 2);
+            area = -area;
+        }
+        let depth = [0.25, 0.5, 0.75];
+        let pixel = |k: usize| (xy[0][k] / SUBPIXEL).clamp(0, 4000);
+        let anchor = [pixel(0), pixel(1)];
+        Some(ScreenTriangle {
             xy,
             inv_area: 1.0 / area as f64,
-            depth: [0.5; 3],
-            inv_w: [1.0; 3],
-            attributes: [corner; 3],
+            depth,
+            anchor: [anchor[0] as i32, anchor[1] as i32],
+            planes: attribute_planes(xy, area, anchor, inv_w, &attributes),
             min: [0, 0],
-            max: [0, 0],
-            source: 0,
-            neighbours_exact: false,
-        }
+            max: [4000, 4000],
+            source: 7,
+        })
     }
 
-    /// The barycentrics at pixel `(x, y)` written out from the edge functions: the oracle of
-    /// the lane paths.
-    fn scalar_barycentrics(t: &ScreenTriangle, x: u32, y: u32) -> [f32; 3] {
-        let [a, b, c] = t.xy;
-        let q = pixel_center_fixed(x, y);
-        t.barycentrics([edge(b, c, q), edge(c, a, q), edge(a, b, q)])
+    /// Corner attributes from three seeds in `[-1, 1]³`.
+    fn corners(seed: [[f32; 3]; 3]) -> [Attributes; 3] {
+        let v = |s: [f32; 3]| Vec3::from_array(s);
+        [0, 1, 2].map(|k| Attributes {
+            p_ws: 10.0 * v(seed[k]),
+            n_ws: v(seed[(k + 1) % 3]) + Vec3::new(0.0, 0.0, 2.0),
+            scalar: 1.0 + seed[k][0],
+            bary: CORNER_BARYCENTRICS[k],
+        })
     }
 
     proptest! {
-        /// Eight pixels' barycentrics at once have the scalar function's bits, for on-screen
-        /// triangles (the exact `f64` path) and for corners far off screen, where the edge
-        /// values pass 2⁵³ (the scalar path).
+        /// Eight pixels' texels at once (any eight pixels of a row, all attributes, and only
+        /// some) have the scalar function's bits: the planes evaluated with the same
+        /// operations lane by lane.
         #[test]
-        fn eight_barycentrics_equal_the_scalar_ones(
-            corners in proptest::array::uniform3(proptest::array::uniform2(-(1i64 << 29)..(1i64 << 29))),
-            near in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
-            far in proptest::bool::ANY,
+        fn eight_texels_equal_the_scalar_ones(
+            xy in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
+            inv_w in proptest::array::uniform3(0.05f32..20.0),
+            seed in proptest::array::uniform3(proptest::array::uniform3(-1.0f32..1.0)),
             x0 in 0u32..1000,
             offsets in proptest::array::uniform8(0u32..24),
             y in 0u32..1000,
         ) {
-            let t = triangle(if far { corners } else { near });
+            let Some(t) = triangle(xy, inv_w, corners(seed)) else { return Ok(()) };
             let x = offsets.map(|o| x0 + o);
-            let lanes = t.barycentrics_x8(&x, y).map(|l| l.to_array());
-            for (i, &xi) in x.iter().enumerate() {
-                let scalar = scalar_barycentrics(&t, xi, y);
-                for k in 0..3 {
-                    prop_assert_eq!(lanes[k][i].to_bits(), scalar[k].to_bits());
-                }
+            let all = divide_x8::<{ Attribute::ALL }>(&t.values_x8::<{ Attribute::ALL }>(&x, y), [t.source; LANES]);
+            let some = divide_x8::<{ Attribute::SCALAR }>(&t.values_x8::<{ Attribute::SCALAR }>(&x, y), [t.source; LANES]);
+            for (i, (lane, some)) in all.to_texels().iter().zip(some.to_texels()).enumerate() {
+                let scalar = t.texel(x[i], y);
+                prop_assert_eq!(format!("{lane:?}"), format!("{scalar:?}"));
+                prop_assert_eq!(
+                    format!("{:?}", (some.p_ws, some.n_ws, some.scalar)),
+                    format!("{:?}", (scalar.p_ws, scalar.n_ws, scalar.scalar))
+                );
             }
         }
     }
 
     proptest! {
-        /// Eight neighbours' barycentrics from the triangle-level exactness test have the
-        /// scalar function's bits wherever that test passes; it passes on screen-sized
-        /// triangles and fails where the edge values pass 2⁵³.
+        /// The planes interpolate perspective-correctly: at pixels inside a triangle, the
+        /// texel's position, scalar, barycentrics and depth agree with the interpolation
+        /// written out in `f64` from the exact edge functions (`λₖ = eₖ/area`, weights
+        /// `λₖ/wₖ` normalised; depth `Σ λₖ·depthₖ`) to a few `f32` roundings of the
+        /// attributes' scale.
         #[test]
-        fn neighbour_barycentrics_equal_the_scalar_ones(
-            corners in proptest::array::uniform3(proptest::array::uniform2(-(1i64 << 29)..(1i64 << 29))),
-            near in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
-            far in proptest::bool::ANY,
-            x0 in 0u32..1000,
-            y in 0u32..1000,
+        fn planes_interpolate_perspective_correctly(
+            xy in proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18))),
+            inv_w in proptest::array::uniform3(0.2f32..5.0),
+            seed in proptest::array::uniform3(proptest::array::uniform3(-1.0f32..1.0)),
+            at in proptest::array::uniform3(0.0f64..1.0),
         ) {
-            let xy = if far { corners } else { near };
-            let exact = edges_exact_in_f64(xy, [i64::from(x0), i64::from(x0) + 7], [i64::from(y); 2]);
-            prop_assert!(far || exact, "on-screen corners are exact");
-            if exact {
-                let t = ScreenTriangle { neighbours_exact: true, ..triangle(xy) };
-                let lanes = t.barycentrics_neighbours_x8(x0, y).map(|l| l.to_array());
-                for (x, i) in (x0..).zip(0..LANES) {
-                    let scalar = scalar_barycentrics(&t, x, y);
-                    for (lanes, scalar) in lanes.iter().zip(scalar) {
-                        prop_assert_eq!(lanes[i].to_bits(), scalar.to_bits());
-                    }
-                }
+            let attributes = corners(seed);
+            let Some(t) = triangle(xy, inv_w, attributes) else { return Ok(()) };
+            // The pixel holding the point with barycentrics `at` (normalised).
+            let sum = at.iter().sum::<f64>().max(1e-9);
+            let point = |k: usize| (0..3).map(|i| at[i] / sum * t.xy[i][k] as f64).sum::<f64>();
+            let (x, y) = ((point(0) / SUBPIXEL as f64) as u32, (point(1) / SUBPIXEL as f64) as u32);
+            let area = edge(t.xy[0], t.xy[1], t.xy[2]) as f64;
+            let e = t.edges_at(x, y).map(|e| e as f64 / area);
+            if e.iter().any(|&l| l < 0.0) {
+                return Ok(()); // rounded to a pixel centre outside a thin triangle
             }
+            // The inputs in the triangle's (clockwise) corner order, as `triangle` swaps them.
+            let mut order = [0, 1, 2];
+            if edge(xy[0], xy[1], xy[2]) < 0 {
+                order.swap(1, 2);
+            }
+            let iw = order.map(|k| f64::from(inv_w[k]));
+            let a = order.map(|k| attributes[k]);
+            let pw = [0, 1, 2].map(|k| e[k] * iw[k]);
+            let den: f64 = pw.iter().sum();
+            let lerp = |f: &dyn Fn(&Attributes) -> f64| {
+                (0..3).map(|k| pw[k] * f(&a[k])).sum::<f64>() / den
+            };
+            // The rounding error of a plane's evaluation: a few `f32` roundings of its terms'
+            // magnitudes (the coefficients' rounding, the two products and sums).
+            let (dx, dy) = t.offsets(x, y);
+            let bound = |p: Plane| {
+                4.0 * f64::from(f32::EPSILON / 2.0)
+                    * f64::from(p.at_anchor.abs() + (p.dy * dy).abs() + (p.dx * dx).abs())
+            };
+            let planes = t.planes;
+            // A quotient of planes (an attribute over `w` by `1/w`).
+            let check = |value: f32, over_w: Plane, exact: f64| {
+                let error = (f64::from(value) - exact).abs();
+                let tolerance = (bound(over_w) + exact.abs() * bound(planes.inv_w)) / den
+                    + 2.0 * f64::from(f32::EPSILON) * exact.abs()
+                    + 1e-12;
+                (error <= tolerance, format!("{value} vs {exact}: {error:e} > {tolerance:e}"))
+            };
+            let texel = t.texel(x, y);
+            for (value, plane, exact) in [
+                (texel.p_ws.x, planes.p_ws[0], lerp(&|a| f64::from(a.p_ws.x))),
+                (texel.p_ws.z, planes.p_ws[2], lerp(&|a| f64::from(a.p_ws.z))),
+                (texel.scalar, planes.scalar, lerp(&|a| f64::from(a.scalar))),
+                (texel.barycentrics.y, planes.bary[1], lerp(&|a| f64::from(a.bary.y))),
+            ] {
+                let (ok, message) = check(value, plane, exact);
+                prop_assert!(ok, "{}", message);
+            }
+            let depth: f64 = (0..3).map(|k| e[k] * [0.25, 0.5, 0.75][k]).sum();
+            let error = (f64::from(texel.depth) - depth).abs();
+            // The depth from the exact barycentrics: three roundings of values below 1.
+            prop_assert!(error <= 4e-7, "depth {} vs {depth}", texel.depth);
         }
-    }
-
-    /// Corners far enough off screen make edge values pass 2⁵³: not exact.
-    #[test]
-    fn far_corners_are_not_exact_in_f64() {
-        let far = 1i64 << 40;
-        let xy = [[0, 0], [far, 0], [0, far]];
-        assert!(!edges_exact_in_f64(xy, [0, 8], [0, 0]));
-        let near = [[0, 0], [1 << 18, 0], [0, 1 << 18]];
-        assert!(edges_exact_in_f64(near, [0, 1000], [0, 1000]));
     }
 
     /// Steps of zero (an edge parallel to the rows) keep or drop the whole row.
