@@ -533,35 +533,59 @@ fn texel_lanes<const ATTRIBUTES: u8>(
         }
         return divide_x8::<ATTRIBUTES>(&values, source);
     }
-    // Lane by lane into plain arrays (loops: `array::map`/`from_fn` are not always inlined).
-    let (mut depth, mut inv_w, mut scalar) = ([0.0f32; LANES], [0.0f32; LANES], [0.0; LANES]);
-    let (mut p, mut n, mut bary) = (
-        [Vec3::ZERO; LANES],
-        [Vec3::ZERO; LANES],
-        [Vec3::ZERO; LANES],
-    );
+    // Each lane on its own triangle: every plane's coefficients gathered lane by lane, then
+    // evaluated on lanes with the scalar path's operations, `(value + dy·Δy) + dx·Δx`.
+    let (mut dx, mut dy) = ([0.0f32; LANES], [0.0f32; LANES]);
     for (i, t) in triangles.iter().enumerate() {
-        let v = t.values(x[i], y);
-        (inv_w[i], p[i], n[i]) = (v.inv_w, v.p_ws, v.n_ws);
-        if ATTRIBUTES & Attribute::DEPTH != 0 {
-            depth[i] = v.depth;
-        }
-        if ATTRIBUTES & Attribute::SCALAR != 0 {
-            scalar[i] = v.scalar;
-        }
-        if ATTRIBUTES & Attribute::BARYCENTRICS != 0 {
-            bary[i] = v.bary;
+        (dx[i], dy[i]) = t.offsets(x[i], y);
+    }
+    let (dx, dy) = (F32x8::new(dx), F32x8::new(dy));
+    let at = |plane: fn(&AttributePlanes) -> Plane| gathered(&triangles, dx, dy, plane);
+    let at3 = |plane: fn(&AttributePlanes) -> &[Plane; 3]| Vec3x8 {
+        x: gathered(&triangles, dx, dy, |p| plane(p)[0]),
+        y: gathered(&triangles, dx, dy, |p| plane(p)[1]),
+        z: gathered(&triangles, dx, dy, |p| plane(p)[2]),
+    };
+    let wanted = |attribute: u8| ATTRIBUTES & attribute != 0;
+    let mut depth = [0.0f32; LANES];
+    if wanted(Attribute::DEPTH) {
+        for (i, t) in triangles.iter().enumerate() {
+            depth[i] = t.depth_at(x[i], y);
         }
     }
     let values = PlaneValuesX8 {
         depth: F32x8::new(depth),
-        inv_w: F32x8::new(inv_w),
-        p_ws: Vec3x8::from_lanes(&p),
-        n_ws: Vec3x8::from_lanes(&n),
-        scalar: F32x8::new(scalar),
-        bary: Vec3x8::from_lanes(&bary),
+        inv_w: at(|p| p.inv_w),
+        p_ws: at3(|p| &p.p_ws),
+        n_ws: at3(|p| &p.n_ws),
+        scalar: match wanted(Attribute::SCALAR) {
+            true => at(|p| p.scalar),
+            false => F32x8::ZERO,
+        },
+        bary: match wanted(Attribute::BARYCENTRICS) {
+            true => at3(|p| &p.bary),
+            false => Vec3x8::ZERO,
+        },
     };
     divide_x8::<ATTRIBUTES>(&values, source)
+}
+
+/// One plane (chosen by `plane`) of each lane's triangle at the lanes' offsets `dx`, `dy` from
+/// their triangles' anchors: the coefficients gathered lane by lane, then
+/// `(value + dy·Δy) + dx·Δx` on lanes, [`Plane::row`] and [`Plane::at`]'s operations.
+#[inline(always)]
+fn gathered(
+    triangles: &[&ScreenTriangle; LANES],
+    dx: F32x8,
+    dy: F32x8,
+    plane: impl Fn(&AttributePlanes) -> Plane,
+) -> F32x8 {
+    let (mut value, mut per_x, mut per_y) = ([0.0f32; LANES], [0.0f32; LANES], [0.0; LANES]);
+    for (i, t) in triangles.iter().enumerate() {
+        let p = plane(&t.planes);
+        (value[i], per_x[i], per_y[i]) = (p.at_anchor, p.dx, p.dy);
+    }
+    (F32x8::new(value) + F32x8::new(per_y) * dy) + F32x8::new(per_x) * dx
 }
 
 /// The distinct values of eight lanes (triangles, triangle ids), in lane order, and how many
@@ -1526,6 +1550,35 @@ mod tests {
                     format!("{:?}", (some.p_ws, some.n_ws, some.scalar)),
                     format!("{:?}", (scalar.p_ws, scalar.n_ws, scalar.scalar))
                 );
+            }
+        }
+    }
+
+    proptest! {
+        /// Eight lanes on eight triangles (the gathered path, and the paths of two or three
+        /// triangles when seeds repeat) have the scalar texels' bits.
+        #[test]
+        fn texels_of_eight_triangles_equal_the_scalar_ones(
+            xy in proptest::array::uniform8(proptest::array::uniform3(proptest::array::uniform2(0i64..(1 << 18)))),
+            inv_w in proptest::array::uniform3(0.05f32..20.0),
+            seed in proptest::array::uniform3(proptest::array::uniform3(-1.0f32..1.0)),
+            pick in proptest::array::uniform8(0usize..8),
+            x0 in 0u32..1000,
+            offsets in proptest::array::uniform8(0u32..24),
+            y in 0u32..1000,
+        ) {
+            let fallback = [[0, 0], [1 << 12, 0], [0, 1 << 12]];
+            let all: [ScreenTriangle; LANES] = core::array::from_fn(|i| {
+                triangle(xy[i], inv_w, corners(seed))
+                    .or_else(|| triangle(fallback, inv_w, corners(seed)))
+                    .expect("a triangle")
+            });
+            let triangles: [&ScreenTriangle; LANES] = core::array::from_fn(|i| &all[pick[i]]);
+            let x = offsets.map(|o| x0 + o);
+            let lanes = texel_lanes::<{ Attribute::ALL }>(triangles, &x, y).to_texels();
+            for (i, lane) in lanes.iter().enumerate() {
+                let scalar = triangles[i].texel(x[i], y);
+                prop_assert_eq!(format!("{lane:?}"), format!("{scalar:?}"));
             }
         }
     }
