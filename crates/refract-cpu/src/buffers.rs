@@ -10,13 +10,15 @@ use refract_scene::Refractor;
 
 use crate::pixel_group::PixelGroup;
 use crate::raster::{
-    Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize, rasterize_bands,
-    rasterize_into,
+    Band, DepthInterpolation, DepthTest, Faces, RasterMesh, SurfaceBuffer, band_pixels, rasterize,
+    rasterize_bands, rasterize_into,
 };
 
-/// The refractor's mesh with its `d_N` as the interpolated scalar.
+/// The refractor's mesh with its `d_N` as the interpolated scalar, its depth as a plane (the
+/// image-space buffers' depth only decides visibility).
 pub(crate) fn raster_mesh(refractor: &Refractor) -> RasterMesh<'_> {
     RasterMesh::with_scalars(refractor.mesh(), refractor.d_n())
+        .with_depth(DepthInterpolation::Plane)
 }
 
 /// The nearest front faces: `P1`, `N1` and interpolated `d_N` per pixel.

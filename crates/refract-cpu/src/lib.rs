@@ -37,8 +37,8 @@ pub use image_space::{
 };
 pub use instruction_set::{UnsupportedCpu, check_instruction_set};
 pub use raster::{
-    BAND_ROWS, Band, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel, band_pixels, rasterize,
-    rasterize_bands, rasterize_into,
+    BAND_ROWS, Band, DepthInterpolation, DepthTest, Faces, RasterMesh, SurfaceBuffer, Texel,
+    band_pixels, rasterize, rasterize_bands, rasterize_into,
 };
 pub use renderer::CpuRenderer;
 pub use surfaces::rasterize_surface;

@@ -116,6 +116,23 @@ pub struct RasterMesh<'a> {
     pub scalars: &'a [f32],
     /// Triangles (counter-clockwise seen from outside).
     pub triangles: &'a [[u32; 3]],
+    /// How the window depth is interpolated.
+    pub depth: DepthInterpolation,
+}
+
+/// How the rasteriser interpolates the window depth (the depth test's value and
+/// [`Texel::depth`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DepthInterpolation {
+    /// `Σ λₖ·depthₖ` with the barycentrics `λₖ` from the exact integer edge functions (the
+    /// default): what a pass that turns window depths into distances needs (the distance
+    /// maps; converting magnifies the depth's last bits).
+    #[default]
+    Exact,
+    /// A plane like the attributes, `(value + dy·Δy) + dx·Δx` in `f32`: fewer operations per
+    /// pixel, last bits different; for passes whose depth only decides visibility (the
+    /// image-space front and back faces).
+    Plane,
 }
 
 impl<'a> RasterMesh<'a> {
@@ -133,7 +150,13 @@ impl<'a> RasterMesh<'a> {
             normals: &mesh.normals,
             scalars,
             triangles: &mesh.triangles,
+            depth: DepthInterpolation::Exact,
         }
+    }
+
+    /// This mesh with its window depth interpolated as `depth` says.
+    pub fn with_depth(self, depth: DepthInterpolation) -> Self {
+        Self { depth, ..self }
     }
 
     #[inline]
@@ -245,6 +268,10 @@ struct ScreenTriangle {
     inv_area: f64,
     /// Window depth of each corner.
     depth: [f32; 3],
+    /// The window depth as a plane ([`DepthInterpolation::Plane`]; else unused).
+    depth_plane: Plane,
+    /// The depth is read from `depth_plane`.
+    plane_depth: bool,
     /// The pixel the planes are set up about: the one holding the corners' centroid,
     /// clamped to the bounds (near every pixel the triangle covers, so that the planes are
     /// evaluated without large cancellations).
@@ -351,6 +378,10 @@ impl ScreenTriangle {
     /// which magnifies their last bits (performance.md, session 20).
     #[inline]
     fn depth_at(&self, x: u32, y: u32) -> f32 {
+        if self.plane_depth {
+            let (dx, dy) = self.offsets(x, y);
+            return self.depth_plane.at(self.depth_plane.row(dy), dx);
+        }
         self.depth_from_edges(self.edges_at(x, y))
     }
 
@@ -756,6 +787,7 @@ fn setup(
     attributes: impl FnOnce() -> [Attributes; 3],
     camera: &Camera,
     faces: Faces,
+    depth_interpolation: DepthInterpolation,
     source: u32,
 ) -> Option<ScreenTriangle> {
     if !(v[0].finite && v[1].finite && v[2].finite) {
@@ -807,29 +839,29 @@ fn setup(
         pixel.clamp(i128::from(min[k]), i128::from(max[k])) as i64
     };
     let anchor = [anchor(0), anchor(1)];
+    let l = barycentric_planes(xy, area, anchor);
+    let plane_depth = depth_interpolation == DepthInterpolation::Plane;
     Some(ScreenTriangle {
         xy,
         inv_area: 1.0 / area as f64,
         depth,
+        depth_plane: match plane_depth {
+            true => Plane::of(depth.map(f64::from), &l),
+            false => Plane::default(),
+        },
+        plane_depth,
         anchor: [anchor[0] as i32, anchor[1] as i32],
-        planes: attribute_planes(xy, area, anchor, inv_w, &attributes),
+        planes: attribute_planes(&l, inv_w, &attributes),
         min: [x0 as u32, y0 as u32],
         max: [x1 as u32, y1 as u32],
         source,
     })
 }
 
-/// The planes of a triangle with corners `xy` (clockwise, twice its area `area` in fixed
-/// point) about the pixel `anchor`: its screen-space barycentrics `λₖ = eₖ / area` (edge
-/// functions, exact at the anchor) and their steps per pixel, in `f64`; then each quantity
-/// as `Σₖ vₖ·λₖ`: `1/w` with `vₖ = 1/wₖ` and every attribute `a` with `vₖ = aₖ/wₖ`.
-fn attribute_planes(
-    xy: [[i64; 2]; 3],
-    area: i64,
-    anchor: [i64; 2],
-    inv_w: [f32; 3],
-    attributes: &[Attributes; 3],
-) -> AttributePlanes {
+/// The screen-space barycentrics `λₖ = eₖ / area` of a triangle with corners `xy` (clockwise,
+/// twice its area `area` in fixed point) as planes about the pixel `anchor`, in `f64`: each
+/// `[λₖ at the anchor, per pixel right, per row down]` (edge functions exact at the anchor).
+fn barycentric_planes(xy: [[i64; 2]; 3], area: i64, anchor: [i64; 2]) -> [[f64; 3]; 3] {
     let [a, b, c] = xy;
     let q = [
         anchor[0] * SUBPIXEL + SUBPIXEL / 2,
@@ -845,9 +877,18 @@ fn attribute_planes(
             (to[0] - from[0]) as f64 * s * inv_area,
         ]
     };
-    let l = [barycentric(b, c), barycentric(c, a), barycentric(a, b)];
+    [barycentric(b, c), barycentric(c, a), barycentric(a, b)]
+}
+
+/// A triangle's attribute planes from its barycentric planes `l`: each as `Σₖ vₖ·λₖ`, `1/w`
+/// with `vₖ = 1/wₖ` and every attribute `a` with `vₖ = aₖ/wₖ`.
+fn attribute_planes(
+    l: &[[f64; 3]; 3],
+    inv_w: [f32; 3],
+    attributes: &[Attributes; 3],
+) -> AttributePlanes {
     let iw = inv_w.map(f64::from);
-    let over_w = |v: [f32; 3]| Plane::of([0, 1, 2].map(|k| f64::from(v[k]) * iw[k]), &l);
+    let over_w = |v: [f32; 3]| Plane::of([0, 1, 2].map(|k| f64::from(v[k]) * iw[k]), l);
     let over_w3 = |v: [Vec3; 3]| {
         [
             over_w(v.map(|v| v.x)),
@@ -856,7 +897,7 @@ fn attribute_planes(
         ]
     };
     AttributePlanes {
-        inv_w: Plane::of(iw, &l),
+        inv_w: Plane::of(iw, l),
         p_ws: over_w3(attributes.map(|a| a.p_ws)),
         n_ws: over_w3(attributes.map(|a| a.n_ws)),
         scalar: over_w(attributes.map(|a| a.scalar)),
@@ -869,6 +910,8 @@ fn attribute_planes(
 #[derive(Clone, Debug, Default)]
 struct TriangleStore {
     chunks: Vec<Vec<ScreenTriangle>>,
+    /// How the triangles' depth is interpolated (the mesh's).
+    depth: DepthInterpolation,
 }
 
 impl TriangleStore {
@@ -887,6 +930,8 @@ impl TriangleStore {
         faces: Faces,
     ) {
         let (width, height) = (camera.width() as f32, camera.height() as f32);
+        let depth = mesh.depth;
+        self.depth = depth;
         let chunks = mesh.triangles.len().div_ceil(CHUNK_TRIANGLES);
         self.chunks.resize_with(chunks, Vec::new);
         self.chunks
@@ -911,7 +956,7 @@ impl TriangleStore {
                                 }
                             })
                         };
-                        out.extend(setup(corners, attributes, camera, faces, source));
+                        out.extend(setup(corners, attributes, camera, faces, depth, source));
                         continue;
                     }
                     // Crossing the near plane: clip, then set up the pieces.
@@ -937,7 +982,7 @@ impl TriangleStore {
                             })
                         };
                         let corners = piece.map(|v| project(v.clip, width, height));
-                        out.extend(setup(corners, attributes, camera, faces, source));
+                        out.extend(setup(corners, attributes, camera, faces, depth, source));
                     }
                 }
             });
@@ -1339,22 +1384,41 @@ fn rasterize_band(
     test: DepthTest,
     floor: Option<&[f32]>,
 ) {
-    // One loop per depth test and peeling, so that the per-pixel loop has no branch on them.
-    match (test, floor) {
-        (DepthTest::Nearest, None) => scan_convert::<false, false>(triangles, bin, target, &[]),
-        (DepthTest::Furthest, None) => scan_convert::<true, false>(triangles, bin, target, &[]),
-        (DepthTest::Nearest, Some(floor)) => {
-            scan_convert::<false, true>(triangles, bin, target, floor);
+    // One loop per depth test, peeling and depth interpolation, so that the per-pixel loop has
+    // no branch on them.
+    let plane = triangles.depth == DepthInterpolation::Plane;
+    match (test, floor, plane) {
+        (DepthTest::Nearest, None, false) => {
+            scan_convert::<false, false, false>(triangles, bin, target, &[]);
         }
-        (DepthTest::Furthest, Some(floor)) => {
-            scan_convert::<true, true>(triangles, bin, target, floor);
+        (DepthTest::Furthest, None, false) => {
+            scan_convert::<true, false, false>(triangles, bin, target, &[]);
+        }
+        (DepthTest::Nearest, None, true) => {
+            scan_convert::<false, false, true>(triangles, bin, target, &[]);
+        }
+        (DepthTest::Furthest, None, true) => {
+            scan_convert::<true, false, true>(triangles, bin, target, &[]);
+        }
+        (DepthTest::Nearest, Some(floor), false) => {
+            scan_convert::<false, true, false>(triangles, bin, target, floor);
+        }
+        (DepthTest::Furthest, Some(floor), false) => {
+            scan_convert::<true, true, false>(triangles, bin, target, floor);
+        }
+        (DepthTest::Nearest, Some(floor), true) => {
+            scan_convert::<false, true, true>(triangles, bin, target, floor);
+        }
+        (DepthTest::Furthest, Some(floor), true) => {
+            scan_convert::<true, true, true>(triangles, bin, target, floor);
         }
     }
 }
 
-/// [`rasterize_band`] for one depth test (`FURTHEST`: Greater, else Less) and with or without
-/// a peeling `floor` (`PEEL`; else `floor` is not read).
-fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
+/// [`rasterize_band`] for one depth test (`FURTHEST`: Greater, else Less), with or without
+/// a peeling `floor` (`PEEL`; else `floor` is not read), and the depth from the triangles'
+/// depth planes (`PLANE_DEPTH`) or from the exact edge functions.
+fn scan_convert<const FURTHEST: bool, const PEEL: bool, const PLANE_DEPTH: bool>(
     triangles: &TriangleStore,
     bin: &[u32],
     target: BandTarget<'_>,
@@ -1395,8 +1459,12 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool>(
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             let (mut first_written, mut last_written) = (u32::MAX, 0);
             // The depth test and write of an inside pixel with edge values `f`.
+            let row_depth = t.depth_plane.row((y as i32 - t.anchor[1]) as f32);
             let mut fragment = |x: u32, f: [i64; 3]| {
-                let depth = t.depth_from_edges(f);
+                let depth = match PLANE_DEPTH {
+                    true => t.depth_plane.at(row_depth, (x as i32 - t.anchor[0]) as f32),
+                    false => t.depth_from_edges(f),
+                };
                 if depth > 1.0 {
                     return; // beyond the far plane (the near plane is clipped geometrically)
                 }
@@ -1488,6 +1556,7 @@ mod tests {
         mut xy: [[i64; 2]; 3],
         inv_w: [f32; 3],
         mut attributes: [Attributes; 3],
+        plane_depth: bool,
     ) -> Option<ScreenTriangle> {
         let mut inv_w = inv_w;
         let mut area = edge(xy[0], xy[1], xy[2]);
@@ -1503,12 +1572,15 @@ mod tests {
         let depth = [0.25, 0.5, 0.75];
         let pixel = |k: usize| (xy[0][k] / SUBPIXEL).clamp(0, 4000);
         let anchor = [pixel(0), pixel(1)];
+        let l = barycentric_planes(xy, area, anchor);
         Some(ScreenTriangle {
             xy,
             inv_area: 1.0 / area as f64,
             depth,
+            depth_plane: Plane::of(depth.map(f64::from), &l),
+            plane_depth,
             anchor: [anchor[0] as i32, anchor[1] as i32],
-            planes: attribute_planes(xy, area, anchor, inv_w, &attributes),
+            planes: attribute_planes(&l, inv_w, &attributes),
             min: [0, 0],
             max: [4000, 4000],
             source: 7,
@@ -1538,8 +1610,9 @@ mod tests {
             x0 in 0u32..1000,
             offsets in proptest::array::uniform8(0u32..24),
             y in 0u32..1000,
+            plane_depth in proptest::bool::ANY,
         ) {
-            let Some(t) = triangle(xy, inv_w, corners(seed)) else { return Ok(()) };
+            let Some(t) = triangle(xy, inv_w, corners(seed), plane_depth) else { return Ok(()) };
             let x = offsets.map(|o| x0 + o);
             let all = divide_x8::<{ Attribute::ALL }>(&t.values_x8::<{ Attribute::ALL }>(&x, y), [t.source; LANES]);
             let some = divide_x8::<{ Attribute::SCALAR }>(&t.values_x8::<{ Attribute::SCALAR }>(&x, y), [t.source; LANES]);
@@ -1566,11 +1639,12 @@ mod tests {
             x0 in 0u32..1000,
             offsets in proptest::array::uniform8(0u32..24),
             y in 0u32..1000,
+            plane_depth in proptest::array::uniform8(proptest::bool::ANY),
         ) {
             let fallback = [[0, 0], [1 << 12, 0], [0, 1 << 12]];
             let all: [ScreenTriangle; LANES] = core::array::from_fn(|i| {
-                triangle(xy[i], inv_w, corners(seed))
-                    .or_else(|| triangle(fallback, inv_w, corners(seed)))
+                triangle(xy[i], inv_w, corners(seed), plane_depth[i])
+                    .or_else(|| triangle(fallback, inv_w, corners(seed), plane_depth[i]))
                     .expect("a triangle")
             });
             let triangles: [&ScreenTriangle; LANES] = core::array::from_fn(|i| &all[pick[i]]);
@@ -1595,9 +1669,10 @@ mod tests {
             inv_w in proptest::array::uniform3(0.2f32..5.0),
             seed in proptest::array::uniform3(proptest::array::uniform3(-1.0f32..1.0)),
             at in proptest::array::uniform3(0.0f64..1.0),
+            plane_depth in proptest::bool::ANY,
         ) {
             let attributes = corners(seed);
-            let Some(t) = triangle(xy, inv_w, attributes) else { return Ok(()) };
+            let Some(t) = triangle(xy, inv_w, attributes, plane_depth) else { return Ok(()) };
             // The pixel holding the point with barycentrics `at` (normalised).
             let sum = at.iter().sum::<f64>().max(1e-9);
             let point = |k: usize| (0..3).map(|i| at[i] / sum * t.xy[i][k] as f64).sum::<f64>();
@@ -1647,8 +1722,72 @@ mod tests {
             }
             let depth: f64 = (0..3).map(|k| e[k] * [0.25, 0.5, 0.75][k]).sum();
             let error = (f64::from(texel.depth) - depth).abs();
-            // The depth from the exact barycentrics: three roundings of values below 1.
-            prop_assert!(error <= 4e-7, "depth {} vs {depth}", texel.depth);
+            // The depth from the exact barycentrics (three roundings of values below 1), or from
+            // its plane.
+            let tolerance = match plane_depth {
+                true => bound(t.depth_plane) + 1e-12,
+                false => 4e-7,
+            };
+            prop_assert!(error <= tolerance, "depth {} vs {depth}", texel.depth);
+        }
+    }
+
+    /// The depth the scan conversion stored at each covered pixel is the texel's depth, bit for
+    /// bit, with either depth interpolation, for the nearest and the furthest surface; and the
+    /// two interpolations agree to a few `f32` roundings.
+    #[test]
+    fn stored_depth_is_the_texel_depth() {
+        let mesh = refract_geometry::shapes::uv_sphere(24, 12, 1.0).expect("sphere");
+        let camera = Camera::new(refract_core::CameraDesc {
+            width: 96,
+            height: 80,
+            ..refract_core::CameraDesc::default()
+        })
+        .expect("camera");
+        let mut depths: [Vec<f32>; 2] = [Vec::new(), Vec::new()];
+        for (k, depth) in [DepthInterpolation::Exact, DepthInterpolation::Plane]
+            .into_iter()
+            .enumerate()
+        {
+            for test in [DepthTest::Nearest, DepthTest::Furthest] {
+                let raster = RasterMesh::new(&mesh).with_depth(depth);
+                let mut buffer = SurfaceBuffer::new();
+                let bands = 80u32.div_ceil(BAND_ROWS) as usize;
+                let checked = std::sync::atomic::AtomicUsize::new(0);
+                rasterize_bands(
+                    &raster,
+                    &camera,
+                    Faces::Both,
+                    test,
+                    &mut buffer,
+                    rayon::iter::repeat_n((), bands),
+                    |band, ()| {
+                        for y in band.first_row..band.first_row + band.rows() {
+                            for x in 0..band.width() {
+                                if let Some(stored) = band.depth(x, y) {
+                                    let texel = band.texel(x, y).expect("covered");
+                                    assert_eq!(
+                                        stored.to_bits(),
+                                        texel.depth.to_bits(),
+                                        "({x}, {y})"
+                                    );
+                                    checked.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                                }
+                            }
+                        }
+                    },
+                );
+                assert!(checked.into_inner() > 1000);
+                if test == DepthTest::Nearest {
+                    depths[k] = (0..96 * 80)
+                        .filter_map(|i| buffer.texel(i).map(|t| t.depth))
+                        .collect();
+                }
+            }
+        }
+        assert_eq!(depths[0].len(), depths[1].len());
+        for (exact, plane) in depths[0].iter().zip(&depths[1]) {
+            assert!((exact - plane).abs() <= 1e-6, "{exact} vs {plane}");
         }
     }
 

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use refract_scene::{Scene, SceneMesh};
 
-use crate::raster::RasterMesh;
+use crate::raster::{DepthInterpolation, RasterMesh};
 
 /// Meshes of a scene concatenated in order: vertices and triangles, and for each triangle the
 /// mesh it came from and its index in that mesh.
@@ -59,6 +59,7 @@ impl SceneMeshes {
             normals: &self.normals,
             scalars: &[],
             triangles: &self.triangles,
+            depth: DepthInterpolation::Exact,
         }
     }
 
