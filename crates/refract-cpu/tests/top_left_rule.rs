@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3};
 use proptest::prelude::*;
 use refract_core::{Camera, CameraDesc};
-use refract_cpu::{DepthTest, Faces, RasterMesh, rasterize};
+use refract_cpu::{DepthInterpolation, DepthTest, Faces, RasterMesh, rasterize};
 
 const W: u32 = 24;
 const H: u32 = 20;
@@ -35,6 +35,7 @@ fn coverage(camera: &Camera, positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<
             normals: &normals,
             scalars: &[],
             triangles: std::slice::from_ref(tri),
+            depth: DepthInterpolation::Exact,
         };
         for faces in [Faces::Front, Faces::Back] {
             let buffer = rasterize(&mesh, camera, faces, DepthTest::Nearest);
