@@ -9,7 +9,8 @@
 //! only the attributes asked for), so overdraw costs an edge test and a depth compare, never an
 //! interpolation. As on a GPU, each triangle's attributes are set up once as planes in screen
 //! space (`1/w` and each attribute over `w`), so a pixel evaluates one multiply-add pair per
-//! attribute and divides once; the window depth stays interpolated from the exact integer edge
+//! attribute and divides once. The window depth is a plane too where the mesh asks for it
+//! ([`DepthInterpolation::Plane`]); by default it is interpolated from the exact integer edge
 //! functions. A texel carries its perspective-correct barycentric weights in its mesh
 //! triangle, through near-plane clipping. A renderer can run its per-pixel work band by band
 //! right after the band is rasterised ([`rasterize_bands`]), while the band is in cache.
@@ -246,8 +247,7 @@ impl Plane {
 /// A triangle's attributes as [`Plane`]s for perspective-correct interpolation: `1/w` and each
 /// attribute over `w` (`a/w` is affine in screen space), so that a pixel's attribute is
 /// `(a/w)(x, y) / (1/w)(x, y)`: one division per pixel, whatever the number of attributes.
-/// (The window depth is not a plane: it is interpolated from the exact barycentrics, see
-/// [`ScreenTriangle::depth_at`].)
+/// (The window depth is a separate, optional plane: see [`ScreenTriangle::depth_at`].)
 #[derive(Clone, Copy, Debug, Default)]
 struct AttributePlanes {
     inv_w: Plane,
@@ -268,10 +268,8 @@ struct ScreenTriangle {
     inv_area: f64,
     /// Window depth of each corner.
     depth: [f32; 3],
-    /// The window depth as a plane ([`DepthInterpolation::Plane`]; else unused).
-    depth_plane: Plane,
-    /// The depth is read from `depth_plane`.
-    plane_depth: bool,
+    /// The window depth as a plane, for a mesh with [`DepthInterpolation::Plane`].
+    depth_plane: Option<Plane>,
     /// The pixel the planes are set up about: the one holding the corners' centroid,
     /// clamped to the bounds (near every pixel the triangle covers, so that the planes are
     /// evaluated without large cancellations).
@@ -372,15 +370,16 @@ impl ScreenTriangle {
         ]
     }
 
-    /// The window depth at the centre of pixel `(x, y)`: `Σₖ λₖ·depthₖ` in `f32` with the
-    /// screen-space barycentrics `λₖ = eₖ / area` from the exact integer edge functions, scaled
-    /// in `f64` and rounded. Not a plane: the distance maps turn window depths into distances,
-    /// which magnifies their last bits (performance.md, session 20).
+    /// The window depth at the centre of pixel `(x, y)`, as the scan conversion computed it:
+    /// from the depth plane where the triangle has one, else `Σₖ λₖ·depthₖ` in `f32` with the
+    /// screen-space barycentrics `λₖ = eₖ / area` from the exact integer edge functions,
+    /// scaled in `f64` and rounded (what the distance maps need: they turn window depths into
+    /// distances, which magnifies their last bits; performance.md, session 20).
     #[inline]
     fn depth_at(&self, x: u32, y: u32) -> f32 {
-        if self.plane_depth {
+        if let Some(plane) = self.depth_plane {
             let (dx, dy) = self.offsets(x, y);
-            return self.depth_plane.at(self.depth_plane.row(dy), dx);
+            return plane.at(plane.row(dy), dx);
         }
         self.depth_from_edges(self.edges_at(x, y))
     }
@@ -840,16 +839,12 @@ fn setup(
     };
     let anchor = [anchor(0), anchor(1)];
     let l = barycentric_planes(xy, area, anchor);
-    let plane_depth = depth_interpolation == DepthInterpolation::Plane;
     Some(ScreenTriangle {
         xy,
         inv_area: 1.0 / area as f64,
         depth,
-        depth_plane: match plane_depth {
-            true => Plane::of(depth.map(f64::from), &l),
-            false => Plane::default(),
-        },
-        plane_depth,
+        depth_plane: (depth_interpolation == DepthInterpolation::Plane)
+            .then(|| Plane::of(depth.map(f64::from), &l)),
         anchor: [anchor[0] as i32, anchor[1] as i32],
         planes: attribute_planes(&l, inv_w, &attributes),
         min: [x0 as u32, y0 as u32],
@@ -910,8 +905,6 @@ fn attribute_planes(
 #[derive(Clone, Debug, Default)]
 struct TriangleStore {
     chunks: Vec<Vec<ScreenTriangle>>,
-    /// How the triangles' depth is interpolated (the mesh's).
-    depth: DepthInterpolation,
 }
 
 impl TriangleStore {
@@ -931,7 +924,6 @@ impl TriangleStore {
     ) {
         let (width, height) = (camera.width() as f32, camera.height() as f32);
         let depth = mesh.depth;
-        self.depth = depth;
         let chunks = mesh.triangles.len().div_ceil(CHUNK_TRIANGLES);
         self.chunks.resize_with(chunks, Vec::new);
         self.chunks
@@ -1321,7 +1313,7 @@ fn rasterize_bands_above<O, F>(
                 rows,
                 extents,
             };
-            rasterize_band(triangles, bin, target, test, floor);
+            rasterize_band(triangles, bin, target, test, mesh.depth, floor);
             let band = Band {
                 first_row,
                 width,
@@ -1382,11 +1374,12 @@ fn rasterize_band(
     bin: &[u32],
     target: BandTarget<'_>,
     test: DepthTest,
+    depth: DepthInterpolation,
     floor: Option<&[f32]>,
 ) {
     // One loop per depth test, peeling and depth interpolation, so that the per-pixel loop has
     // no branch on them.
-    let plane = triangles.depth == DepthInterpolation::Plane;
+    let plane = depth == DepthInterpolation::Plane;
     match (test, floor, plane) {
         (DepthTest::Nearest, None, false) => {
             scan_convert::<false, false, false>(triangles, bin, target, &[]);
@@ -1417,7 +1410,8 @@ fn rasterize_band(
 
 /// [`rasterize_band`] for one depth test (`FURTHEST`: Greater, else Less), with or without
 /// a peeling `floor` (`PEEL`; else `floor` is not read), and the depth from the triangles'
-/// depth planes (`PLANE_DEPTH`) or from the exact edge functions.
+/// depth planes (`PLANE_DEPTH`: the mesh's [`DepthInterpolation::Plane`], so every triangle
+/// has one) or from the exact edge functions.
 fn scan_convert<const FURTHEST: bool, const PEEL: bool, const PLANE_DEPTH: bool>(
     triangles: &TriangleStore,
     bin: &[u32],
@@ -1459,10 +1453,13 @@ fn scan_convert<const FURTHEST: bool, const PEEL: bool, const PLANE_DEPTH: bool>
             let row = &mut rows[((y - first_row) * width) as usize..][..width as usize];
             let (mut first_written, mut last_written) = (u32::MAX, 0);
             // The depth test and write of an inside pixel with edge values `f`.
-            let row_depth = t.depth_plane.row((y as i32 - t.anchor[1]) as f32);
+            // Set up from the same mesh as `PLANE_DEPTH`: a plane exactly when it is set.
+            debug_assert_eq!(PLANE_DEPTH, t.depth_plane.is_some());
+            let depth_plane = t.depth_plane.unwrap_or_default();
+            let row_depth = depth_plane.row((y as i32 - t.anchor[1]) as f32);
             let mut fragment = |x: u32, f: [i64; 3]| {
                 let depth = match PLANE_DEPTH {
-                    true => t.depth_plane.at(row_depth, (x as i32 - t.anchor[0]) as f32),
+                    true => depth_plane.at(row_depth, (x as i32 - t.anchor[0]) as f32),
                     false => t.depth_from_edges(f),
                 };
                 if depth > 1.0 {
@@ -1577,8 +1574,7 @@ mod tests {
             xy,
             inv_area: 1.0 / area as f64,
             depth,
-            depth_plane: Plane::of(depth.map(f64::from), &l),
-            plane_depth,
+            depth_plane: plane_depth.then(|| Plane::of(depth.map(f64::from), &l)),
             anchor: [anchor[0] as i32, anchor[1] as i32],
             planes: attribute_planes(&l, inv_w, &attributes),
             min: [0, 0],
@@ -1725,7 +1721,7 @@ mod tests {
             // The depth from the exact barycentrics (three roundings of values below 1), or from
             // its plane.
             let tolerance = match plane_depth {
-                true => bound(t.depth_plane) + 1e-12,
+                true => bound(t.depth_plane.expect("a depth plane")) + 1e-12,
                 false => 4e-7,
             };
             prop_assert!(error <= tolerance, "depth {} vs {depth}", texel.depth);
