@@ -15,10 +15,11 @@
 //! the two within their 1e-5 relative tolerance.
 
 use core::f32::consts::{FRAC_PI_2, PI};
-use core::ops::{Add, Mul};
+
+use crate::real::Real;
 
 /// Coefficients of `P(s)`, constant term first.
-pub(crate) const ATAN_POLYNOMIAL: [f32; 9] = [
+const ATAN_POLYNOMIAL: [f32; 9] = [
     -0.333_333_3,
     0.199_997_66,
     -0.142_791_1,
@@ -30,55 +31,46 @@ pub(crate) const ATAN_POLYNOMIAL: [f32; 9] = [
     -0.002_447_031_2,
 ];
 
-/// `atan(a)` for `a ∈ [0, 1]`: `a + a·s·P(s)`, `P` (coefficients `p`, [`ATAN_POLYNOMIAL`])
-/// evaluated with Estrin's scheme (four dependent multiply-adds instead of Horner's eight: the
-/// latency, not the arithmetic, bounds a pixel). Generic so that `f32` and the eight-lane type
-/// of [`crate::lanes`] run exactly the same operations.
+/// `atan(a)` for `a ∈ [0, 1]`: `a + a·s·P(s)`, `P` ([`ATAN_POLYNOMIAL`]) evaluated with
+/// Estrin's scheme (four dependent multiply-adds instead of Horner's eight: the latency, not the
+/// arithmetic, bounds a pixel).
 #[inline]
-pub(crate) fn atan_unit<T>(a: T, p: &[T; 9]) -> T
-where
-    T: Copy + Add<Output = T> + Mul<Output = T>,
-{
+fn atan_unit<R: Real>(a: R) -> R {
+    let p = |k: usize| R::splat(ATAN_POLYNOMIAL[k]);
     let s = a * a;
     let s2 = s * s;
     let s4 = s2 * s2;
-    let p01 = p[0] + p[1] * s;
-    let p23 = p[2] + p[3] * s;
-    let p45 = p[4] + p[5] * s;
-    let p67 = p[6] + p[7] * s;
+    let p01 = p(0) + p(1) * s;
+    let p23 = p(2) + p(3) * s;
+    let p45 = p(4) + p(5) * s;
+    let p67 = p(6) + p(7) * s;
     let p03 = p01 + p23 * s2;
     let p47 = p45 + p67 * s2;
-    let poly = p03 + (p47 + p[8] * s4) * s4;
+    let poly = p03 + (p47 + p(8) * s4) * s4;
     a + a * s * poly
 }
 
 /// The angle of the point `(x, y)` from the positive `x` axis, in `[−π, π]`, like
 /// [`f32::atan2`]: `atan2(±0, x ≥ +0) = ±0`, `atan2(±0, x ≤ −0) = ±π`, NaN in, NaN out.
 /// Meant for finite arguments (two infinities give NaN, where libm gives a multiple of π/4).
+/// One body for one pixel (`f32`) and eight ([`crate::lanes::F32x8`]), see [`crate::real`].
 ///
 /// # Example
 ///
 /// ```
-/// let a = refract_core::arctangent::atan2(1.0, -1.0);
+/// let a = refract_core::arctangent::atan2(1.0f32, -1.0);
 /// assert!((a - 3.0 * core::f32::consts::FRAC_PI_4).abs() < 1e-6);
 /// ```
 #[inline]
-pub fn atan2(y: f32, x: f32) -> f32 {
+pub fn atan2<R: Real>(y: R, x: R) -> R {
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
     // hi = 0 only at the origin, where the angle is that of the signed zeros.
-    let a = if hi > 0.0 { lo / hi } else { 0.0 };
-    let mut r = atan_unit(a, &ATAN_POLYNOMIAL);
-    if ay > ax {
-        r = FRAC_PI_2 - r;
-    }
-    if x.is_sign_negative() {
-        r = PI - r;
-    }
-    if x.is_nan() || y.is_nan() {
-        return f32::NAN;
-    }
-    r.copysign(y)
+    let a = R::select(hi.gt(R::ZERO), lo / hi, R::ZERO);
+    let mut r = atan_unit(a);
+    r = R::select(ay.gt(ax), R::splat(FRAC_PI_2) - r, r);
+    r = R::select(x.is_sign_negative(), R::splat(PI) - r, r);
+    R::select(x.is_nan() | y.is_nan(), R::splat(f32::NAN), r.copysign(y))
 }
 
 #[cfg(test)]

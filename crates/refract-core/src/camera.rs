@@ -11,7 +11,8 @@ use core::fmt;
 use glam::camera::rh::{proj::directx::perspective, view::look_at_mat4};
 use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
 
-use crate::lanes::{F32x8, Vec2x8, Vec3x8};
+use crate::lanes::{Vec2x8, Vec3x8};
+use crate::real::{Msk, Real, Vector3};
 
 /// A ray `origin + t · dir`, `dir` unit length.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,28 +133,61 @@ impl CubeFace {
     /// `+X … −Z`. Texel column `s·N`, row `t·N` of an `N × N` face. `None` for a zero or
     /// non-finite direction.
     pub fn of_direction(dir: Vec3) -> Option<(CubeFace, Vec2)> {
-        let a = dir.abs();
-        if !(dir.is_finite() && a.max_element() > 0.0) {
-            return None;
-        }
-        let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
-            if dir.x >= 0.0 {
-                (CubeFace::PosX, -dir.z, -dir.y, a.x)
-            } else {
-                (CubeFace::NegX, dir.z, -dir.y, a.x)
-            }
-        } else if a.y >= a.z {
-            if dir.y >= 0.0 {
-                (CubeFace::PosY, dir.x, dir.z, a.y)
-            } else {
-                (CubeFace::NegY, dir.x, -dir.z, a.y)
-            }
-        } else if dir.z >= 0.0 {
-            (CubeFace::PosZ, dir.x, -dir.y, a.z)
-        } else {
-            (CubeFace::NegZ, -dir.x, -dir.y, a.z)
-        };
-        Some((face, Vec2::new(sc / ma + 1.0, tc / ma + 1.0) * 0.5))
+        let c = cube_coordinates(dir);
+        c.valid
+            .then(|| (CubeFace::ALL[c.face as usize], Vec2::new(c.s, c.t)))
+    }
+}
+
+/// [`CubeFace::of_direction`] of one direction or eight: the face's index in
+/// [`CubeFace::ALL`], `(s, t)`, and the lanes with a finite non-zero direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CubeCoordinates<R: Real> {
+    /// The face's index in [`CubeFace::ALL`] (a whole number).
+    pub face: R,
+    /// `s ∈ [0, 1]`.
+    pub s: R,
+    /// `t ∈ [0, 1]`.
+    pub t: R,
+    /// Finite and non-zero directions (elsewhere the other fields are meaningless).
+    pub valid: R::Mask,
+}
+
+/// [`CubeFace::of_direction`] for one direction or eight, the face chosen by selects.
+#[inline]
+pub fn cube_coordinates<V: Vector3>(dir: V) -> CubeCoordinates<V::Real> {
+    let zero = V::Real::ZERO;
+    let (x, y, z) = (dir.x(), dir.y(), dir.z());
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let valid = dir.is_finite() & ax.max(ay).max(az).gt(zero);
+    // The major axis, ties to x, then y.
+    let x_major = ax.ge(ay) & ax.ge(az);
+    let y_major = !x_major & ay.ge(az);
+    let (pos_x, pos_y, pos_z) = (x.ge(zero), y.ge(zero), z.ge(zero));
+    let pick = |m: Msk<V>, a: V::Real, b: V::Real| V::Real::select(m, a, b);
+    let sc = pick(
+        x_major,
+        pick(pos_x, -z, z),
+        pick(y_major, x, pick(pos_z, x, -x)),
+    );
+    let tc = pick(x_major, -y, pick(y_major, pick(pos_y, z, -z), -y));
+    let ma = pick(x_major, ax, pick(y_major, ay, az));
+    let splat = V::Real::splat;
+    let face = pick(
+        x_major,
+        pick(pos_x, splat(0.0), splat(1.0)),
+        pick(
+            y_major,
+            pick(pos_y, splat(2.0), splat(3.0)),
+            pick(pos_z, splat(4.0), splat(5.0)),
+        ),
+    );
+    let half = splat(0.5);
+    CubeCoordinates {
+        face,
+        s: (sc / ma + V::Real::ONE) * half,
+        t: (tc / ma + V::Real::ONE) * half,
+        valid,
     }
 }
 
@@ -397,6 +431,24 @@ impl Camera {
         ))
     }
 
+    /// [`Self::world_to_pixel`]'s `(u_px, v_px)` for one point or eight, and the lanes in front
+    /// of the eye (`w_clip > 0`): the same operations (glam's `M · (p, 1)` row by row,
+    /// `((m₀ x + m₁ y) + m₂ z) + m₃`), so the same bits.
+    #[inline]
+    pub fn world_to_pixel_xy<V: Vector3>(&self, p_ws: V) -> (V::Real, V::Real, Msk<V>) {
+        let m = &self.world_to_clip;
+        let row = |k: usize| {
+            let c = |col: glam::Vec4| V::Real::splat(col[k]);
+            c(m.x_axis) * p_ws.x() + c(m.y_axis) * p_ws.y() + c(m.z_axis) * p_ws.z() + c(m.w_axis)
+        };
+        let (x, y, w) = (row(0), row(1), row(3));
+        let rcp = V::Real::ONE / w;
+        let half = V::Real::splat(0.5);
+        let u_px = half * (x * rcp + V::Real::ONE) * V::Real::splat(self.desc.width as f32);
+        let v_px = half * (V::Real::ONE - y * rcp) * V::Real::splat(self.desc.height as f32);
+        (u_px, v_px, w.gt(V::Real::ZERO))
+    }
+
     /// The world point at pixel position `uv_px` and window depth `depth ∈ [0, 1]`: the exact
     /// inverse of [`Self::world_to_pixel`] through `clip_to_world` (never a linearisation formula
     /// for another depth range).
@@ -422,24 +474,26 @@ impl Camera {
     /// precomputed, so that a ray costs no division besides the normalisation).
     #[inline]
     pub fn pixel_ray(&self, uv_px: Vec2) -> Ray {
-        let xy = uv_px * self.ray_scale + self.ray_offset;
         Ray {
             origin: self.desc.eye,
-            dir: self
-                .view_to_world
-                .transform_vector3(xy.extend(-1.0))
-                .normalize(),
+            dir: self.pixel_ray_dir(uv_px.x, uv_px.y),
         }
     }
 
     /// [`Self::pixel_ray`]'s direction for eight pixel positions at once (bit-identical).
     #[inline]
     pub fn pixel_ray_dir_x8(&self, uv_px: Vec2x8) -> Vec3x8 {
-        let x = uv_px.x * F32x8::splat(self.ray_scale.x) + F32x8::splat(self.ray_offset.x);
-        let y = uv_px.y * F32x8::splat(self.ray_scale.y) + F32x8::splat(self.ray_offset.y);
-        let z = F32x8::splat(-1.0);
-        let dir = Vec3x8::transform_vector3(&self.view_to_world, Vec3x8 { x, y, z });
-        dir * (F32x8::ONE / dir.length())
+        self.pixel_ray_dir(uv_px.x, uv_px.y)
+    }
+
+    /// [`Self::pixel_ray`]'s direction at pixel position `(u_px, v_px)`, for one pixel or eight.
+    #[inline]
+    pub fn pixel_ray_dir<V: Vector3>(&self, u_px: V::Real, v_px: V::Real) -> V {
+        let splat = V::Real::splat;
+        let x = u_px * splat(self.ray_scale.x) + splat(self.ray_offset.x);
+        let y = v_px * splat(self.ray_scale.y) + splat(self.ray_offset.y);
+        let dir = V::transform_vector3(&self.view_to_world, V::new(x, y, splat(-1.0)));
+        dir * (V::Real::ONE / dir.length())
     }
 
     /// Euclidean distance from the eye, `‖p − eye‖`: the quantity stored in back-face buffers.

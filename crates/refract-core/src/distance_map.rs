@@ -12,12 +12,13 @@
 //! The maps are read through [`DistanceLayers`] (CPU buffers, a test's analytic layers); the
 //! WGSL twin is `shaders/distance_search.wgsl`, held to this file by the conformance tests.
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec3};
 
-use crate::camera::CubeFace;
+use crate::camera::{CubeCoordinates, CubeFace, cube_coordinates};
 use crate::fresnel::schlick;
 use crate::lanes::{F32x8, I32x8, LANES, Vec3x8};
 use crate::optics::{reflect, refract};
+use crate::real::{Real, Vector3};
 use crate::vector::angle_between;
 
 /// Layers of one distance map at most (`layers` parameter).
@@ -43,12 +44,28 @@ pub const SECANT_TOLERANCE: f32 = 1e-4;
 /// `None` for a zero or non-finite direction.
 #[inline]
 pub fn cube_texel(dir: Vec3, size: u32) -> Option<(CubeFace, UVec2)> {
-    let (face, st) = CubeFace::of_direction(dir)?;
-    let max = (size - 1) as f32;
-    let xy = (st * size as f32)
-        .floor()
-        .clamp(Vec2::ZERO, Vec2::splat(max));
-    Some((face, UVec2::new(xy.x as u32, xy.y as u32)))
+    let c = cube_texel_lanes(dir, size);
+    c.valid.then(|| {
+        let face = CubeFace::ALL[c.face as usize];
+        (face, UVec2::new(c.s as u32, c.t as u32))
+    })
+}
+
+/// [`cube_texel`] of one direction or eight: [`cube_coordinates`] with `s`, `t` turned into
+/// the texel's column and row, `⌊q·size⌋` clamped to `size − 1` (`q ∈ [0, 1]`: never below 0).
+#[inline]
+fn cube_texel_lanes<V: Vector3>(dir: V, size: u32) -> CubeCoordinates<V::Real> {
+    let c = cube_coordinates(dir);
+    let (n, max) = (
+        V::Real::splat(size as f32),
+        V::Real::splat((size - 1) as f32),
+    );
+    let texel = |q: V::Real| (q * n).floor().min(max);
+    CubeCoordinates {
+        s: texel(c.s),
+        t: texel(c.t),
+        ..c
+    }
 }
 
 /// The largest face size whose texel indices [`cube_texel_indices_x8`] computes in `i32`
@@ -56,43 +73,16 @@ pub fn cube_texel(dir: Vec3, size: u32) -> Option<(CubeFace, UVec2)> {
 const MAX_LANE_INDEX_SIZE: u32 = 18_918;
 
 /// [`cube_texel`] then [`cube_texel_index`] of eight directions on lanes (the linear search's
-/// samples): lane `i` is `cube_texel(dirs[i], size).map(|(f, t)| cube_texel_index(f, t, size))`,
-/// the same operations per lane (the face chosen by selects), so the same texels.
+/// samples): lane `i` is `cube_texel(dirs[i], size).map(|(f, t)| cube_texel_index(f, t, size))`.
 #[inline]
 pub fn cube_texel_indices_x8(dirs: Vec3x8, size: u32) -> [Option<u32>; LANES] {
-    let zero = F32x8::ZERO;
-    let (x, y, z) = (dirs.x, dirs.y, dirs.z);
-    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-    let valid = dirs.is_finite() & ax.max(ay).max(az).simd_gt(zero);
-    // `CubeFace::of_direction`'s major axis, ties to x, then y.
-    let x_major = ax.simd_ge(ay) & ax.simd_ge(az);
-    let y_major = !x_major & ay.simd_ge(az);
-    let (pos_x, pos_y, pos_z) = (x.simd_ge(zero), y.simd_ge(zero), z.simd_ge(zero));
-    let sc = x_major.select(pos_x.select(-z, z), y_major.select(x, pos_z.select(x, -x)));
-    let tc = x_major.select(-y, y_major.select(pos_y.select(z, -z), -y));
-    let ma = x_major.select(ax, y_major.select(ay, az));
-    let splat = F32x8::splat;
-    let face = x_major.select(
-        pos_x.select(splat(0.0), splat(1.0)),
-        y_major.select(
-            pos_y.select(splat(2.0), splat(3.0)),
-            pos_z.select(splat(4.0), splat(5.0)),
-        ),
-    );
-    let (half, n, max) = (splat(0.5), splat(size as f32), splat((size - 1) as f32));
-    // `(st · size).floor().clamp(0, size − 1)`: `|sc| ≤ ma`, so `sc / ma ∈ [−1, 1]` and the
-    // floor is never below 0; `min` is the clamp.
-    let texel = |q: F32x8| (((q / ma + F32x8::ONE) * half) * n).floor().min(max);
-    let valid = valid.to_bitmask();
+    let c = cube_texel_lanes(dirs, size);
+    let valid = c.valid.to_bitmask();
     let mut indices = [None; LANES];
     if size <= MAX_LANE_INDEX_SIZE {
         // Small non-negative integers: the truncation is `as u32`'s; the index fits in `i32`.
         let n = I32x8::splat(size as i32);
-        let (s, t, face) = (
-            texel(sc).trunc_int(),
-            texel(tc).trunc_int(),
-            face.trunc_int(),
-        );
+        let (s, t, face) = (c.s.trunc_int(), c.t.trunc_int(), c.face.trunc_int());
         let index = ((face * n + t) * n + s).to_array();
         for (i, out) in indices.iter_mut().enumerate() {
             if valid & (1 << i) != 0 {
@@ -100,7 +90,7 @@ pub fn cube_texel_indices_x8(dirs: Vec3x8, size: u32) -> [Option<u32>; LANES] {
             }
         }
     } else {
-        let (s, t, face) = (texel(sc).to_array(), texel(tc).to_array(), face.to_array());
+        let (s, t, face) = (c.s.to_array(), c.t.to_array(), c.face.to_array());
         for (i, out) in indices.iter_mut().enumerate() {
             if valid & (1 << i) != 0 {
                 *out = Some((face[i] as u32 * size + t[i] as u32) * size + s[i] as u32);

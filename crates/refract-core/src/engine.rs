@@ -23,9 +23,9 @@
 use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::Camera;
-use crate::kernel_x8::{refract as refract_x8, world_to_pixel_xy};
-use crate::lanes::{F32x8, LANES, Vec3x8, mask_lanes};
+use crate::lanes::{LANES, Vec2x8, Vec3x8};
 use crate::optics::refract;
+use crate::real::{LaneMask, Msk, Real, Vector3};
 
 /// HDRP's thin refraction model: the slab thickness (5 mm), `REFRACTION_THIN_DISTANCE`.
 pub const THIN_THICKNESS: f32 = 0.005;
@@ -122,8 +122,8 @@ pub struct EnginePath {
 
 /// `T = refract(I, N, 1/ior)` and `cos θt = −N·T` (never TIR when entering glass, `ior ≥ 1`).
 #[inline]
-fn entry(incident: Vec3, n1: Vec3, ior: f32) -> (Vec3, f32) {
-    let t = refract(incident, n1, 1.0 / ior);
+fn entry<V: Vector3>(incident: V, n1: V, ior: V::Real) -> (V, V::Real) {
+    let t = refract(incident, n1, V::Real::ONE / ior);
     (t, -n1.dot(t))
 }
 
@@ -131,29 +131,32 @@ fn entry(incident: Vec3, n1: Vec3, ior: f32) -> (Vec3, f32) {
 /// tangent sphere of diameter `d` has its centre at `C = P − N d/2`; the chord along `T` has
 /// length `d cos θt`, so `P1 = P + T d cos θt`; `N1 = normalize(C − P1)` (inward) and
 /// `R2 = refract(T, N1, ior)`. The chord's symmetry makes the exit angle `θt`: no TIR (should
-/// rounding report one, `R2 = T`). Returns `(P1, R2)`.
+/// rounding report one, `R2 = T`). Returns `(P1, R2)`. One pixel (glam types) or eight lanes.
 #[inline]
-pub fn proxy_sphere_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+pub fn proxy_sphere_exit<V: Vector3>(p: V, n: V, incident: V, ior: V::Real, d: V::Real) -> (V, V) {
     let (t, cos_t) = entry(incident, n, ior);
     let p1 = p + t * (d * cos_t);
-    let center = p - n * (0.5 * d);
+    let center = p - n * (V::Real::splat(0.5) * d);
     let n1 = (center - p1).normalize_or_zero();
     let r2 = refract(t, n1, ior);
-    (p1, if r2 == Vec3::ZERO { t } else { r2 })
+    (p1, V::select(r2.is_zero(), t, r2))
 }
 
 /// HDRP's box model (`RefractionModelBox`): a slab of thickness `d`, `P1 = P + T d / max(cos
 /// θt, 1e-5)` and `R2 = I` (exact for a parallel slab). Returns `(P1, R2)`.
 #[inline]
-pub fn proxy_box_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+pub fn proxy_box_exit<V: Vector3>(p: V, n: V, incident: V, ior: V::Real, d: V::Real) -> (V, V) {
     let (t, cos_t) = entry(incident, n, ior);
-    (p + t * (d / cos_t.max(HDRP_MIN_COS)), incident)
+    (
+        p + t * (d / cos_t.max(V::Real::splat(HDRP_MIN_COS))),
+        incident,
+    )
 }
 
 /// three.js / Bevy: `X = P + T d` (the exit at distance `d` along `T`, not `d / cos θt`).
 /// Returns `(X, T)`.
 #[inline]
-pub fn volume_exit(p: Vec3, n: Vec3, incident: Vec3, ior: f32, d: f32) -> (Vec3, Vec3) {
+pub fn volume_exit<V: Vector3>(p: V, n: V, incident: V, ior: V::Real, d: V::Real) -> (V, V) {
     let (t, _) = entry(incident, n, ior);
     (p + t * d, t)
 }
@@ -201,42 +204,92 @@ pub fn clamp_to_screen(uv_px: Vec2, size: UVec2) -> (UVec2, bool) {
     (UVec2::new(x, y), !inside)
 }
 
-/// What [`engine_path`] computes before it reads the screen: per pixel ([`geometry`]) or eight
-/// pixels at a time ([`engine_path_x8`]), bit for bit the same.
+/// What [`engine_path`] computes before it reads the screen, for one pixel (`Vec3`) or eight
+/// ([`engine_path_x8`]): one body, so the same bits.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Geometry {
-    incident: Vec3,
-    fragment_depth: f32,
-    p2: Vec3,
-    t2: Vec3,
+struct Geometry<V: Vector3> {
+    incident: V,
+    fragment_depth: V::Real,
+    p2: V,
+    t2: V,
     /// The screen offset's shifted position; for the others the projected lookup point (the
-    /// exit, or HDRP's hit on the sky), `None` behind the eye.
-    projected: Option<Vec2>,
+    /// exit, or HDRP's hit on the sky), valid where `in_front`.
+    lookup_px: (V::Real, V::Real),
+    in_front: Msk<V>,
 }
 
-/// The per-pixel geometry of `model` at the front surface `(p1_ws, n1_ws)`.
+impl<V: Vector3> Geometry<V> {
+    /// The geometry of lane `i`.
+    #[inline]
+    fn lane(&self, i: usize) -> Geometry<Vec3> {
+        Geometry {
+            incident: self.incident.lane(i),
+            fragment_depth: self.fragment_depth.lane(i),
+            p2: self.p2.lane(i),
+            t2: self.t2.lane(i),
+            lookup_px: (self.lookup_px.0.lane(i), self.lookup_px.1.lane(i)),
+            in_front: self.in_front.lanes().nth(i).unwrap_or(false),
+        }
+    }
+}
+
+impl Geometry<Vec3> {
+    /// The lookup position, `None` behind the eye.
+    #[inline]
+    fn projected(&self) -> Option<Vec2> {
+        self.in_front
+            .then(|| Vec2::new(self.lookup_px.0, self.lookup_px.1))
+    }
+}
+
+/// The per-pixel geometry of `model` at the front surface `(p1_ws, n1_ws)` of the pixel at
+/// `uv_px` (its `x` and `y`), for one pixel or eight.
 #[inline]
-fn geometry(
+fn geometry<V: Vector3>(
     camera: &Camera,
-    uv_px: Vec2,
-    p1_ws: Vec3,
-    n1_ws: Vec3,
+    uv_px: (V::Real, V::Real),
+    p1_ws: V,
+    n1_ws: V,
     ior: f32,
     model: EngineModel,
-) -> Geometry {
-    let incident = (p1_ws - camera.eye()).normalize_or_zero();
-    let fragment_depth = crate::nearby_geometry::view_depth(camera, p1_ws);
-    let projected = |p: Vec3| camera.world_to_pixel(p).map(|q| Vec2::new(q.x, q.y));
-    let (p2, t2, projected) = match model {
+) -> Geometry<V> {
+    let splat = V::Real::splat;
+    let from_eye = p1_ws - V::constant(camera.eye());
+    let incident = from_eye.normalize_or_zero();
+    // `view_depth`: along the look direction.
+    let fragment_depth = from_eye.dot(V::constant(camera.look_dir()));
+    let geometry = |p2: V, t2: V, lookup: V| {
+        let (x, y, in_front) = camera.world_to_pixel_xy(lookup);
+        Geometry {
+            incident,
+            fragment_depth,
+            p2,
+            t2,
+            lookup_px: (x, y),
+            in_front,
+        }
+    };
+    let ior = splat(ior);
+    match model {
         EngineModel::ScreenOffset { scale, .. } => {
-            let size = Vec2::new(camera.width() as f32, camera.height() as f32);
-            let n_view = camera.world_to_view().transform_vector3(n1_ws);
-            let offset = uv_px + screen_offset_px(n_view, scale, size);
-            (Vec3::NAN, Vec3::NAN, Some(offset))
+            // `screen_offset_px`: (−n_x scale W, −n_y scale H).
+            let n_view = V::transform_vector3(&camera.world_to_view(), n1_ws);
+            let (w, h) = (splat(camera.width() as f32), splat(camera.height() as f32));
+            let x = uv_px.0 + -n_view.x() * splat(scale) * w;
+            let y = uv_px.1 + -n_view.y() * splat(scale) * h;
+            let nan = V::constant(Vec3::NAN);
+            Geometry {
+                incident,
+                fragment_depth,
+                p2: nan,
+                t2: nan,
+                lookup_px: (x, y),
+                in_front: LaneMask::splat(true),
+            }
         }
         EngineModel::VolumeThickness { thickness, .. } => {
-            let (x, t) = volume_exit(p1_ws, n1_ws, incident, ior, thickness);
-            (x, t, projected(x))
+            let (x, t) = volume_exit(p1_ws, n1_ws, incident, ior, splat(thickness));
+            geometry(x, t, x)
         }
         EngineModel::Proxy {
             shape,
@@ -244,23 +297,20 @@ fn geometry(
             lookup,
         } => {
             let (p1, r2) = match shape {
-                ProxyShape::Sphere => proxy_sphere_exit(p1_ws, n1_ws, incident, ior, thickness),
-                ProxyShape::Box => proxy_box_exit(p1_ws, n1_ws, incident, ior, thickness),
-                ProxyShape::Thin => proxy_box_exit(p1_ws, n1_ws, incident, ior, THIN_THICKNESS),
+                ProxyShape::Sphere => {
+                    proxy_sphere_exit(p1_ws, n1_ws, incident, ior, splat(thickness))
+                }
+                ProxyShape::Box => proxy_box_exit(p1_ws, n1_ws, incident, ior, splat(thickness)),
+                ProxyShape::Thin => {
+                    proxy_box_exit(p1_ws, n1_ws, incident, ior, splat(THIN_THICKNESS))
+                }
             };
             let point = match lookup {
                 ProxyLookup::Filament => p1,
-                ProxyLookup::Hdrp => p1 + r2 * HDRP_SKY_DISTANCE,
+                ProxyLookup::Hdrp => p1 + r2 * splat(HDRP_SKY_DISTANCE),
             };
-            (p1, r2, projected(point))
+            geometry(p1, r2, point)
         }
-    };
-    Geometry {
-        incident,
-        fragment_depth,
-        p2,
-        t2,
-        projected,
     }
 }
 
@@ -270,7 +320,7 @@ fn finish<S: OpaqueDepth>(
     size: UVec2,
     screen: &S,
     uv_px: Vec2,
-    g: &Geometry,
+    g: &Geometry<Vec3>,
     model: EngineModel,
 ) -> EnginePath {
     let own_texel = clamp_to_screen(uv_px, size).0;
@@ -288,7 +338,7 @@ fn finish<S: OpaqueDepth>(
     };
     match model {
         EngineModel::ScreenOffset { depth_guard, .. } => {
-            let offset = g.projected.unwrap_or(uv_px);
+            let offset = g.projected().unwrap_or(uv_px);
             let (texel, off_screen) = clamp_to_screen(offset, size);
             let texel = if depth_guard {
                 let w = smoothstep01(screen.view_depth(texel) - g.fragment_depth);
@@ -302,7 +352,7 @@ fn finish<S: OpaqueDepth>(
             thickness,
             reject_nearer,
         } => {
-            let (texel, off_screen) = projected(g.projected);
+            let (texel, off_screen) = projected(g.projected());
             if reject_nearer && screen.view_depth(texel) < g.fragment_depth {
                 return EnginePath {
                     screen_weight: 0.0,
@@ -316,14 +366,14 @@ fn finish<S: OpaqueDepth>(
             lookup: ProxyLookup::Filament,
             ..
         } => {
-            let (texel, off_screen) = projected(g.projected);
+            let (texel, off_screen) = projected(g.projected());
             screen_only(texel, off_screen)
         }
         EngineModel::Proxy {
             lookup: ProxyLookup::Hdrp,
             ..
         } => {
-            let Some(hit) = g.projected else {
+            let Some(hit) = g.projected() else {
                 return EnginePath {
                     screen_weight: 0.0,
                     environment_dir: g.t2,
@@ -357,23 +407,14 @@ pub fn engine_path<S: OpaqueDepth>(
     ior: f32,
     model: EngineModel,
 ) -> EnginePath {
-    let g = geometry(camera, uv_px, p1_ws, n1_ws, ior, model);
+    let g = geometry(camera, (uv_px.x, uv_px.y), p1_ws, n1_ws, ior, model);
     let size = UVec2::new(camera.width(), camera.height());
     finish(size, screen, uv_px, &g, model)
 }
 
-/// glam's `normalize_or_zero` on lanes: `v · (1/|v|)` where that reciprocal is finite and
-/// positive, else zero.
-#[inline]
-fn normalize_or_zero_x8(v: Vec3x8) -> Vec3x8 {
-    let rcp = F32x8::ONE / v.dot(v).sqrt();
-    let ok = rcp.is_finite() & rcp.simd_gt(F32x8::ZERO);
-    Vec3x8::select(ok, v * rcp, Vec3x8::ZERO)
-}
-
 /// [`engine_path`] for eight pixels: lane `i` is `engine_path(camera, screen, uv_px[i],
-/// p1_ws[i], n1_ws[i], ior, model)`, bit for bit (tested). The vector math runs on eight
-/// lanes; the reads of the screen's depth run per lane.
+/// p1_ws[i], n1_ws[i], ior, model)`, bit for bit (tested). The geometry runs on eight lanes;
+/// the reads of the screen's depth run per lane.
 pub fn engine_path_x8<S: OpaqueDepth>(
     camera: &Camera,
     screen: &S,
@@ -383,79 +424,11 @@ pub fn engine_path_x8<S: OpaqueDepth>(
     ior: f32,
     model: EngineModel,
 ) -> [EnginePath; LANES] {
+    let uv = Vec2x8::from_lanes(uv_px);
     let (p, n) = (Vec3x8::from_lanes(p1_ws), Vec3x8::from_lanes(n1_ws));
-    let from_eye = p - Vec3x8::splat(camera.eye());
-    let incident = normalize_or_zero_x8(from_eye);
-    let fragment_depth = from_eye.dot(Vec3x8::splat(camera.look_dir())).to_array();
-    let eta = F32x8::splat(1.0 / ior);
-    let entry = || {
-        let t = refract_x8(incident, n, eta);
-        (t, -n.dot(t))
-    };
-    let projected = |q: Vec3x8| -> [Option<Vec2>; LANES] {
-        let (x, y, front) = world_to_pixel_xy(camera, q);
-        let (x, y, front) = (x.to_array(), y.to_array(), mask_lanes(front));
-        core::array::from_fn(|i| front[i].then(|| Vec2::new(x[i], y[i])))
-    };
-    let nan = [Vec3::NAN; LANES];
-    let (p2, t2, projected) = match model {
-        EngineModel::ScreenOffset { scale, .. } => {
-            let n_view = Vec3x8::transform_vector3(&camera.world_to_view(), n);
-            let (w, h) = (camera.width() as f32, camera.height() as f32);
-            let ox = (-n_view.x * F32x8::splat(scale) * F32x8::splat(w)).to_array();
-            let oy = (-n_view.y * F32x8::splat(scale) * F32x8::splat(h)).to_array();
-            let offsets = core::array::from_fn(|i| Some(uv_px[i] + Vec2::new(ox[i], oy[i])));
-            (nan, nan, offsets)
-        }
-        EngineModel::VolumeThickness { thickness, .. } => {
-            let (t, _) = entry();
-            let x = p + t * F32x8::splat(thickness);
-            (x.to_lanes(), t.to_lanes(), projected(x))
-        }
-        EngineModel::Proxy {
-            shape,
-            thickness,
-            lookup,
-        } => {
-            let (t, cos_t) = entry();
-            let (p1, r2) = match shape {
-                ProxyShape::Sphere => {
-                    let d = F32x8::splat(thickness);
-                    let p1 = p + t * (d * cos_t);
-                    let center = p - n * (F32x8::splat(0.5) * d);
-                    let n1 = normalize_or_zero_x8(center - p1);
-                    let r2 = refract_x8(t, n1, F32x8::splat(ior));
-                    (p1, Vec3x8::select(r2.is_zero(), t, r2))
-                }
-                ProxyShape::Box | ProxyShape::Thin => {
-                    let d = if shape == ProxyShape::Thin {
-                        THIN_THICKNESS
-                    } else {
-                        thickness
-                    };
-                    let dist = F32x8::splat(d) / cos_t.max(F32x8::splat(HDRP_MIN_COS));
-                    (p + t * dist, incident)
-                }
-            };
-            let point = match lookup {
-                ProxyLookup::Filament => p1,
-                ProxyLookup::Hdrp => p1 + r2 * F32x8::splat(HDRP_SKY_DISTANCE),
-            };
-            (p1.to_lanes(), r2.to_lanes(), projected(point))
-        }
-    };
-    let incident = incident.to_lanes();
+    let g = geometry(camera, (uv.x, uv.y), p, n, ior, model);
     let size = UVec2::new(camera.width(), camera.height());
-    core::array::from_fn(|i| {
-        let g = Geometry {
-            incident: incident[i],
-            fragment_depth: fragment_depth[i],
-            p2: p2[i],
-            t2: t2[i],
-            projected: projected[i],
-        };
-        finish(size, screen, uv_px[i], &g, model)
-    })
+    core::array::from_fn(|i| finish(size, screen, uv_px[i], &g.lane(i), model))
 }
 
 /// Model code of [`EngineModel::ScreenOffset`].

@@ -10,19 +10,22 @@ use core::f32::consts::{PI, TAU};
 
 use glam::{Vec2, Vec3};
 
+use crate::real::{Real, Vector3};
+
 /// How an environment lookup evaluates `atan2(y, x)`.
-pub trait Atan2 {
+/// Generic over the number type `R` (`f32`, the default, or eight lanes).
+pub trait Atan2<R: Real = f32> {
     /// The angle of `(x, y)` from the positive `x` axis, in `[−π, π]`.
-    fn atan2(y: f32, x: f32) -> f32;
+    fn atan2(y: R, x: R) -> R;
 }
 
 /// The backends' `atan2`: [`crate::arctangent::atan2`] (≤ 8e-8 + 1 ulp from exact).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Polynomial;
 
-impl Atan2 for Polynomial {
+impl<R: Real> Atan2<R> for Polynomial {
     #[inline]
-    fn atan2(y: f32, x: f32) -> f32 {
+    fn atan2(y: R, x: R) -> R {
         crate::arctangent::atan2(y, x)
     }
 }
@@ -55,12 +58,20 @@ impl Atan2 for Exact {
 /// ```
 #[inline]
 pub fn direction_to_latlong<A: Atan2>(dir: Vec3) -> Vec2 {
-    let u = A::atan2(dir.x, -dir.z) / TAU;
-    let u = if u < 0.0 { u + 1.0 } else { u };
+    let (u, v) = latlong_coordinates::<Vec3, A>(dir);
+    Vec2::new(u, v)
+}
+
+/// [`direction_to_latlong`] for one direction or eight: `(u, v)`.
+#[inline]
+pub fn latlong_coordinates<V: Vector3, A: Atan2<V::Real>>(dir: V) -> (V::Real, V::Real) {
+    let (zero, one) = (V::Real::ZERO, V::Real::ONE);
+    let u = A::atan2(dir.x(), -dir.z()) / V::Real::splat(TAU);
+    let u = V::Real::select(u.lt(zero), u + one, u);
     // `u + 1` can round to exactly 1 for tiny negative u.
-    let u = if u >= 1.0 { 0.0 } else { u };
-    let theta = A::atan2(crate::math::sqrt(dir.x * dir.x + dir.z * dir.z), dir.y);
-    Vec2::new(u, theta / PI)
+    let u = V::Real::select(u.ge(one), zero, u);
+    let theta = A::atan2((dir.x() * dir.x() + dir.z() * dir.z()).sqrt(), dir.y());
+    (u, theta / V::Real::splat(PI))
 }
 
 /// The unit direction of lat-long coordinates, the inverse of [`direction_to_latlong`]:
@@ -94,30 +105,37 @@ pub fn latlong_to_direction(uv: Vec2) -> Vec3 {
 /// use refract_core::environment::{Polynomial, sample_latlong_bilinear};
 /// // A 2 × 3 map: rows 0 (zenith), 1 (horizon), 2 (nadir) in 0, 1, 2.
 /// let texels = [0.0, 0.0, 1.0, 1.0, 2.0, 2.0].map(Vec3::splat);
-/// let horizon = sample_latlong_bilinear::<Polynomial>(&texels, 2, 3, Vec3::X);
+/// let horizon = sample_latlong_bilinear::<Polynomial, _>(&texels, 2, 3, Vec3::X);
 /// assert!((horizon - Vec3::ONE).length() < 1e-5); // y = v (H − 1) = 1: row 1 exactly
 /// ```
+///
+/// One direction or eight (the texel fetches lane by lane).
 #[inline]
-pub fn sample_latlong_bilinear<A: Atan2>(
+pub fn sample_latlong_bilinear<A: Atan2<V::Real>, V: Vector3>(
     texels: &[Vec3],
     width: u32,
     height: u32,
-    dir: Vec3,
-) -> Vec3 {
-    let uv = direction_to_latlong::<A>(dir);
-    let x = uv.x * width as f32 - 0.5;
-    let y = (uv.y * (height - 1) as f32).clamp(0.0, (height - 1) as f32);
-    let (x0, y0) = (crate::math::floor(x), crate::math::floor(y));
+    dir: V,
+) -> V {
+    let (u, v) = latlong_coordinates::<V, A>(dir);
+    let last_row = V::Real::splat((height - 1) as f32);
+    let x = u * V::Real::splat(width as f32) - V::Real::splat(0.5);
+    let y = Real::clamp(v * last_row, V::Real::ZERO, last_row);
+    let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let w = i64::from(width);
     let wrap = |x: i64| x.rem_euclid(w) as usize;
-    let (xa, xb) = (wrap(x0 as i64), wrap(x0 as i64 + 1));
-    let ya = y0 as usize;
-    let yb = (ya + 1).min(height as usize - 1);
-    let at = |x: usize, y: usize| texels[y * width as usize + x];
-    let top = at(xa, ya).lerp(at(xb, ya), fx);
-    let bottom = at(xa, yb).lerp(at(xb, yb), fx);
-    top.lerp(bottom, fy)
+    // Lane i's texel at column offset dx ∈ {0, 1}, row offset dy ∈ {0, 1}.
+    let texel = |i: usize, dx: i64, dy: usize| {
+        let (x0, y0) = (x0.lane(i) as i64, y0.lane(i) as usize);
+        let y = (y0 + dy).min(height as usize - 1);
+        texels[y * width as usize + wrap(x0 + dx)]
+    };
+    let a = V::gather(|i| texel(i, 0, 0));
+    let b = V::gather(|i| texel(i, 1, 0));
+    let c = V::gather(|i| texel(i, 0, 1));
+    let d = V::gather(|i| texel(i, 1, 1));
+    a.lerp(b, fx).lerp(c.lerp(d, fx), fy)
 }
 
 #[cfg(test)]
@@ -160,7 +178,12 @@ mod tests {
         let (w, h) = (4u32, 3u32);
         let texels: Vec<Vec3> = (0..w * h).map(|i| Vec3::splat(i as f32)).collect();
         let at = |u: f32, v: f32| {
-            sample_latlong_bilinear::<Exact>(&texels, w, h, latlong_to_direction(Vec2::new(u, v)))
+            sample_latlong_bilinear::<Exact, _>(
+                &texels,
+                w,
+                h,
+                latlong_to_direction(Vec2::new(u, v)),
+            )
         };
         let close = |a: Vec3, b: f32| (a - Vec3::splat(b)).abs().max_element() < 2e-3;
         // Column centres: u = (x + ½)/W. Zenith (v = 0) is row 0, the nadir row 2, the equator
@@ -193,7 +216,7 @@ mod tests {
     fn one_row_maps_sample_that_row_everywhere() {
         let texels = vec![Vec3::X, Vec3::Y];
         for v in [0.1, 0.5, 0.9] {
-            let c = sample_latlong_bilinear::<Exact>(
+            let c = sample_latlong_bilinear::<Exact, _>(
                 &texels,
                 2,
                 1,

@@ -3,7 +3,8 @@
 use glam::Vec3;
 
 use crate::optics::{face_forward_shading_normal, reflect, refract};
-use crate::vector::robust_normalize;
+use crate::real::{LaneMask, Msk, Vector3};
+use crate::vector::robust_normalize_masked;
 
 /// What to do when the ray inside the refractor meets the exit surface beyond the critical
 /// angle (total internal reflection at the second interface, Wyman 2005a §3.3).
@@ -46,19 +47,19 @@ pub enum ExitNormalSource {
 /// assert!((exit_normal_outside_silhouette(t1, look) - Vec3::X).length() < 1e-6);
 /// ```
 #[inline]
-pub fn exit_normal_outside_silhouette(t1: Vec3, look_dir: Vec3) -> Vec3 {
-    (t1 - look_dir.dot(t1) * look_dir)
-        .try_normalize()
-        .unwrap_or(t1)
+pub fn exit_normal_outside_silhouette<V: Vector3>(t1: V, look_dir: V) -> V {
+    let (n, ok) = (t1 - look_dir * look_dir.dot(t1)).try_normalize();
+    V::select(ok, n, t1)
 }
 
 /// The refracted direction leaving the refractor, and whether the exit was totally reflected.
+/// For one pixel (the default, `Vec3`) or eight lanes ([`crate::lanes::Vec3x8`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExitRefraction {
+pub struct ExitRefraction<V: Vector3 = Vec3> {
     /// `T2`, unit length; the zero vector when the ray was absorbed ([`TirPolicy::Black`]).
-    pub t2: Vec3,
+    pub t2: V,
     /// Total internal reflection at this interface (before the policy was applied).
-    pub tir: bool,
+    pub tir: Msk<V>,
 }
 
 /// Refraction at the exit surface with outward normal `n2`, inner index `ior` and outside
@@ -83,19 +84,33 @@ pub struct ExitRefraction {
 /// assert_eq!(refract_exit(t1, Vec3::NEG_Z, 1.5, TirPolicy::Black).t2, Vec3::ZERO);
 /// ```
 #[inline]
-pub fn refract_exit(t1: Vec3, n2: Vec3, ior: f32, policy: TirPolicy) -> ExitRefraction {
+pub fn refract_exit<V: Vector3>(
+    t1: V,
+    n2: V,
+    ior: V::Real,
+    policy: TirPolicy,
+) -> ExitRefraction<V> {
     let inward = face_forward_shading_normal(-n2, t1);
-    let t2 = refract(t1, inward, ior);
-    if t2 != Vec3::ZERO {
-        let t2 = robust_normalize(t2).unwrap_or(t1);
-        return ExitRefraction { t2, tir: false };
+    let refracted = refract(t1, inward, ior);
+    let tir = refracted.is_zero();
+    // TIR lanes normalise `T1` (unit: no work) and are replaced below.
+    let (t2, ok) = robust_normalize_masked(V::select(tir, t1, refracted));
+    let t2 = V::select(ok, t2, t1);
+    if !tir.any() {
+        return ExitRefraction { t2, tir };
     }
-    let t2 = match policy {
-        TirPolicy::ClampToCritical => (t1 - t1.dot(inward) * inward).try_normalize().unwrap_or(t1),
+    let tir_t2 = match policy {
+        TirPolicy::ClampToCritical => {
+            let (tangent, ok) = (t1 - inward * t1.dot(inward)).try_normalize();
+            V::select(ok, tangent, t1)
+        }
         TirPolicy::ReflectOnce => reflect(t1, inward),
-        TirPolicy::Black => Vec3::ZERO,
+        TirPolicy::Black => V::constant(Vec3::ZERO),
     };
-    ExitRefraction { t2, tir: true }
+    ExitRefraction {
+        t2: V::select(tir, tir_t2, t2),
+        tir,
+    }
 }
 
 #[cfg(test)]

@@ -1,8 +1,7 @@
 //! Wyman 2005a §3.1: approximating the distance `d~` from the entry point `P1` to the exit
 //! point `P2` along the refracted ray `T1`.
 
-use glam::Vec3;
-
+use crate::real::{Real, Vector3};
 use crate::vector::angle_between;
 
 /// Below this incidence angle (radians) the ratio `θt/θi` takes its normal-incidence limit `η`.
@@ -34,7 +33,7 @@ pub enum DistanceMode {
 /// assert_eq!(theta_i, 0.0); // looking straight at the surface
 /// ```
 #[inline]
-pub fn incidence_angle(view: Vec3, n1: Vec3) -> f32 {
+pub fn incidence_angle<V: Vector3>(view: V, n1: V) -> V::Real {
     angle_between(-view, n1)
 }
 
@@ -49,7 +48,7 @@ pub fn incidence_angle(view: Vec3, n1: Vec3) -> f32 {
 /// assert!((theta_t - 0.6f32.asin()).abs() < 1e-6);
 /// ```
 #[inline]
-pub fn transmission_angle(t1: Vec3, n1: Vec3) -> f32 {
+pub fn transmission_angle<V: Vector3>(t1: V, n1: V) -> V::Real {
     angle_between(t1, -n1)
 }
 
@@ -68,13 +67,13 @@ pub fn transmission_angle(t1: Vec3, n1: Vec3) -> f32 {
 /// assert_eq!(angle_ratio(0.0, 0.0, 1.0 / 1.5), 1.0 / 1.5); // the limit at normal incidence
 /// ```
 #[inline]
-pub fn angle_ratio(theta_i: f32, theta_t: f32, eta: f32) -> f32 {
-    let ratio = if theta_i > NORMAL_INCIDENCE_ANGLE {
-        theta_t / theta_i
-    } else {
-        eta
-    };
-    ratio.clamp(0.0, 1.0)
+pub fn angle_ratio<R: Real>(theta_i: R, theta_t: R, eta: R) -> R {
+    let ratio = R::select(
+        theta_i.gt(R::splat(NORMAL_INCIDENCE_ANGLE)),
+        theta_t / theta_i,
+        eta,
+    );
+    Real::clamp(ratio, R::ZERO, R::ONE)
 }
 
 /// Wyman 2005a §3.1: `d~ = (θt/θi)·d_V + (1 − θt/θi)·d_N`, with `θt/θi` from [`angle_ratio`].
@@ -88,9 +87,9 @@ pub fn angle_ratio(theta_i: f32, theta_t: f32, eta: f32) -> f32 {
 /// assert!((d - (2.0 / 1.5 + 1.0 / 3.0)).abs() < 1e-6);
 /// ```
 #[inline]
-pub fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n: f32) -> f32 {
+pub fn interpolated_distance<R: Real>(theta_i: R, theta_t: R, eta: R, d_v: R, d_n: R) -> R {
     let w = angle_ratio(theta_i, theta_t, eta);
-    w * d_v + (1.0 - w) * d_n
+    w * d_v + (R::ONE - w) * d_n
 }
 
 /// `d~` for a [`DistanceMode`]: the interpolation, or one of its ablations.
@@ -106,14 +105,14 @@ pub fn interpolated_distance(theta_i: f32, theta_t: f32, eta: f32, d_v: f32, d_n
 /// assert_eq!(approximate_distance(DistanceMode::Interpolated, theta_i, theta_t, eta, d_v, d_n), 1.5);
 /// ```
 #[inline]
-pub fn approximate_distance(
+pub fn approximate_distance<R: Real>(
     mode: DistanceMode,
-    theta_i: f32,
-    theta_t: f32,
-    eta: f32,
-    d_v: f32,
-    d_n: f32,
-) -> f32 {
+    theta_i: R,
+    theta_t: R,
+    eta: R,
+    d_v: R,
+    d_n: R,
+) -> R {
     match mode {
         DistanceMode::Interpolated => interpolated_distance(theta_i, theta_t, eta, d_v, d_n),
         DistanceMode::ViewOnly => d_v,
@@ -129,8 +128,8 @@ pub fn approximate_distance(
 /// assert_eq!(p2, Vec3::NEG_Z);
 /// ```
 #[inline]
-pub fn exit_point(p1: Vec3, t1: Vec3, d_tilde: f32) -> Vec3 {
-    p1 + d_tilde * t1
+pub fn exit_point<V: Vector3>(p1: V, t1: V, d_tilde: V::Real) -> V {
+    p1 + t1 * d_tilde
 }
 
 #[cfg(test)]

@@ -1,25 +1,29 @@
 //! The lane twin of [`crate::kernel`]: [`one_interface`] and [`two_interface`] for eight
 //! pixels at once, the same formulas on eight SIMD lanes ([`crate::lanes`]).
 //!
-//! Every lane computes exactly the bits the scalar kernel computes for that pixel (the tests
-//! below compare them bit for bit on random inputs). The rare cases (a degenerate input, a
-//! vector too long or too short for the one-division normalisation, total internal reflection
-//! at the entry point, a non-finite result) are not written twice: those lanes are handed to
-//! the scalar kernel. Back-face lookups are made lane by lane through the same
-//! [`BackFaceSampler`].
+//! Both kernels call the same leaves ([`crate::optics`], [`crate::exit`],
+//! [`crate::interpolated_distance`], [`crate::vector`]), written once over [`crate::real`]; only
+//! the control flow differs (masks here, early returns there). Every lane computes exactly the
+//! bits the scalar kernel computes for that pixel (the tests below compare them bit for bit on
+//! random inputs). The rare cases (a degenerate input, total internal reflection at the entry
+//! point, a non-finite result) are handed to the scalar kernel. Back-face lookups go through
+//! [`BackFaceSampler::back_faces_x8`].
 
 use glam::{Vec2, Vec3};
 
 use crate::camera::Camera;
-use crate::exit::{ExitNormalSource, TirPolicy};
-use crate::interpolated_distance::{DistanceMode, NORMAL_INCIDENCE_ANGLE};
+use crate::exit::{ExitNormalSource, exit_normal_outside_silhouette, refract_exit};
+use crate::interpolated_distance::{
+    approximate_distance, exit_point, incidence_angle, transmission_angle,
+};
 use crate::kernel::{
     BackFaceSampler, DegenerateInput, FrontSurface, ImageSpaceParams, OneInterfacePath,
     TwoInterfacePath, one_interface, two_interface,
 };
-use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, atan2, le, lt, mask_lanes};
-use crate::optics::FACE_FORWARD_EPSILON;
-use crate::vector::{UNIT_TOLERANCE, robust_normalize};
+use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_lanes};
+use crate::optics::{face_forward_shading_normal, refract};
+use crate::real::Vector3;
+use crate::vector::robust_normalize_masked;
 
 /// Eight front surfaces as lanes (structure of arrays): `P1`, `N1` and `d_N` of each pixel,
 /// as a rasteriser that resolves eight texels at once produces them.
@@ -62,56 +66,8 @@ impl FrontLanes {
 /// Every lane set.
 const ALL_LANES: Mask = F32x8::splat(f32::from_bits(u32::MAX));
 
-/// [`robust_normalize`]'s two common paths (already unit: `v`; otherwise `v · (1/√(v·v))`) and
-/// the lanes they cover; the other lanes need the scaled path of the scalar function.
-#[inline]
-fn normalize_common(v: Vec3x8) -> (Vec3x8, Mask) {
-    let length_squared = v.dot(v);
-    let unit = (length_squared - F32x8::ONE)
-        .abs()
-        .simd_le(F32x8::splat(UNIT_TOLERANCE));
-    // Most groups are all unit already (normals from the rasteriser, Snell's `T`): the square
-    // root and division are only spent when some lane needs them.
-    if unit.all() {
-        return (v, unit);
-    }
-    let in_range = le(F32x8::splat(1e-30), length_squared) & le(length_squared, F32x8::MAX);
-    let scaled = v * (F32x8::ONE / length_squared.sqrt());
-    (Vec3x8::select(unit, v, scaled), unit | in_range)
-}
-
-/// [`crate::optics::face_forward_shading_normal`].
-#[inline]
-fn face_forward(normal: Vec3x8, incident: Vec3x8) -> Vec3x8 {
-    let n_dot_i = normal.dot(incident);
-    let facing = lt(n_dot_i, F32x8::ZERO);
-    if facing.all() {
-        return normal; // the common case: no lane needs turning
-    }
-    let (turned, ok) =
-        (normal - (n_dot_i + F32x8::splat(FACE_FORWARD_EPSILON)) * incident).try_normalize();
-    let turned = Vec3x8::select(ok, turned, -incident);
-    Vec3x8::select(facing, normal, turned)
-}
-
-/// [`crate::optics::refract`]: the zero vector where `k < 0`.
-#[inline]
-pub(crate) fn refract(incident: Vec3x8, normal: Vec3x8, eta: F32x8) -> Vec3x8 {
-    let n_dot_i = normal.dot(incident);
-    let eta2 = eta * eta;
-    let k = (F32x8::ONE - eta2) + eta2 * n_dot_i * n_dot_i;
-    let t = eta * incident - (eta * n_dot_i + k.sqrt()) * normal;
-    Vec3x8::select(lt(k, F32x8::ZERO), Vec3x8::ZERO, t)
-}
-
-/// [`crate::vector::angle_between`].
-#[inline]
-fn angle_between(a: Vec3x8, b: Vec3x8) -> F32x8 {
-    atan2(a.cross(b).length(), a.dot(b))
-}
-
 /// The entry refraction of eight pixels: view, shading normal, `T1`, and the lanes the scalar
-/// kernel must take (degenerate or long/short vectors, TIR at the entry).
+/// kernel must take (degenerate inputs, TIR at the entry).
 struct Entry {
     view: Vec3x8,
     n1: Vec3x8,
@@ -119,14 +75,15 @@ struct Entry {
     scalar: Mask,
 }
 
+/// The scalar kernel's `entry_frame` and entry refraction, on lanes, through the same leaves.
 #[inline]
 fn entry(camera: &Camera, p1: Vec3x8, n1: Vec3x8, eta: F32x8) -> Entry {
-    let (view, view_ok) = normalize_common(p1 - Vec3x8::splat(camera.eye()));
-    let (n1, n1_ok) = normalize_common(n1);
-    let n1 = face_forward(n1, view);
+    let (view, view_ok) = robust_normalize_masked(p1 - Vec3x8::splat(camera.eye()));
+    let (n1, n1_ok) = robust_normalize_masked(n1);
+    let n1 = face_forward_shading_normal(n1, view);
     let refracted = refract(view, n1, eta);
     let tir_entry = refracted.is_zero();
-    let (t1, t1_ok) = normalize_common(refracted);
+    let (t1, t1_ok) = robust_normalize_masked(Vec3x8::select(tir_entry, view, refracted));
     Entry {
         view,
         n1,
@@ -231,80 +188,33 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     let e = entry(camera, p1, n1, eta);
     let d_n_ok = d_n.simd_ge(F32x8::ZERO) & d_n.is_finite();
 
-    // d_V at P1's own pixel (Wyman 2005a §3.1); `‖P1 − eye‖` on lanes, as
-    // `Camera::distance_from_eye`.
+    // d_V at P1's own pixel (Wyman 2005a §3.1), `‖P1 − eye‖` as `Camera::distance_from_eye`.
     let own = back.back_faces_x8(Vec2x8::from_lanes(uv_px), ALL_LANES);
     let d_v = own.distance - (p1 - Vec3x8::splat(camera.eye())).length();
     let d_v_ok = own.found & d_v.simd_ge(F32x8::ZERO) & d_v.is_finite();
-    let d_v_or_n = d_v_ok.select(d_v, d_n);
 
-    // d~ (Wyman 2005a §3.1).
-    let theta_i = angle_between(-e.view, e.n1);
-    let theta_t = angle_between(e.t1, -e.n1);
-    let d_tilde = match params.distance_mode {
-        DistanceMode::Interpolated => {
-            let ratio = theta_i
-                .simd_gt(F32x8::splat(NORMAL_INCIDENCE_ANGLE))
-                .select(theta_t / theta_i, eta);
-            // f32::clamp(0, 1): NaN stays NaN.
-            let ratio = lt(ratio, F32x8::ZERO).select(F32x8::ZERO, ratio);
-            let w = ratio.simd_gt(F32x8::ONE).select(F32x8::ONE, ratio);
-            w * d_v_or_n + (F32x8::ONE - w) * d_n
-        }
-        DistanceMode::ViewOnly => d_v_or_n,
-        DistanceMode::NormalOnly => d_n,
-    };
-    let p2 = p1 + d_tilde * e.t1;
+    let theta_i = incidence_angle(e.view, e.n1);
+    let theta_t = transmission_angle(e.t1, e.n1);
+    let d_v_or_n = d_v_ok.select(d_v, d_n);
+    let d_tilde = approximate_distance(params.distance_mode, theta_i, theta_t, eta, d_v_or_n, d_n);
+    let p2 = exit_point(p1, e.t1, d_tilde);
 
     // N2 from the back faces at P~2's pixel (§3.2), else the silhouette fallback (§3.3).
-    let (px, py, in_front) = world_to_pixel_xy(camera, p2);
+    let (px, py, in_front) = camera.world_to_pixel_xy(p2);
     let far = back.back_faces_x8(Vec2x8 { x: px, y: py }, in_front);
-    // `robust_normalize` of each sampled normal: its two common paths on lanes, the rare
-    // lanes (too long, too short, not finite) one by one.
-    let (mut sampled_n2, common) = normalize_common(far.n_ws);
-    let mut sampled_mask = far.found & common;
-    let rare = far.found & !common;
-    if rare.any() {
-        let (rare, raw) = (mask_lanes(rare), far.n_ws.to_lanes());
-        let (mut n2, mut sampled) = (sampled_n2.to_lanes(), mask_lanes(sampled_mask));
-        for i in (0..LANES).filter(|i| rare[*i]) {
-            if let Some(n) = robust_normalize(raw[i]) {
-                (n2[i], sampled[i]) = (n, true);
-            }
-        }
-        sampled_n2 = Vec3x8::from_lanes(&n2);
-        sampled_mask = crate::lanes::mask_from_lanes(sampled);
-    }
-    let sampled = mask_lanes(sampled_mask);
-    let n2 = if sampled_mask.all() {
+    // Empty lanes normalise a unit vector (no work) and are replaced by the fallback.
+    let found_n = Vec3x8::select(far.found, far.n_ws, Vec3x8::splat(Vec3::Z));
+    let (sampled_n2, normal_ok) = robust_normalize_masked(found_n);
+    let sampled = far.found & normal_ok;
+    let n2 = if sampled.all() {
         sampled_n2
     } else {
-        let look = Vec3x8::splat(camera.look_dir());
-        let (fallback, fallback_ok) = (e.t1 - look.dot(e.t1) * look).try_normalize();
-        let fallback = Vec3x8::select(fallback_ok, fallback, e.t1);
-        Vec3x8::select(sampled_mask, sampled_n2, fallback)
+        let fallback = exit_normal_outside_silhouette(e.t1, Vec3x8::splat(camera.look_dir()));
+        Vec3x8::select(sampled, sampled_n2, fallback)
     };
 
-    // T2 = refract(T1, −N2, n) with the TIR policy (§3.3), as `refract_exit`.
-    let inward = face_forward(-n2, e.t1);
-    let refracted = refract(e.t1, inward, F32x8::splat(params.ior()));
-    let tir_exit = refracted.is_zero();
-    let (normalized, t2_ok) = normalize_common(refracted);
-    let t2 = if tir_exit.any() {
-        let tir_t2 = match params.tir_policy {
-            TirPolicy::ClampToCritical => {
-                let (tangent, ok) = (e.t1 - e.t1.dot(inward) * inward).try_normalize();
-                Vec3x8::select(ok, tangent, e.t1)
-            }
-            TirPolicy::ReflectOnce => e.t1 - (F32x8::splat(2.0) * inward.dot(e.t1)) * inward,
-            TirPolicy::Black => Vec3x8::ZERO,
-        };
-        Vec3x8::select(tir_exit, tir_t2, normalized)
-    } else {
-        normalized
-    };
-
-    let finite = p2.is_finite() & d_tilde.is_finite() & t2.is_finite();
+    let exit = refract_exit(e.t1, n2, F32x8::splat(params.ior()), params.tir_policy);
+    let finite = p2.is_finite() & d_tilde.is_finite() & exit.t2.is_finite();
     TwoInterfaceSoa {
         view: e.view,
         n1: e.n1,
@@ -314,10 +224,10 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
         d_tilde,
         p2,
         n2,
-        n2_from_back_face: sampled,
-        t2,
-        tir_exit,
-        scalar: mask_lanes(e.scalar | !d_n_ok | !(finite & (t2_ok | tir_exit))),
+        n2_from_back_face: mask_lanes(sampled),
+        t2: exit.t2,
+        tir_exit: exit.tir,
+        scalar: mask_lanes(e.scalar | !d_n_ok | !finite),
     }
 }
 
@@ -475,31 +385,12 @@ pub fn two_interface_lanes<S: BackFaceSampler + ?Sized>(
     lanes
 }
 
-/// [`Camera::world_to_pixel`]'s `(u_px, v_px)` and the lanes in front of the eye (`w > 0`).
-#[inline]
-pub(crate) fn world_to_pixel_xy(camera: &Camera, p: Vec3x8) -> (F32x8, F32x8, Mask) {
-    let m = camera.world_to_clip();
-    let row = |c: glam::Vec4| Vec3x8::splat(c.truncate());
-    // glam's Mat4 · Vec4: ((c0·x + c1·y) + c2·z) + c3·1, lane-wise per output row.
-    let (c0, c1, c2) = (row(m.x_axis), row(m.y_axis), row(m.z_axis));
-    let c3 = m.w_axis;
-    let clip = c0 * p.x + c1 * p.y + c2 * p.z + Vec3x8::splat(c3.truncate());
-    let w = F32x8::splat(m.x_axis.w) * p.x
-        + F32x8::splat(m.y_axis.w) * p.y
-        + F32x8::splat(m.z_axis.w) * p.z
-        + F32x8::splat(c3.w);
-    let rcp = F32x8::ONE / w;
-    let (ndc_x, ndc_y) = (clip.x * rcp, clip.y * rcp);
-    let half = F32x8::splat(0.5);
-    let px = half * (ndc_x + F32x8::ONE) * F32x8::splat(camera.width() as f32);
-    let py = half * (F32x8::ONE - ndc_y) * F32x8::splat(camera.height() as f32);
-    (px, py, w.simd_gt(F32x8::ZERO))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::camera::CameraDesc;
+    use crate::exit::TirPolicy;
+    use crate::interpolated_distance::DistanceMode;
     use crate::kernel::BackFaceSample;
 
     /// A back-face buffer made of a smooth analytic field, so that lookups vary per pixel

@@ -1,30 +1,16 @@
-//! Eight pixels at a time: structure-of-arrays vectors over `wide::f32x8` for the lane twin of
-//! the kernels ([`crate::kernel_x8`]).
+//! Eight pixels at a time: structure-of-arrays vectors over `wide::f32x8`, the lane types of
+//! [`crate::real`] (whose traits give them their arithmetic: `dot`, `cross`, `select`, ...).
 //!
 //! A pixel of the two-interface kernel is a chain of ~20 dependent square roots, divisions and
 //! polynomials: one pixel at a time the CPU mostly waits. Eight independent pixels per
 //! instruction keep its pipelines full. Every operation here performs exactly the IEEE
-//! operations of its glam counterpart in the same order (`dot = (x·x' + y·y') + z·z'`,
-//! `normalize = v · (1/√(v·v))`, ...), so a lane computes the same bits as the scalar code; the
-//! tests of [`crate::kernel_x8`] hold them to it.
+//! operations of its glam counterpart in the same order, so a lane computes the same bits as the
+//! scalar code.
 
 use core::ops::{Add, Mul, Neg, Sub};
 
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use wide::f32x8;
-
-use crate::arctangent::{ATAN_POLYNOMIAL, atan_unit};
-
-/// [`ATAN_POLYNOMIAL`] in every lane.
-const ATAN_POLYNOMIAL_X8: [F32x8; 9] = {
-    let mut lanes = [F32x8::ZERO; 9];
-    let mut i = 0;
-    while i < 9 {
-        lanes[i] = F32x8::splat(ATAN_POLYNOMIAL[i]);
-        i += 1;
-    }
-    lanes
-};
 
 /// The number of lanes.
 pub const LANES: usize = 8;
@@ -97,68 +83,6 @@ impl Vec3x8 {
             self.y.to_array()[i],
             self.z.to_array()[i],
         )
-    }
-
-    /// `(x·x' + y·y') + z·z'`, as [`Vec3::dot`].
-    #[inline]
-    pub fn dot(self, rhs: Self) -> F32x8 {
-        (self.x * rhs.x) + (self.y * rhs.y) + (self.z * rhs.z)
-    }
-
-    /// As [`Vec3::cross`].
-    #[inline]
-    pub fn cross(self, rhs: Self) -> Self {
-        Self {
-            x: self.y * rhs.z - rhs.y * self.z,
-            y: self.z * rhs.x - rhs.z * self.x,
-            z: self.x * rhs.y - rhs.x * self.y,
-        }
-    }
-
-    /// `√(v·v)`, as [`Vec3::length`].
-    #[inline]
-    pub fn length(self) -> F32x8 {
-        self.dot(self).sqrt()
-    }
-
-    /// Lane-wise `if mask { a } else { b }`.
-    #[inline]
-    pub fn select(mask: Mask, a: Self, b: Self) -> Self {
-        Self {
-            x: mask.select(a.x, b.x),
-            y: mask.select(a.y, b.y),
-            z: mask.select(a.z, b.z),
-        }
-    }
-
-    /// Lanes where all three components are finite.
-    #[inline]
-    pub fn is_finite(self) -> Mask {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
-    }
-
-    /// Lanes equal to the zero vector (either sign of zero), as `v == Vec3::ZERO`.
-    #[inline]
-    pub fn is_zero(self) -> Mask {
-        let zero = F32x8::ZERO;
-        self.x.simd_eq(zero) & self.y.simd_eq(zero) & self.z.simd_eq(zero)
-    }
-
-    /// `v · (1/√(v·v))` and the lanes where `1/√(v·v)` is finite and positive, as
-    /// [`Vec3::try_normalize`] (other lanes hold garbage).
-    #[inline]
-    pub fn try_normalize(self) -> (Self, Mask) {
-        let rcp = F32x8::ONE / self.length();
-        (self * rcp, rcp.is_finite() & rcp.simd_gt(F32x8::ZERO))
-    }
-
-    /// `M · (v, 0)`, as [`Mat4::transform_vector3`].
-    #[inline]
-    pub fn transform_vector3(m: &Mat4, v: Self) -> Self {
-        let column = |c: glam::Vec4| Vec3x8::splat(c.truncate());
-        let (c0, c1, c2) = (column(m.x_axis), column(m.y_axis), column(m.z_axis));
-        // glam: ((c0·x) + c1·y) + c2·z, added in that order (addition commutes bitwise).
-        c0 * v.x + c1 * v.y + c2 * v.z
     }
 }
 
@@ -275,35 +199,6 @@ impl Vec2x8 {
         }
         lanes
     }
-}
-
-/// [`crate::arctangent::atan2`] on eight lanes: the same operations, so the same bits.
-#[inline]
-pub fn atan2(y: F32x8, x: F32x8) -> F32x8 {
-    let (ax, ay) = (x.abs(), y.abs());
-    let (lo, hi) = (ax.min(ay), ax.max(ay));
-    let a = hi.simd_gt(F32x8::ZERO).select(lo / hi, F32x8::ZERO);
-    let mut r = atan_unit(a, &ATAN_POLYNOMIAL_X8);
-    r = ay
-        .simd_gt(ax)
-        .select(F32x8::splat(core::f32::consts::FRAC_PI_2) - r, r);
-    r = x
-        .is_sign_negative()
-        .select(F32x8::splat(core::f32::consts::PI) - r, r);
-    let nan = x.is_nan() | y.is_nan();
-    nan.select(F32x8::splat(f32::NAN), r.copysign(y))
-}
-
-/// `a < b` lane-wise.
-#[inline]
-pub fn lt(a: F32x8, b: F32x8) -> Mask {
-    a.simd_lt(b)
-}
-
-/// `a ≤ b` lane-wise.
-#[inline]
-pub fn le(a: F32x8, b: F32x8) -> Mask {
-    a.simd_le(b)
 }
 
 /// The lanes of a mask as booleans.

@@ -8,7 +8,11 @@
 //! * [`interpolated_distance`]: Wyman 2005a §3.1, the distance `d~` from `P1` to `P2`.
 //! * [`exit`]: Wyman 2005a §3.2–3.3, the exit normal and the second-interface TIR policy.
 //! * [`kernel`]: the one- and two-interface per-pixel kernels, generic over [`kernel::BackFaceSampler`].
-//! * [`kernel_x8`], [`lanes`]: the same kernels on eight pixels at once (SIMD), bit-identical.
+//! * [`real`]: the number traits every per-pixel leaf is written over once (`f32`/`Vec3`, and
+//!   the eight-lane types of [`lanes`]).
+//! * [`kernel_x8`], [`lanes`]: the kernels on eight pixels at once (SIMD) through the same
+//!   leaves, bit-identical.
+//! * [`shading`]: the opaque objects' albedos and directional light.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
 //! * [`engine`]: the refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament): exit models and screen lookups.
@@ -23,8 +27,9 @@
 //! * [`wgsl`]: the WGSL twin of these functions, to prepend to your own shaders.
 //!
 //! Public on purpose and stable: `optics`, `fresnel`, `interpolated_distance`, `exit`, `kernel`,
-//! `camera`, `environment`, `procedural_sky`, `back_surface`, `vector`, `wgsl`. Public for the
-//! refract backends and subject to change: `kernel_x8`, `lanes`, `arctangent`, `gpu`.
+//! `camera`, `environment`, `procedural_sky`, `shading`, `back_surface`, `vector`, `wgsl`.
+//! Public for the refract backends and subject to change: `real`, `kernel_x8`, `lanes`,
+//! `arctangent`, `gpu`.
 //!
 //! Conventions (see `docs/conventions.md`): right-handed world, y up; unit vectors; incident
 //! directions point *toward* the surface; normals point *outward* from the refractor;
@@ -63,6 +68,8 @@ pub mod nearby_geometry_x8;
 pub mod optics;
 pub mod procedural_sky;
 pub mod pvrr;
+pub mod real;
+pub mod shading;
 pub mod vector;
 pub mod wgsl;
 

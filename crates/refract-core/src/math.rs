@@ -13,6 +13,14 @@ mod imp {
         x.floor()
     }
     #[inline]
+    pub fn trunc(x: f32) -> f32 {
+        x.trunc()
+    }
+    #[inline]
+    pub fn sin(x: f32) -> f32 {
+        x.sin()
+    }
+    #[inline]
     pub fn tan(x: f32) -> f32 {
         x.tan()
     }
@@ -37,6 +45,14 @@ mod imp {
         libm::floorf(x)
     }
     #[inline]
+    pub fn trunc(x: f32) -> f32 {
+        libm::truncf(x)
+    }
+    #[inline]
+    pub fn sin(x: f32) -> f32 {
+        libm::sinf(x)
+    }
+    #[inline]
     pub fn tan(x: f32) -> f32 {
         libm::tanf(x)
     }
@@ -50,4 +66,4 @@ mod imp {
     }
 }
 
-pub(crate) use imp::{atan2, floor, sin_cos, sqrt, tan};
+pub(crate) use imp::{atan2, floor, sin, sin_cos, sqrt, tan, trunc};

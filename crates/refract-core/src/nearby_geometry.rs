@@ -20,6 +20,7 @@ use glam::{UVec2, Vec3, Vec4};
 use crate::camera::{Camera, CameraDesc};
 use crate::lanes::{F32x8, I32x8, LANES, Mask, Vec3x8, mask_from_lanes};
 use crate::math;
+use crate::real::{Msk, Real, Vector3};
 
 /// The camera of an NG texture with a guard band (beyond Wyman 2005b, which renders the NG
 /// texture with the eye's camera): `percent` of the image's width and height added on each
@@ -256,15 +257,29 @@ pub fn view_depth(camera: &Camera, p_ws: Vec3) -> f32 {
 
 /// The ray `origin + t dir` in a camera's clip space, `clip(t) = c0 + t c1` (affine in `t`):
 /// a point of the ray projects with four multiply-adds and one division, and its view depth is
-/// `clip.w` (the perspective projection's `w = −z_view`).
+/// `clip.w` (the perspective projection's `w = −z_view`). One ray (`ClipRay`, glam types) or
+/// eight (`ClipRay<Vec3x8>`, [`ClipRay::from_rays`]); the methods on `ClipRay<V>` are the one
+/// body both run.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ClipRay {
-    origin: Vec3,
-    dir: Vec3,
-    c0: Vec4,
-    c1: Vec4,
-    width: f32,
-    height: f32,
+pub struct ClipRay<V: Vector3 = Vec3> {
+    origin: V,
+    dir: V,
+    c0: [V::Real; 4],
+    c1: [V::Real; 4],
+    width: V::Real,
+    height: V::Real,
+}
+
+/// The texels under the points of [`ClipRay::texel_lanes`]: their coordinates (whole numbers)
+/// and the lanes inside the view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexelLanes<R: Real> {
+    /// Column (a whole number where `inside`).
+    pub x: R,
+    /// Row.
+    pub y: R,
+    /// Inside the view and its depth range.
+    pub inside: R::Mask,
 }
 
 impl ClipRay {
@@ -275,8 +290,8 @@ impl ClipRay {
         Self {
             origin,
             dir,
-            c0: m * origin.extend(1.0),
-            c1: m * dir.extend(0.0),
+            c0: (m * origin.extend(1.0)).to_array(),
+            c1: (m * dir.extend(0.0)).to_array(),
             width: camera.width() as f32,
             height: camera.height() as f32,
         }
@@ -285,89 +300,149 @@ impl ClipRay {
     /// `(c0, c1)` of `clip(t) = c0 + t c1`.
     #[inline]
     pub fn clip(&self) -> (Vec4, Vec4) {
-        (self.c0, self.c1)
-    }
-
-    /// The point at `t`.
-    #[inline]
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.origin + t * self.dir
-    }
-
-    /// The view depth of the point at `t`.
-    #[inline]
-    pub fn depth(&self, t: f32) -> f32 {
-        self.c0.w + t * self.c1.w
+        (Vec4::from_array(self.c0), Vec4::from_array(self.c1))
     }
 
     /// The pixel position and window depth of the point at `t` (as
     /// [`Camera::world_to_pixel`]), `None` on or behind the eye plane.
     #[inline]
     pub fn pixel(&self, t: f32) -> Option<Vec3> {
-        let clip = self.c0 + t * self.c1;
-        // `w ≤ 0` or NaN: on or behind the eye plane.
-        if clip.w.is_nan() || clip.w <= 0.0 {
-            return None;
-        }
-        let ndc = clip.truncate() * clip.w.recip();
-        Some(Vec3::new(
-            0.5 * (ndc.x + 1.0) * self.width,
-            0.5 * (1.0 - ndc.y) * self.height,
-            ndc.z,
-        ))
+        let (x, y, z, in_front) = self.pixel_lanes(t);
+        in_front.then(|| Vec3::new(x, y, z))
     }
 
     /// The texel under the point at `t` ([`texel_of`]).
     #[inline]
     pub fn texel(&self, t: f32) -> Option<UVec2> {
-        let q = self.pixel(t)?;
-        let inside = q.x >= 0.0
-            && q.x < self.width
-            && q.y >= 0.0
-            && q.y < self.height
-            && q.z >= 0.0
-            && q.z <= 1.0;
-        inside.then(|| UVec2::new(q.x as u32, q.y as u32))
+        let texel = self.texel_lanes(t);
+        texel
+            .inside
+            .then(|| UVec2::new(texel.x as u32, texel.y as u32))
     }
 
     /// The part `[t0, t1]`, `t ≥ 0`, inside the view frustum ([`frustum_segment`]).
     pub fn segment(&self) -> Option<(f32, f32)> {
-        let (c0, c1) = (self.c0, self.c1);
-        // Each constraint a0 + t a1 ≥ 0.
-        let constraints = [
-            (c0.w + c0.x, c1.w + c1.x),
-            (c0.w - c0.x, c1.w - c1.x),
-            (c0.w + c0.y, c1.w + c1.y),
-            (c0.w - c0.y, c1.w - c1.y),
-            (c0.z, c1.z),
-            (c0.w - c0.z, c1.w - c1.z),
-        ];
-        // The far end is bounded by the far plane when the ray heads away from the eye; rays
-        // heading back toward the camera leave through the near plane or a side, so t stays
-        // finite.
-        let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
-        for (a0, a1) in constraints {
-            if a1 == 0.0 {
-                // Parallel to this plane: inside everywhere or nowhere (NaN: nowhere).
-                if a0.is_nan() || a0 < 0.0 {
-                    return None;
-                }
-            } else {
-                let t = -a0 / a1;
-                if a1 > 0.0 {
-                    t0 = t0.max(t);
-                } else {
-                    t1 = t1.min(t);
-                }
-            }
-        }
-        (t0.is_finite() && t1.is_finite() && t0 < t1).then_some((t0, t1))
+        let (t0, t1, ok) = self.segment_lanes(true);
+        ok.then_some((t0, t1))
     }
 
     /// The ray parameter of seed `i` of `k` over `segment` ([`seed_parameter`]).
     #[inline]
-    pub fn seed(&self, (t0, t1): (f32, f32), i: u32, k: u32, spacing: SeedSpacing) -> f32 {
-        let s = (i as f32 + 0.5) / k as f32;
+    pub fn seed(&self, segment: (f32, f32), i: u32, k: u32, spacing: SeedSpacing) -> f32 {
+        self.seed_lanes(segment, i, k, spacing)
+    }
+}
+
+impl ClipRay<Vec3x8> {
+    /// Eight rays as lanes.
+    pub fn from_rays(rays: &[ClipRay; LANES]) -> Self {
+        let (mut c0, mut c1) = ([[0.0; LANES]; 4], [[0.0; LANES]; 4]);
+        for (i, ray) in rays.iter().enumerate() {
+            for k in 0..4 {
+                (c0[k][i], c1[k][i]) = (ray.c0[k], ray.c1[k]);
+            }
+        }
+        Self {
+            origin: Vec3x8::gather(|i| rays[i].origin),
+            dir: Vec3x8::gather(|i| rays[i].dir),
+            c0: c0.map(F32x8::new),
+            c1: c1.map(F32x8::new),
+            width: F32x8::splat(rays[0].width),
+            height: F32x8::splat(rays[0].height),
+        }
+    }
+}
+
+impl<V: Vector3> ClipRay<V> {
+    /// The point at `t`.
+    #[inline]
+    pub fn at(&self, t: V::Real) -> V {
+        self.origin + self.dir * t
+    }
+
+    /// The view depth of the point at `t`: `c0.w + t c1.w`.
+    #[inline]
+    pub fn depth(&self, t: V::Real) -> V::Real {
+        self.c0[3] + t * self.c1[3]
+    }
+
+    /// `(u_px, v_px, z/w)` of the point at `t` and the lanes in front of the eye (`w > 0`, false
+    /// for NaN): `(½(x/w + 1)·W, ½(1 − y/w)·H)`.
+    #[inline]
+    pub fn pixel_lanes(&self, t: V::Real) -> (V::Real, V::Real, V::Real, Msk<V>) {
+        let clip = |k: usize| self.c0[k] + t * self.c1[k];
+        let w = clip(3);
+        let rcp_w = V::Real::ONE / w;
+        let (ndc_x, ndc_y, ndc_z) = (clip(0) * rcp_w, clip(1) * rcp_w, clip(2) * rcp_w);
+        let (half, one) = (V::Real::splat(0.5), V::Real::ONE);
+        let u_px = half * (ndc_x + one) * self.width;
+        let v_px = half * (one - ndc_y) * self.height;
+        (u_px, v_px, ndc_z, w.gt(V::Real::ZERO))
+    }
+
+    /// The texel under the point at `t`: the floor of its pixel position, inside where `w > 0`,
+    /// `0 ≤ x < W`, `0 ≤ y < H` and `0 ≤ z ≤ 1` (NaN: outside).
+    #[inline]
+    pub fn texel_lanes(&self, t: V::Real) -> TexelLanes<V::Real> {
+        let (q_x, q_y, q_z, in_front) = self.pixel_lanes(t);
+        let zero = V::Real::ZERO;
+        let inside = in_front
+            & q_x.ge(zero)
+            & q_x.lt(self.width)
+            & q_y.ge(zero)
+            & q_y.lt(self.height)
+            & q_z.ge(zero)
+            & q_z.le(V::Real::ONE);
+        TexelLanes {
+            x: q_x.floor(),
+            y: q_y.floor(),
+            inside,
+        }
+    }
+
+    /// The clip-space Liang–Barsky clip of `t ≥ 0` against `−w ≤ x, y ≤ w` and `0 ≤ z ≤ w`,
+    /// each constraint `a0 + t a1 ≥ 0`: `(t0, t1)` and the lanes of `live` where the segment
+    /// exists (finite, `t0 < t1`).
+    #[inline]
+    pub fn segment_lanes(&self, live: Msk<V>) -> (V::Real, V::Real, Msk<V>) {
+        let (c0, c1) = (&self.c0, &self.c1);
+        let constraints = [
+            (c0[3] + c0[0], c1[3] + c1[0]),
+            (c0[3] - c0[0], c1[3] - c1[0]),
+            (c0[3] + c0[1], c1[3] + c1[1]),
+            (c0[3] - c0[1], c1[3] - c1[1]),
+            (c0[2], c1[2]),
+            (c0[3] - c0[2], c1[3] - c1[2]),
+        ];
+        // The far end is bounded by the far plane when the ray heads away from the eye; rays
+        // heading back toward the camera leave through the near plane or a side, so t stays
+        // finite.
+        let zero = V::Real::ZERO;
+        let (mut t0, mut t1) = (zero, V::Real::splat(f32::INFINITY));
+        let mut ok = live;
+        for (a0, a1) in constraints {
+            // Parallel to this plane: inside everywhere or nowhere (NaN: nowhere).
+            ok = ok & !(a1.eq(zero) & !a0.ge(zero));
+            let t = -a0 / a1;
+            t0 = V::Real::select(a1.gt(zero), t0.max(t), t0);
+            t1 = V::Real::select(a1.lt(zero), t1.min(t), t1);
+        }
+        let ok = ok & t0.is_finite() & t1.is_finite() & t0.lt(t1);
+        (t0, t1, ok)
+    }
+
+    /// The ray parameter of seed `i` of `k` over the segment `(t0, t1)`: at fraction
+    /// `s = (i + ½)/k` in `α` or, for [`SeedSpacing::Screen`], on screen
+    /// ([`screen_fraction_to_segment`]).
+    #[inline]
+    pub fn seed_lanes(
+        &self,
+        (t0, t1): (V::Real, V::Real),
+        i: u32,
+        k: u32,
+        spacing: SeedSpacing,
+    ) -> V::Real {
+        let s = V::Real::splat((i as f32 + 0.5) / k as f32);
         let lambda = match spacing {
             SeedSpacing::World => s,
             SeedSpacing::Screen => screen_fraction_to_segment(s, self.depth(t0), self.depth(t1)),
@@ -395,9 +470,9 @@ pub fn frustum_segment(camera: &Camera, origin: Vec3, dir: Vec3) -> Option<(f32,
 /// assert_eq!(screen_fraction_to_segment(0.5, 1.0, 3.0), 0.25);
 /// ```
 #[inline]
-pub fn screen_fraction_to_segment(s: f32, w0: f32, w1: f32) -> f32 {
-    let denom = (1.0 - s) * w1 + s * w0;
-    if denom > 0.0 { s * w0 / denom } else { s }
+pub fn screen_fraction_to_segment<R: Real>(s: R, w0: R, w1: R) -> R {
+    let denom = (R::ONE - s) * w1 + s * w0;
+    R::select(denom.gt(R::ZERO), s * w0 / denom, s)
 }
 
 /// The ray parameter of seed `i` of `k` over the segment `[t0, t1]` of `origin + t dir`

@@ -16,112 +16,19 @@ use crate::camera::Camera;
 use crate::lanes::{F32x8, LANES, Mask, Vec3x8, mask_lanes};
 use crate::nearby_geometry::{
     ClipRay, NearbyGeometryTexture, NearbyHit, NearbyLookup, NearbyResult, Plane, SeedSpacing,
-    nearest_plane_hit,
+    TexelLanes, nearest_plane_hit,
 };
+use crate::real::Vector3;
 
-/// Eight [`ClipRay`]s: `clip(t) = c0 + t c1` per lane, components `x, y, z, w`.
-struct ClipRayLanes {
-    c0: [F32x8; 4],
-    c1: [F32x8; 4],
-    width: F32x8,
-    height: F32x8,
-}
-
-/// The texels under eight points: coordinates (whole numbers) and the lanes inside the view.
-struct TexelLanes {
-    x: F32x8,
-    y: F32x8,
-    inside: Mask,
-}
+/// Eight rays in clip space.
+type ClipRayLanes = ClipRay<Vec3x8>;
 
 /// Eight lookups: the texel read and what it holds, in the lanes where it holds a surface.
 struct Found {
-    texel: TexelLanes,
+    texel: TexelLanes<F32x8>,
     p_ws: Vec3x8,
     depth: F32x8,
     found: Mask,
-}
-
-impl ClipRayLanes {
-    fn new(camera: &Camera, rays: &[ClipRay; LANES]) -> Self {
-        let (mut c0, mut c1) = ([[0.0; LANES]; 4], [[0.0; LANES]; 4]);
-        for (i, ray) in rays.iter().enumerate() {
-            let (a, b) = ray.clip();
-            for k in 0..4 {
-                (c0[k][i], c1[k][i]) = (a[k], b[k]);
-            }
-        }
-        Self {
-            c0: c0.map(F32x8::new),
-            c1: c1.map(F32x8::new),
-            width: F32x8::splat(camera.width() as f32),
-            height: F32x8::splat(camera.height() as f32),
-        }
-    }
-
-    /// [`ClipRay::depth`]: `c0.w + t c1.w`.
-    #[inline]
-    fn depth(&self, t: F32x8) -> F32x8 {
-        self.c0[3] + t * self.c1[3]
-    }
-
-    /// [`ClipRay::segment`] on lanes: the clip-space Liang–Barsky clip of `t ≥ 0` against
-    /// `−w ≤ x, y ≤ w` and `0 ≤ z ≤ w`, each constraint `a0 + t a1 ≥ 0` in the scalar order,
-    /// `max`/`min` with the scalar's NaN rule (`wide`'s `max`/`min` return the other operand
-    /// for a NaN, as `f32::max`/`min`). Returns `(t0, t1)` and the lanes of `live` where the
-    /// segment exists.
-    #[inline]
-    fn segment(&self, live: Mask) -> (F32x8, F32x8, Mask) {
-        let (c0, c1) = (&self.c0, &self.c1);
-        let constraints = [
-            (c0[3] + c0[0], c1[3] + c1[0]),
-            (c0[3] - c0[0], c1[3] - c1[0]),
-            (c0[3] + c0[1], c1[3] + c1[1]),
-            (c0[3] - c0[1], c1[3] - c1[1]),
-            (c0[2], c1[2]),
-            (c0[3] - c0[2], c1[3] - c1[2]),
-        ];
-        let zero = F32x8::ZERO;
-        let (mut t0, mut t1) = (zero, F32x8::splat(f32::INFINITY));
-        let mut ok = live;
-        for (a0, a1) in constraints {
-            // Parallel to this plane: inside everywhere or nowhere (NaN: nowhere).
-            ok &= !(a1.simd_eq(zero) & !a0.simd_ge(zero));
-            let t = -a0 / a1;
-            t0 = a1.simd_gt(zero).select(t0.max(t), t0);
-            t1 = a1.simd_lt(zero).select(t1.min(t), t1);
-        }
-        ok &= t0.is_finite() & t1.is_finite() & t0.simd_lt(t1);
-        (t0, t1, ok)
-    }
-
-    /// [`ClipRay::texel`]: the pixel position `(½(x/w + 1)·W, ½(1 − y/w)·H)` and window depth
-    /// `z/w`, inside where `w > 0`, `0 ≤ x < W`, `0 ≤ y < H` and `0 ≤ z ≤ 1`; the texel is the
-    /// floor (the scalar code's `as u32` of a non-negative number).
-    #[inline]
-    fn texel(&self, t: F32x8) -> TexelLanes {
-        let clip = |k: usize| self.c0[k] + t * self.c1[k];
-        let w = clip(3);
-        let rcp_w = F32x8::ONE / w;
-        let (ndc_x, ndc_y, ndc_z) = (clip(0) * rcp_w, clip(1) * rcp_w, clip(2) * rcp_w);
-        let half = F32x8::splat(0.5);
-        let q_x = (half * (ndc_x + F32x8::ONE)) * self.width;
-        let q_y = (half * (F32x8::ONE - ndc_y)) * self.height;
-        let zero = F32x8::ZERO;
-        // NaN compares false: `w` NaN or `≤ 0` is outside, as in the scalar code.
-        let inside = w.simd_gt(zero)
-            & q_x.simd_ge(zero)
-            & q_x.simd_lt(self.width)
-            & q_y.simd_ge(zero)
-            & q_y.simd_lt(self.height)
-            & ndc_z.simd_ge(zero)
-            & ndc_z.simd_le(F32x8::ONE);
-        TexelLanes {
-            x: q_x.floor(),
-            y: q_y.floor(),
-            inside,
-        }
-    }
 }
 
 /// The texture read at the texels under `rays` at `t`, in the lanes of `live`. (Always
@@ -134,7 +41,7 @@ fn lookup<T: NearbyGeometryTexture + ?Sized>(
     t: F32x8,
     live: Mask,
 ) -> Found {
-    let texel = rays.texel(t);
+    let texel = rays.texel_lanes(t);
     let read = live & texel.inside;
     let s = texture.surfaces_x8(texel.x.trunc_int(), texel.y.trunc_int(), read);
     Found {
@@ -147,7 +54,7 @@ fn lookup<T: NearbyGeometryTexture + ?Sized>(
 
 /// Per lane, a hit at `texel` with its surface `p_geom`.
 #[inline]
-fn hit(texel: &TexelLanes, p_geom: &Vec3x8, i: usize) -> NearbyHit {
+fn hit(texel: &TexelLanes<F32x8>, p_geom: &Vec3x8, i: usize) -> NearbyHit {
     NearbyHit {
         texel: UVec2::new(texel.x.to_array()[i] as u32, texel.y.to_array()[i] as u32),
         p_geom: p_geom.lane(i),
@@ -170,7 +77,7 @@ pub fn find_nearby_x8<T: NearbyGeometryTexture + ?Sized>(
     let (p2_lanes, t2_lanes) = (p2.to_lanes(), t2.to_lanes());
     let scalar_rays: [ClipRay; LANES] =
         core::array::from_fn(|i| ClipRay::new(camera, p2_lanes[i], t2_lanes[i]));
-    let rays = ClipRayLanes::new(camera, &scalar_rays);
+    let rays = ClipRayLanes::from_rays(&scalar_rays);
     let active_lanes = mask_lanes(active);
     // Per lane the ray parameter the lookup starts from (or `None`: a miss).
     let plane_starts = || -> [Option<f32>; LANES] {
@@ -227,23 +134,12 @@ fn best_seed<T: NearbyGeometryTexture + ?Sized>(
     k: u32,
     spacing: SeedSpacing,
 ) -> (F32x8, Mask) {
-    let (starts_t, ends_t, live) = rays.segment(active);
-    let (w0, w1) = (rays.depth(starts_t), rays.depth(ends_t));
+    let (starts_t, ends_t, live) = rays.segment_lanes(active);
     let mut best_error = F32x8::ZERO;
     let mut best_t = F32x8::ZERO;
     let mut has_best = F32x8::ZERO;
     for i in 0..k {
-        // [`ClipRay::seed`] and [`crate::nearby_geometry::screen_fraction_to_segment`].
-        let s_scalar = (i as f32 + 0.5) / k as f32;
-        let s = F32x8::splat(s_scalar);
-        let lambda = match spacing {
-            SeedSpacing::World => s,
-            SeedSpacing::Screen => {
-                let denom = (F32x8::splat(1.0 - s_scalar)) * w1 + s * w0;
-                denom.simd_gt(F32x8::ZERO).select(s * w0 / denom, s)
-            }
-        };
-        let t = starts_t + lambda * (ends_t - starts_t);
+        let t = rays.seed_lanes((starts_t, ends_t), i, k, spacing);
         let read = lookup(rays, texture, t, live);
         let error = (rays.depth(t) - read.depth).abs();
         let take = read.found & (!has_best | error.simd_lt(best_error));
@@ -500,12 +396,12 @@ mod tests {
                 let dirs: [Vec3; LANES] = core::array::from_fn(|i| spiral(group * LANES + i, 800));
                 let scalar: [ClipRay; LANES] =
                     core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
-                let lanes = ClipRayLanes::new(&cam, &scalar);
+                let lanes = ClipRayLanes::from_rays(&scalar);
                 let segment = scalar.map(|r| r.segment().unwrap_or((0.0, 1.0)));
                 for f in [-1.0, 0.0, 0.25, 0.5, 0.999, 1.0, 1.5, 100.0] {
                     let t: [f32; LANES] =
                         core::array::from_fn(|i| segment[i].0 + f * (segment[i].1 - segment[i].0));
-                    let texels = lanes.texel(F32x8::new(t));
+                    let texels = lanes.texel_lanes(F32x8::new(t));
                     let (x, y) = (texels.x.to_array(), texels.y.to_array());
                     let lane_inside = mask_lanes(texels.inside);
                     for i in 0..LANES {
@@ -565,8 +461,8 @@ mod tests {
                     });
                     let scalar: [ClipRay; LANES] =
                         core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
-                    let (t0, t1, ok) = ClipRayLanes::new(&cam, &scalar)
-                        .segment(F32x8::splat(f32::from_bits(u32::MAX)));
+                    let (t0, t1, ok) = ClipRayLanes::from_rays(&scalar)
+                        .segment_lanes(F32x8::splat(f32::from_bits(u32::MAX)));
                     let (t0, t1, ok) = (t0.to_array(), t1.to_array(), mask_lanes(ok));
                     for i in 0..LANES {
                         let lanes = ok[i].then_some((t0[i], t1[i]));

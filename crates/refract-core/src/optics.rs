@@ -4,6 +4,8 @@
 
 use glam::Vec3;
 
+use crate::real::{LaneMask, Msk, Real, Vector3};
+
 /// Snell refraction (Wyman 2005a §2: `n_i sin θi = n_t sin θt`), exactly as WGSL's `refract`:
 ///
 /// `k = 1 − η²(1 − (N·I)²)`; if `k < 0` (total internal reflection) the result is the zero
@@ -31,15 +33,12 @@ use glam::Vec3;
 /// assert_eq!(refract(grazing, Vec3::Y, 1.5), Vec3::ZERO);
 /// ```
 #[inline]
-pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
+pub fn refract<V: Vector3>(incident: V, normal: V, eta: V::Real) -> V {
     let n_dot_i = normal.dot(incident);
     let eta2 = eta * eta;
-    let k = (1.0 - eta2) + eta2 * n_dot_i * n_dot_i;
-    if k < 0.0 {
-        Vec3::ZERO
-    } else {
-        eta * incident - (eta * n_dot_i + crate::math::sqrt(k)) * normal
-    }
+    let k = (V::Real::ONE - eta2) + eta2 * n_dot_i * n_dot_i;
+    let t = incident * eta - normal * (eta * n_dot_i + k.sqrt());
+    V::select(k.lt(V::Real::ZERO), V::constant(Vec3::ZERO), t)
 }
 
 /// True when [`refract`] reports total internal reflection: `η² (1 − (N·I)²) > 1`, i.e.
@@ -55,10 +54,10 @@ pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Vec3 {
 /// assert!(!is_total_internal_reflection(at_60_degrees, Vec3::Y, 1.0 / 1.5)); // air to glass
 /// ```
 #[inline]
-pub fn is_total_internal_reflection(incident: Vec3, normal: Vec3, eta: f32) -> bool {
+pub fn is_total_internal_reflection<V: Vector3>(incident: V, normal: V, eta: V::Real) -> Msk<V> {
     let n_dot_i = normal.dot(incident);
     let eta2 = eta * eta;
-    (1.0 - eta2) + eta2 * n_dot_i * n_dot_i < 0.0
+    ((V::Real::ONE - eta2) + eta2 * n_dot_i * n_dot_i).lt(V::Real::ZERO)
 }
 
 /// Mirror reflection, as WGSL's `reflect`: `R = I − 2 (N·I) N`.
@@ -69,8 +68,8 @@ pub fn is_total_internal_reflection(incident: Vec3, normal: Vec3, eta: f32) -> b
 /// assert_eq!(r, Vec3::new(1.0, 1.0, 0.0));
 /// ```
 #[inline]
-pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
-    incident - 2.0 * normal.dot(incident) * normal
+pub fn reflect<V: Vector3>(incident: V, normal: V) -> V {
+    incident - normal * (V::Real::splat(2.0) * normal.dot(incident))
 }
 
 /// The critical angle `θc = asin(1/η)` beyond which light going from the denser medium
@@ -116,14 +115,16 @@ pub const FACE_FORWARD_EPSILON: f32 = 1e-4;
 /// assert!(turned.dot(incident) < 0.0 && (turned.length() - 1.0).abs() < 1e-6);
 /// ```
 #[inline]
-pub fn face_forward_shading_normal(normal: Vec3, incident: Vec3) -> Vec3 {
+pub fn face_forward_shading_normal<V: Vector3>(normal: V, incident: V) -> V {
     let n_dot_i = normal.dot(incident);
-    if n_dot_i < 0.0 {
-        return normal;
+    let facing = n_dot_i.lt(V::Real::ZERO);
+    if facing.all() {
+        return normal; // the common case: no lane needs turning
     }
-    (normal - (n_dot_i + FACE_FORWARD_EPSILON) * incident)
-        .try_normalize()
-        .unwrap_or(-incident)
+    let (turned, ok) =
+        (normal - incident * (n_dot_i + V::Real::splat(FACE_FORWARD_EPSILON))).try_normalize();
+    let turned = V::select(ok, turned, -incident);
+    V::select(facing, normal, turned)
 }
 
 #[cfg(test)]

@@ -5,8 +5,9 @@
 
 use glam::Vec3;
 
-use crate::environment::Atan2;
-use crate::lanes::{F32x8, Vec3x8, atan2 as atan2_x8};
+use crate::environment::{Atan2, Polynomial};
+use crate::lanes::{F32x8, Vec3x8};
+use crate::real::{LaneMask, Real, Vector3};
 
 /// The procedural sky's sun direction, `normalize(0.4, 0.6, −0.7)`.
 const SUN: Vec3 = Vec3::new(0.398_014_87, 0.597_022_3, -0.696_526_05);
@@ -42,37 +43,15 @@ const STRIPE_HUES: [Vec3; 4] = [
 /// ```
 pub fn procedural_radiance<A: Atan2>(dir: Vec3) -> Vec3 {
     if dir.y >= 0.0 {
-        let mut sky = HORIZON.lerp(ZENITH, crate::math::sqrt(dir.y));
-        // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
-        // wraps it (the same number as `rem_euclid(12)`, without a call to fmodf).
-        let signed = A::atan2(dir.x, -dir.z) * (6.0 / core::f32::consts::PI);
-        let stripe = if signed < 0.0 { signed + 12.0 } else { signed };
-        let nearest = crate::math::floor(stripe + 0.5); // stripe ≥ 0: rounds halves up, as `round` does
-        // Meridians converge at the zenith: stop them below it.
-        if (stripe - nearest).abs() < 0.06 && dir.y < 0.85 {
-            sky = STRIPE_HUES[(nearest as usize) % 4];
-        }
-        if dir.dot(SUN) > 0.995 {
-            sky = SUN_RADIANCE;
-        }
-        sky
+        sky::<Vec3, A>(dir)
     } else {
-        let p = dir * (-dir.y).recip(); // hit on the plane y = −1
-        // Parity of an integer-valued float, a − 2⌊a/2⌋ (exact; equal to `rem_euclid(2)`).
-        let cells = crate::math::floor(p.x * 2.0) + crate::math::floor(p.z * 2.0);
-        let check = cells - 2.0 * crate::math::floor(cells * 0.5);
-        let tile = if check < 1.0 {
-            Vec3::splat(0.9)
-        } else {
-            Vec3::splat(0.05)
-        };
-        let fade = (-dir.y * 4.0).min(1.0); // grazing rays see the horizon
-        HORIZON.lerp(tile, fade)
+        ground(dir)
     }
 }
 
-/// [`procedural_radiance`] with the polynomial `atan2` for eight directions at once: both branches evaluated and selected
-/// per lane, with the same operations, so each lane has the scalar function's bits.
+/// [`procedural_radiance`] with the polynomial `atan2` for eight directions at once: the halves
+/// some lane needs evaluated by the same leaves and selected per lane, so each lane has the
+/// scalar function's bits.
 ///
 /// # Example
 ///
@@ -92,57 +71,47 @@ pub fn procedural_radiance_x8(dir: Vec3x8) -> Vec3x8 {
     // evaluated.
     let up = dir.y.simd_ge(F32x8::ZERO);
     match (up.any(), up.all()) {
-        (true, true) => sky_x8(dir),
-        (false, _) => ground_x8(dir),
-        (true, false) => Vec3x8::select(up, sky_x8(dir), ground_x8(dir)),
+        (true, true) => sky::<_, Polynomial>(dir),
+        (false, _) => ground(dir),
+        (true, false) => Vec3x8::select(up, sky::<_, Polynomial>(dir), ground(dir)),
     }
 }
 
-fn lerp_x8(a: Vec3x8, b: Vec3x8, s: F32x8) -> Vec3x8 {
-    a * (F32x8::ONE - s) + b * s
-}
-
-/// The sky half of [`procedural_radiance_x8`] (`d.y ≥ 0`).
+/// The sky half (`d.y ≥ 0`): the gradient, the meridian stripes, the sun.
 #[inline]
-fn sky_x8(dir: Vec3x8) -> Vec3x8 {
-    let splat = F32x8::splat;
-    let mut sky = lerp_x8(Vec3x8::splat(HORIZON), Vec3x8::splat(ZENITH), dir.y.sqrt());
-    let signed = atan2_x8(dir.x, -dir.z) * splat(6.0 / core::f32::consts::PI);
-    let stripe = signed
-        .simd_lt(F32x8::ZERO)
-        .select(signed + splat(12.0), signed);
-    let nearest = (stripe + splat(0.5)).floor();
-    let on_stripe = (stripe - nearest).abs().simd_lt(splat(0.06)) & dir.y.simd_lt(splat(0.85));
+fn sky<V: Vector3, A: Atan2<V::Real>>(dir: V) -> V {
+    let splat = V::Real::splat;
+    let mut sky = V::constant(HORIZON).lerp(V::constant(ZENITH), dir.y().sqrt());
+    // Azimuth in stripe units (30°) in [0, 12): atan2 gives (−6, 6], so one conditional add
+    // wraps it (the same number as `rem_euclid(12)`, without a call to fmodf).
+    let signed = A::atan2(dir.x(), -dir.z()) * splat(6.0 / core::f32::consts::PI);
+    let stripe = V::Real::select(signed.lt(V::Real::ZERO), signed + splat(12.0), signed);
+    let nearest = (stripe + splat(0.5)).floor(); // stripe ≥ 0: rounds halves up, as `round` does
+    // Meridians converge at the zenith: stop them below it.
+    let on_stripe = (stripe - nearest).abs().lt(splat(0.06)) & dir.y().lt(splat(0.85));
     if on_stripe.any() {
         // `nearest as usize % 4` for the integers 0..=12, exactly.
         let hue = nearest - splat(4.0) * (nearest * splat(0.25)).floor();
         for (k, colour) in STRIPE_HUES.iter().enumerate() {
-            let this = on_stripe & hue.simd_eq(splat(k as f32));
-            sky = Vec3x8::select(this, Vec3x8::splat(*colour), sky);
+            let this = on_stripe & hue.eq(splat(k as f32));
+            sky = V::select(this, V::constant(*colour), sky);
         }
     }
-    Vec3x8::select(
-        dir.dot(Vec3x8::splat(SUN)).simd_gt(splat(0.995)),
-        Vec3x8::splat(SUN_RADIANCE),
-        sky,
-    )
+    let sun = dir.dot(V::constant(SUN)).gt(splat(0.995));
+    V::select(sun, V::constant(SUN_RADIANCE), sky)
 }
 
-/// The ground half of [`procedural_radiance_x8`] (`d.y < 0`).
+/// The ground half (`d.y < 0`): the checkerboard on `y = −1`, faded into the horizon.
 #[inline]
-fn ground_x8(dir: Vec3x8) -> Vec3x8 {
-    let splat = F32x8::splat;
-    let p = dir * (F32x8::ONE / -dir.y); // not `recip`: wide's is the 12-bit estimate
-    let cells = (p.x * splat(2.0)).floor() + (p.z * splat(2.0)).floor();
+fn ground<V: Vector3>(dir: V) -> V {
+    let splat = V::Real::splat;
+    let p = dir * (V::Real::ONE / -dir.y()); // hit on the plane y = −1
+    // Parity of an integer-valued float, a − 2⌊a/2⌋ (exact; equal to `rem_euclid(2)`).
+    let cells = (p.x() * splat(2.0)).floor() + (p.z() * splat(2.0)).floor();
     let check = cells - splat(2.0) * (cells * splat(0.5)).floor();
-    let tile = check.simd_lt(F32x8::ONE).select(splat(0.9), splat(0.05));
-    let fade = (-dir.y * splat(4.0)).min(F32x8::ONE);
-    let tile = Vec3x8 {
-        x: tile,
-        y: tile,
-        z: tile,
-    };
-    lerp_x8(Vec3x8::splat(HORIZON), tile, fade)
+    let tile = V::Real::select(check.lt(V::Real::ONE), splat(0.9), splat(0.05));
+    let fade = (-dir.y() * splat(4.0)).min(V::Real::ONE); // grazing rays see the horizon
+    V::constant(HORIZON).lerp(V::new(tile, tile, tile), fade)
 }
 
 #[cfg(test)]

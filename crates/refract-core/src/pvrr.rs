@@ -15,7 +15,8 @@
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
 use crate::camera::{Camera, CameraDesc, CameraError};
-use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, lt};
+use crate::lanes::{Mask, Vec2x8, Vec3x8};
+use crate::real::{Real, Vector3};
 
 /// Where a vertex's exact ray ends: a scene point, or a direction to the environment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -387,16 +388,29 @@ pub trait MapTexels {
 /// Bilinear lookup of `map` at pixel position `st` (texel centres at `i + 0.5`), clamped to the
 /// edge texels: the texture filtering of the paper's second pass.
 pub fn sample_bilinear<M: MapTexels + ?Sized>(map: &M, st: Vec2) -> Vec3 {
+    sample_bilinear_at(map, st.x, st.y)
+}
+
+/// [`sample_bilinear`] at one position `(s, t)` or eight. The footprints (clamp, floor,
+/// fractions) are computed on lanes; each lane's four texels are weighed as they are loaded
+/// (gathering them into lanes first cost a transpose through memory).
+#[inline]
+pub fn sample_bilinear_at<M: MapTexels + ?Sized, V: Vector3>(map: &M, s: V::Real, t: V::Real) -> V {
     let (w, h) = map.size();
-    let x = (st.x - 0.5).clamp(0.0, (w - 1) as f32);
-    let y = (st.y - 0.5).clamp(0.0, (h - 1) as f32);
-    let (x0, y0) = (crate::math::floor(x), crate::math::floor(y));
+    let clamp =
+        |v: V::Real, size: u32| Real::clamp(v, V::Real::ZERO, V::Real::splat((size - 1) as f32));
+    let x = clamp(s - V::Real::splat(0.5), w);
+    let y = clamp(t - V::Real::splat(0.5), h);
+    let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let (x0, y0) = (x0 as u32, y0 as u32);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let top = map.texel(x0, y0) * (1.0 - fx) + map.texel(x1, y0) * fx;
-    let bottom = map.texel(x0, y1) * (1.0 - fx) + map.texel(x1, y1) * fx;
-    top * (1.0 - fy) + bottom * fy
+    V::gather(|i| {
+        let (x0, y0) = (x0.lane(i) as u32, y0.lane(i) as u32);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (fx.lane(i), fy.lane(i));
+        let top = map.texel(x0, y0) * (1.0 - fx) + map.texel(x1, y0) * fx;
+        let bottom = map.texel(x0, y1) * (1.0 - fx) + map.texel(x1, y1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    })
 }
 
 /// The second pass at one pixel: channel `k` of the map at `st[k]` (one set of coordinates per
@@ -415,41 +429,12 @@ pub fn lookup<M: MapTexels + ?Sized>(map: &M, st: [Vec2; 3], tint: Vec3) -> Vec3
 /// A mirror's reflectance at one pixel: Schlick's approximation per channel from the
 /// conductor's normal-incidence reflectance `f0` (the distance-map method's choice too):
 /// `F = F0 + (1 − F0)(1 − |N·V|)⁵`; a perfect mirror (`F0 = 1`) gives 1.
-pub fn mirror_tint(f0: Vec3, n: Vec3, v: Vec3) -> Vec3 {
-    let m = 1.0 - n.dot(v).abs().min(1.0);
-    let m5 = m * m * m * m * m;
-    f0 + (Vec3::ONE - f0) * m5
-}
-
-/// [`sample_bilinear`] at eight positions: lane `i` is `sample_bilinear(map, st_i)`, bit for
-/// bit. The footprints (clamp, floor, fractions) are placed on lanes; each lane's four texels
-/// are weighed as they are loaded, with the scalar function's operations (gathering them into
-/// lanes first cost a transpose through memory: performance.md, session 18).
+/// One pixel (glam types) or eight lanes.
 #[inline]
-pub fn sample_bilinear_x8<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) -> Vec3x8 {
-    let (w, h) = map.size();
-    // f32::clamp(0, hi): a NaN stays NaN.
-    let clamp = |v: F32x8, hi: u32| {
-        let v = lt(v, F32x8::ZERO).select(F32x8::ZERO, v);
-        let hi = F32x8::splat((hi - 1) as f32);
-        v.simd_gt(hi).select(hi, v)
-    };
-    let x = clamp(st.x - F32x8::splat(0.5), w);
-    let y = clamp(st.y - F32x8::splat(0.5), h);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let (x0, y0) = (x0.to_array(), y0.to_array());
-    let (fx, fy) = (fx.to_array(), fy.to_array());
-    let mut out = [Vec3::ZERO; LANES];
-    for i in 0..LANES {
-        let (x0, y0) = (x0[i] as u32, y0[i] as u32);
-        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-        let (fx, fy) = (fx[i], fy[i]);
-        let top = map.texel(x0, y0) * (1.0 - fx) + map.texel(x1, y0) * fx;
-        let bottom = map.texel(x0, y1) * (1.0 - fx) + map.texel(x1, y1) * fx;
-        out[i] = top * (1.0 - fy) + bottom * fy;
-    }
-    Vec3x8::from_lanes(&out)
+pub fn mirror_tint<V: Vector3>(f0: Vec3, n: V, v: V) -> V {
+    let m = V::Real::ONE - n.dot(v).abs().min(V::Real::ONE);
+    let m5 = m * m * m * m * m;
+    V::constant(f0) + V::constant(Vec3::ONE - f0) * m5
 }
 
 /// [`lookup`] at eight pixels: lane `i` is `lookup(map, [st[0]_i, st[1]_i, st[2]_i], tint_i)`,
@@ -468,12 +453,12 @@ pub fn lookup_x8<M: MapTexels + ?Sized>(map: &M, st: [Vec2x8; 3], tint: Vec3x8) 
         prefetch_ahead(map, st[1]);
         prefetch_ahead(map, st[2]);
     }
-    let r = sample_bilinear_x8(map, st[0]);
+    let r: Vec3x8 = sample_bilinear_at(map, st[0].x, st[0].y);
     if shared.all() {
         return r * tint;
     }
-    let g = sample_bilinear_x8(map, st[1]);
-    let b = sample_bilinear_x8(map, st[2]);
+    let g: Vec3x8 = sample_bilinear_at(map, st[1].x, st[1].y);
+    let b: Vec3x8 = sample_bilinear_at(map, st[2].x, st[2].y);
     let split = Vec3x8 {
         x: r.x,
         y: g.y,
@@ -498,16 +483,6 @@ fn prefetch_ahead<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) {
             map.prefetch(px, (py + 1).min(h - 1));
         }
     }
-}
-
-/// [`mirror_tint`] at eight pixels, bit for bit.
-#[inline]
-pub fn mirror_tint_x8(f0: Vec3, n: Vec3x8, v: Vec3x8) -> Vec3x8 {
-    let cos = n.dot(v).abs();
-    // f32::min(cos, 1): a NaN gives 1.
-    let m = F32x8::ONE - lt(cos, F32x8::ONE).select(cos, F32x8::ONE);
-    let m5 = m * m * m * m * m;
-    Vec3x8::splat(f0) + Vec3x8::splat(Vec3::ONE - f0) * m5
 }
 
 /// One vertex of a reflector as both backends draw it: its map position per channel (R, G, B)
@@ -547,6 +522,7 @@ impl PvrrVertex {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lanes::LANES;
 
     fn eye_camera(size: u32) -> Camera {
         Camera::new(CameraDesc {
@@ -842,10 +818,11 @@ mod tests {
                 Vec3::new(next() - 0.5, next() - 0.5, -next()).normalize_or_zero()
             });
             let f0 = Vec3::new(0.9, 0.6 * next(), 0.3);
-            let tint = mirror_tint_x8(f0, Vec3x8::from_lanes(&n), Vec3x8::from_lanes(&v));
+            let tint = mirror_tint(f0, Vec3x8::from_lanes(&n), Vec3x8::from_lanes(&v));
             let channels = [0, 1, 2].map(|c| Vec2x8::from_lanes(&st.map(|s| s[c])));
             let looked_up = lookup_x8(&map, channels, tint).to_lanes();
-            let sampled = sample_bilinear_x8(&map, channels[1]).to_lanes();
+            let sampled: Vec3x8 = sample_bilinear_at(&map, channels[1].x, channels[1].y);
+            let sampled = sampled.to_lanes();
             let tint = tint.to_lanes();
             for i in 0..LANES {
                 let scalar_tint = mirror_tint(f0, n[i], v[i]);

@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use crate::arctangent::atan2;
+use crate::real::{LaneMask, Msk, Real, Vector3};
 
 /// `|‖v‖² − 1|` below which [`robust_normalize`] returns `v` itself: ten `f32` ulps, the
 /// rounding of a normalisation or of Snell's formula on unit vectors.
@@ -16,7 +17,7 @@ pub const UNIT_TOLERANCE: f32 = 10.0 * f32::EPSILON;
 /// and one division, the per-pixel case). Unlike `Vec3::try_normalize`, vectors whose squared
 /// length overflows or underflows `f32` (components above ~1.8e19 or below ~1e-15) are still
 /// normalised: `v` is first scaled by its largest absolute component,
-/// `v̂ = (v / max|vᵢ|) / ‖v / max|vᵢ|‖`.
+/// `v̂ = (v / max|vᵢ|) / ‖v / max|vᵢ|‖`. The scalar face of [`robust_normalize_masked`].
 ///
 /// ```
 /// use glam::Vec3;
@@ -29,18 +30,56 @@ pub const UNIT_TOLERANCE: f32 = 10.0 * f32::EPSILON;
 /// ```
 #[inline]
 pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
-    let length_squared = v.length_squared();
-    if (length_squared - 1.0).abs() <= UNIT_TOLERANCE {
-        return Some(v);
-    }
-    // Also false for NaN. Below 1e-30 the squares of small components would lose digits.
-    if (1e-30..=f32::MAX).contains(&length_squared) {
-        return Some(v * crate::math::sqrt(length_squared).recip());
-    }
-    robust_normalize_scaled(v)
+    let (n, ok) = robust_normalize_masked(v);
+    ok.then_some(n)
 }
 
+/// [`robust_normalize`] for one pixel or eight: the normalised vector and the lanes where it
+/// exists (the others hold garbage). The two common paths run on lanes; a lane whose squared
+/// length is outside `[1e-30, f32::MAX]` takes the scaled path alone.
+#[inline]
+pub fn robust_normalize_masked<V: Vector3>(v: V) -> (V, Msk<V>) {
+    let (n, common) = normalize_common(v);
+    if common.all() {
+        return (n, common);
+    }
+    rare_lanes(v, n, common)
+}
+
+/// [`robust_normalize`]'s two common paths, `v` itself when unit to within [`UNIT_TOLERANCE`]
+/// and `v · (1/√(v·v))` when `v·v ∈ [1e-30, f32::MAX]`, and the lanes they cover.
+#[inline]
+fn normalize_common<V: Vector3>(v: V) -> (V, Msk<V>) {
+    let length_squared = v.dot(v);
+    let unit = (length_squared - V::Real::ONE)
+        .abs()
+        .le(V::Real::splat(UNIT_TOLERANCE));
+    // Most vectors are unit already (normals from the rasteriser, Snell's `T`): the square
+    // root and division are only spent when some lane needs them.
+    if unit.all() {
+        return (v, unit);
+    }
+    // Also false for NaN. Below 1e-30 the squares of small components would lose digits.
+    let in_range =
+        V::Real::splat(1e-30).le(length_squared) & length_squared.le(V::Real::splat(f32::MAX));
+    let scaled = v * (V::Real::ONE / length_squared.sqrt());
+    (V::select(unit, v, scaled), unit | in_range)
+}
+
+/// The lanes [`normalize_common`] did not cover, one by one through the scaled path.
 #[cold]
+#[inline(never)]
+fn rare_lanes<V: Vector3>(v: V, mut n: V, mut ok: Msk<V>) -> (V, Msk<V>) {
+    let common = ok;
+    for (i, covered) in common.lanes().enumerate() {
+        if !covered && let Some(lane) = robust_normalize_scaled(v.lane(i)) {
+            n.set_lane(i, lane);
+            ok.set(i, true);
+        }
+    }
+    (n, ok)
+}
+
 fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {
     let scale = v.abs().max_element();
     if !(scale > 0.0 && scale.is_finite()) {
@@ -61,7 +100,7 @@ fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {
 /// assert!((a - 1e-4).abs() < 1e-9); // small angles keep their digits (acos would not)
 /// ```
 #[inline]
-pub fn angle_between(a: Vec3, b: Vec3) -> f32 {
+pub fn angle_between<V: Vector3>(a: V, b: V) -> V::Real {
     atan2(a.cross(b).length(), a.dot(b))
 }
 

@@ -5,6 +5,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{BackFaceLanes, BackFaceSample, BackFaceSampler};
 use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8};
+use refract_core::real::Vector3;
 use refract_core::{BackSurface, Camera};
 use refract_scene::Refractor;
 

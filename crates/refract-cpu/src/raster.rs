@@ -26,6 +26,7 @@ use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::lanes::{F32x8, LANES, Mask, Vec3x8, mask_from_lanes};
+use refract_core::real::Vector3;
 use refract_geometry::Mesh;
 
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).

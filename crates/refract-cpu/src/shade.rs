@@ -17,6 +17,7 @@ use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, one_interface_lanes, two_interface_lanes};
 use refract_core::lanes::{F32x8, LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::view_depth;
+use refract_core::real::Vector3;
 use refract_scene::Environment;
 
 use crate::buffers::BackFaces;

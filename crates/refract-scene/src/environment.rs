@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use refract_core::environment::{Atan2, Exact, Polynomial, sample_latlong_bilinear};
-use refract_core::lanes::Vec3x8;
+use refract_core::lanes::{F32x8, Vec3x8};
 use refract_core::procedural_sky::{procedural_radiance, procedural_radiance_x8};
 
 /// A lat-long (equirectangular) map of linear RGB radiance, row 0 at the zenith.
@@ -49,7 +49,8 @@ impl Environment {
     pub fn radiance_with<A: Atan2>(&self, dir: Vec3) -> Vec3 {
         match self {
             Self::LatLong { map, intensity } => {
-                *intensity * sample_latlong_bilinear::<A>(&map.texels, map.width, map.height, dir)
+                *intensity
+                    * sample_latlong_bilinear::<A, _>(&map.texels, map.width, map.height, dir)
             }
             Self::Constant(c) => *c,
             Self::Procedural => procedural_radiance::<A>(dir),
@@ -75,13 +76,10 @@ impl Environment {
         match self {
             Self::Procedural => procedural_radiance_x8(dir),
             Self::Constant(c) => Vec3x8::splat(*c),
-            Self::LatLong { .. } => {
-                // A loop, not `array::map`: its closure was once left as a call per lane.
-                let mut radiance = dir.to_lanes();
-                for r in &mut radiance {
-                    *r = self.radiance(*r);
-                }
-                Vec3x8::from_lanes(&radiance)
+            Self::LatLong { map, intensity } => {
+                let texels = &map.texels;
+                sample_latlong_bilinear::<Polynomial, _>(texels, map.width, map.height, dir)
+                    * F32x8::splat(*intensity)
             }
         }
     }

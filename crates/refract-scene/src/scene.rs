@@ -6,8 +6,10 @@ use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
 use refract_core::distance_map::TexelMaterial;
 pub use refract_core::fresnel::Conductor;
-use refract_core::lanes::{F32x8, I32x8, Vec2x8, Vec3x8};
+use refract_core::lanes::{Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{MAX_PLANES, Plane};
+use refract_core::real::{Real, Vector3};
+pub use refract_core::shading::{Albedo, COLOR_CHART, DirectionalLight};
 use refract_geometry::{Mesh, MeshBvh, NormalDistances, normal_distances};
 
 use crate::environment::Environment;
@@ -195,162 +197,6 @@ pub fn check_ior(ior: f32) -> Result<(), SceneError> {
     }
 }
 
-/// The reflectance of an opaque diffuse surface.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Albedo {
-    /// One colour.
-    Constant(Vec3),
-    /// A checkerboard of two colours with `squares` squares per unit of uv (or of world `x`/`z`
-    /// when the mesh has no uvs).
-    Checker {
-        /// First colour.
-        a: Vec3,
-        /// Second colour.
-        b: Vec3,
-        /// Squares per unit.
-        squares: f32,
-    },
-    /// A 6 × 4 colour chart over the uv square (approximate linear-sRGB values of the 24
-    /// patches of the classic ColorChecker), grey elsewhere.
-    ColorChart,
-    /// Wood-like rings: with `r = ‖(u − ½, (v − ½)/4)‖` and
-    /// `f = fract(rings · r + 0.15 sin(40 u))`, the albedo `light + (dark − light) f²`.
-    Wood {
-        /// Colour between rings.
-        light: Vec3,
-        /// Colour at the ring edges.
-        dark: Vec3,
-        /// Rings per unit of `r`.
-        rings: f32,
-    },
-}
-
-/// Linear sRGB of the 24 ColorChecker patches, row by row (approximate published values).
-pub const COLOR_CHART: [[f32; 3]; 24] = [
-    [0.173, 0.085, 0.059],
-    [0.554, 0.300, 0.222],
-    [0.117, 0.195, 0.335],
-    [0.107, 0.148, 0.058],
-    [0.236, 0.221, 0.432],
-    [0.132, 0.515, 0.409],
-    [0.680, 0.198, 0.025],
-    [0.072, 0.103, 0.386],
-    [0.545, 0.085, 0.117],
-    [0.109, 0.045, 0.142],
-    [0.327, 0.503, 0.049],
-    [0.741, 0.364, 0.020],
-    [0.030, 0.046, 0.287],
-    [0.066, 0.291, 0.066],
-    [0.428, 0.031, 0.040],
-    [0.816, 0.578, 0.010],
-    [0.505, 0.083, 0.288],
-    [0.000, 0.235, 0.383],
-    [0.887, 0.887, 0.869],
-    [0.588, 0.591, 0.590],
-    [0.361, 0.367, 0.368],
-    [0.191, 0.191, 0.192],
-    [0.088, 0.089, 0.090],
-    [0.031, 0.032, 0.032],
-];
-
-/// [`Albedo::ColorChart`] outside the unit square: a mid grey.
-const COLOR_CHART_OUTSIDE: f32 = 0.18;
-
-/// [`Albedo::ColorChart`] at `uv`.
-#[inline]
-fn color_chart(uv: Vec2) -> Vec3 {
-    if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
-        return Vec3::splat(COLOR_CHART_OUTSIDE);
-    }
-    let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
-    Vec3::from_array(COLOR_CHART[row * 6 + col])
-}
-
-impl Albedo {
-    /// The albedo at texture coordinates `uv` (or world `xz` for meshes without uvs).
-    pub fn at(&self, uv: Vec2) -> Vec3 {
-        match *self {
-            Self::Constant(c) => c,
-            Self::Checker { a, b, squares } => {
-                let cell = (uv * squares).floor();
-                if (cell.x + cell.y).rem_euclid(2.0) < 1.0 {
-                    a
-                } else {
-                    b
-                }
-            }
-            Self::ColorChart => color_chart(uv),
-            Self::Wood { light, dark, rings } => {
-                let r = Vec2::new(uv.x - 0.5, (uv.y - 0.5) * 0.25).length();
-                let f = (rings * r + 0.15 * (40.0 * uv.x).sin()).rem_euclid(1.0);
-                light + (dark - light) * (f * f)
-            }
-        }
-    }
-
-    /// [`Self::at`] at eight texture coordinates: lane `i` is `at(uv_i)`, bit for bit (a NaN
-    /// for a NaN). The
-    /// checker's parity and the wood's `fract` are exact lane operations (`a − 2⌊a/2⌋` of an
-    /// integer-valued float, `a − trunc(a)`, equal to `rem_euclid`'s `fmodf`); the wood's
-    /// `sin` and the colour chart's table are per lane.
-    pub fn at_x8(&self, uv: Vec2x8) -> Vec3x8 {
-        let splat = F32x8::splat;
-        match *self {
-            Self::Constant(c) => Vec3x8::splat(c),
-            Self::Checker { a, b, squares } => {
-                let cells = (uv.x * splat(squares)).floor() + (uv.y * splat(squares)).floor();
-                let parity = cells - splat(2.0) * (cells * splat(0.5)).floor();
-                Vec3x8::select(
-                    parity.simd_lt(F32x8::ONE),
-                    Vec3x8::splat(a),
-                    Vec3x8::splat(b),
-                )
-            }
-            Self::ColorChart => {
-                // `color_chart` with the range test and the patch index on lanes (inside the
-                // unit square `(u·6) as usize` is the truncation), then one load per lane.
-                let (zero, one) = (F32x8::ZERO, F32x8::ONE);
-                let inside =
-                    uv.x.simd_ge(zero) & uv.x.simd_lt(one) & uv.y.simd_ge(zero) & uv.y.simd_lt(one);
-                let (col, row) = (
-                    (uv.x * splat(6.0)).trunc_int(),
-                    (uv.y * splat(4.0)).trunc_int(),
-                );
-                let index = (row * I32x8::splat(6) + col).to_array();
-                let inside = inside.to_bitmask();
-                let mut patches = [Vec3::splat(COLOR_CHART_OUTSIDE); 8];
-                for (i, patch) in patches.iter_mut().enumerate() {
-                    if inside & (1 << i) != 0 {
-                        *patch = Vec3::from_array(COLOR_CHART[index[i] as usize]);
-                    }
-                }
-                Vec3x8::from_lanes(&patches)
-            }
-            Self::Wood { light, dark, rings } => {
-                let (dx, dy) = (uv.x - splat(0.5), (uv.y - splat(0.5)) * splat(0.25));
-                let r = (dx * dx + dy * dy).sqrt();
-                let u = uv.x.to_array();
-                let mut wave = [0.0f32; 8];
-                for (w, u) in wave.iter_mut().zip(u) {
-                    *w = (40.0 * u).sin();
-                }
-                let a = splat(rings) * r + splat(0.15) * F32x8::new(wave);
-                // `a % 1` (fmodf, exact) is `a − trunc(a)`; `rem_euclid` adds 1 below 0.
-                let rem = a - a.trunc();
-                let f = rem.simd_lt(F32x8::ZERO).select(rem + F32x8::ONE, rem);
-                Vec3x8::splat(light) + Vec3x8::splat(dark - light) * (f * f)
-            }
-        }
-    }
-
-    /// The albedo of the built-in wood texture.
-    pub const WOOD: Albedo = Albedo::Wood {
-        light: Vec3::new(0.60, 0.36, 0.16),
-        dark: Vec3::new(0.22, 0.10, 0.04),
-        rings: 24.0,
-    };
-}
-
 /// What an opaque object's surface does with light.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
@@ -418,36 +264,39 @@ impl Object {
     /// The texture coordinates at a point `p_ws` of triangle `triangle`: the mesh's uvs
     /// interpolated barycentrically, or world `(x, z)` for meshes without uvs.
     pub fn uv_at(&self, triangle: u32, barycentrics: Vec2, p_ws: Vec3) -> Vec2 {
-        if self.mesh.uvs.is_empty() {
-            return Vec2::new(p_ws.x, p_ws.z);
-        }
-        let [a, b, c] = self.mesh.triangles[triangle as usize].map(|i| self.mesh.uvs[i as usize]);
-        (1.0 - barycentrics.x - barycentrics.y) * a + barycentrics.x * b + barycentrics.y * c
+        let (u, v) = self.uv_at_lanes(triangle, (barycentrics.x, barycentrics.y), p_ws);
+        Vec2::new(u, v)
     }
 
     /// [`Self::uv_at`] at eight points of triangle `triangle`: lane `i` is
     /// `uv_at(triangle, barycentrics_i, p_ws_i)`, bit for bit.
     pub fn uv_at_x8(&self, triangle: u32, barycentrics: Vec2x8, p_ws: Vec3x8) -> Vec2x8 {
+        let (x, y) = self.uv_at_lanes(triangle, (barycentrics.x, barycentrics.y), p_ws);
+        Vec2x8 { x, y }
+    }
+
+    /// [`Self::uv_at`] for one point or eight: `(1 − b₁ − b₂) uv_a + b₁ uv_b + b₂ uv_c`.
+    fn uv_at_lanes<V: Vector3>(
+        &self,
+        triangle: u32,
+        (b1, b2): (V::Real, V::Real),
+        p_ws: V,
+    ) -> (V::Real, V::Real) {
         if self.mesh.uvs.is_empty() {
-            return Vec2x8 {
-                x: p_ws.x,
-                y: p_ws.z,
-            };
+            return (p_ws.x(), p_ws.z());
         }
         let [a, b, c] = self.mesh.triangles[triangle as usize].map(|i| self.mesh.uvs[i as usize]);
-        let w0 = F32x8::ONE - barycentrics.x - barycentrics.y;
-        let (w1, w2) = (barycentrics.x, barycentrics.y);
-        let (a, b, c) = (Vec2x8::splat(a), Vec2x8::splat(b), Vec2x8::splat(c));
-        Vec2x8 {
-            x: w0 * a.x + w1 * b.x + w2 * c.x,
-            y: w0 * a.y + w1 * b.y + w2 * c.y,
-        }
+        let w0 = V::Real::ONE - b1 - b2;
+        let at = |a: f32, b: f32, c: f32| {
+            w0 * V::Real::splat(a) + b1 * V::Real::splat(b) + b2 * V::Real::splat(c)
+        };
+        (at(a.x, b.x, c.x), at(a.y, b.y, c.y))
     }
 
     /// [`Self::shade`] at eight points: lane `i` is `shade(light, uv_i, n_i)`, bit for bit.
     pub fn shade_x8(&self, light: &DirectionalLight, uv: Vec2x8, n: Vec3x8) -> Vec3x8 {
         match &self.material {
-            Material::Diffuse(albedo) => light.shade_x8(albedo.at_x8(uv), n),
+            Material::Diffuse(albedo) => light.shade(albedo.at_x8(uv), n),
             Material::Conductor(_) => Vec3x8::ZERO,
         }
     }
@@ -502,42 +351,6 @@ fn planar(mesh: &Mesh, tolerance: f32) -> Option<Plane> {
         .iter()
         .all(|p| (*p - a).dot(n).abs() <= tolerance);
     flat.then(|| Plane::through(a, n))
-}
-
-/// View-independent lighting of opaque objects: `albedo × (ambient + max(0, N·L) · radiance)`.
-/// No shadows: image-space methods that store nearby geometry in a texture (Wyman 2005b) see
-/// exactly this, so the comparison stays fair.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DirectionalLight {
-    /// Unit direction toward the light.
-    pub direction: Vec3,
-    /// Radiance scale of the light.
-    pub radiance: Vec3,
-    /// Ambient term.
-    pub ambient: Vec3,
-}
-
-impl Default for DirectionalLight {
-    fn default() -> Self {
-        Self {
-            direction: Vec3::new(0.4, 0.6, -0.7).normalize(),
-            radiance: Vec3::splat(0.8),
-            ambient: Vec3::splat(0.25),
-        }
-    }
-}
-
-impl DirectionalLight {
-    /// Diffuse radiance leaving a surface of `albedo` with unit normal `n`, seen from either side.
-    pub fn shade(&self, albedo: Vec3, n: Vec3) -> Vec3 {
-        albedo * (self.ambient + n.dot(self.direction).abs() * self.radiance)
-    }
-
-    /// [`Self::shade`] on eight lanes, bit for bit.
-    pub fn shade_x8(&self, albedo: Vec3x8, n: Vec3x8) -> Vec3x8 {
-        let cos = n.dot(Vec3x8::splat(self.direction)).abs();
-        albedo * (Vec3x8::splat(self.ambient) + cos * Vec3x8::splat(self.radiance))
-    }
 }
 
 /// Which mesh of a scene.

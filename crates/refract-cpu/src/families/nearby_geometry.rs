@@ -23,6 +23,7 @@ use refract_core::nearby_geometry::{
     guard_band_camera, view_depth,
 };
 use refract_core::nearby_geometry_x8::find_nearby_x8;
+use refract_core::real::Vector3;
 use refract_scene::{
     Aov, Frame, LayerValue, NearbyParams, PixelLayers, RenderError, Scene, SceneMesh,
 };

@@ -18,7 +18,8 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use refract_core::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_from_lanes, mask_lanes};
 use refract_core::pvrr::PvrrVertex;
-use refract_core::pvrr::{MapTexels, lookup, lookup_x8, mirror_tint, mirror_tint_x8};
+use refract_core::pvrr::{MapTexels, lookup, lookup_x8, mirror_tint};
+use refract_core::real::Vector3;
 use refract_scene::pvrr::{PvrrPlan, PvrrPlanner, PvrrView, ReflectorKind};
 use refract_scene::{
     Aov, Frame, FrameOutputs, LayerValue, PixelLayers, PvrrParams, RenderError, Scene, SceneMesh,
@@ -449,7 +450,7 @@ impl ViewRows<'_> {
             ReflectorKind::Mirror { f0 } => {
                 let to_texel = t.p_ws - Vec3x8::splat(self.pass.view.camera.eye());
                 let view = to_texel * (F32x8::ONE / to_texel.length());
-                mirror_tint_x8(f0, t.n_ws, view)
+                mirror_tint(f0, t.n_ws, view)
             }
             ReflectorKind::Lens { .. } => Vec3x8::splat(Vec3::ONE),
         };

@@ -9,6 +9,7 @@ use glam::Vec3;
 use refract_core::Camera;
 use refract_core::distance_map::{PathStart, trace_path};
 use refract_core::lanes::{LANES, Vec3x8, mask_from_lanes};
+use refract_core::real::Vector3;
 use refract_scene::{Scene, SceneMesh};
 
 use super::{DistanceAov, MapScene, start_layer, surface_material, surface_rgb_x8};
