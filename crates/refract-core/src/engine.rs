@@ -23,7 +23,7 @@
 use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::Camera;
-use crate::lanes::{LANES, Vec2x8, Vec3x8};
+use crate::lanes::{LANES, Vec2x8, Vec3x8, mask_lanes};
 use crate::optics::refract;
 use crate::real::{LaneMask, Msk, Real, Vector3};
 
@@ -216,21 +216,6 @@ struct Geometry<V: Vector3> {
     /// exit, or HDRP's hit on the sky), valid where `in_front`.
     lookup_px: (V::Real, V::Real),
     in_front: Msk<V>,
-}
-
-impl<V: Vector3> Geometry<V> {
-    /// The geometry of lane `i`.
-    #[inline]
-    fn lane(&self, i: usize) -> Geometry<Vec3> {
-        Geometry {
-            incident: self.incident.lane(i),
-            fragment_depth: self.fragment_depth.lane(i),
-            p2: self.p2.lane(i),
-            t2: self.t2.lane(i),
-            lookup_px: (self.lookup_px.0.lane(i), self.lookup_px.1.lane(i)),
-            in_front: self.in_front.lanes().nth(i).unwrap_or(false),
-        }
-    }
 }
 
 impl Geometry<Vec3> {
@@ -428,7 +413,32 @@ pub fn engine_path_x8<S: OpaqueDepth>(
     let (p, n) = (Vec3x8::from_lanes(p1_ws), Vec3x8::from_lanes(n1_ws));
     let g = geometry(camera, (uv.x, uv.y), p, n, ior, model);
     let size = UVec2::new(camera.width(), camera.height());
-    core::array::from_fn(|i| finish(size, screen, uv_px[i], &g.lane(i), model))
+    // Each vector taken apart once, each lane's geometry built where it is finished.
+    let (incident, p2, t2) = (g.incident.to_lanes(), g.p2.to_lanes(), g.t2.to_lanes());
+    let depth = g.fragment_depth.to_array();
+    let (x, y) = (g.lookup_px.0.to_array(), g.lookup_px.1.to_array());
+    let in_front = mask_lanes(g.in_front);
+    let mut paths = [EnginePath {
+        texel: UVec2::ZERO,
+        screen_weight: 0.0,
+        environment_dir: Vec3::NAN,
+        p2: Vec3::NAN,
+        t2: Vec3::NAN,
+        off_screen: false,
+    }; LANES];
+    // A loop, not `array::from_fn`: its closure was left as a call per lane.
+    for (i, path) in paths.iter_mut().enumerate() {
+        let lane = Geometry {
+            incident: incident[i],
+            fragment_depth: depth[i],
+            p2: p2[i],
+            t2: t2[i],
+            lookup_px: (x[i], y[i]),
+            in_front: in_front[i],
+        };
+        *path = finish(size, screen, uv_px[i], &lane, model);
+    }
+    paths
 }
 
 /// Model code of [`EngineModel::ScreenOffset`].

@@ -125,9 +125,10 @@ pub fn sample_latlong_bilinear<A: Atan2<V::Real>, V: Vector3>(
     let (fx, fy) = (x - x0, y - y0);
     let w = i64::from(width);
     let wrap = |x: i64| x.rem_euclid(w) as usize;
+    let (x0, y0) = (x0.to_lane_array(), y0.to_lane_array());
     // Lane i's texel at column offset dx ∈ {0, 1}, row offset dy ∈ {0, 1}.
     let texel = |i: usize, dx: i64, dy: usize| {
-        let (x0, y0) = (x0.lane(i) as i64, y0.lane(i) as usize);
+        let (x0, y0) = (x0.as_ref()[i] as i64, y0.as_ref()[i] as usize);
         let y = (y0 + dy).min(height as usize - 1);
         texels[y * width as usize + wrap(x0 + dx)]
     };

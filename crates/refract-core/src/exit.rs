@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use crate::optics::{face_forward_shading_normal, reflect, refract};
 use crate::real::{LaneMask, Msk, Vector3};
-use crate::vector::robust_normalize_masked;
+use crate::vector::robust_normalize_where;
 
 /// What to do when the ray inside the refractor meets the exit surface beyond the critical
 /// angle (total internal reflection at the second interface, Wyman 2005a §3.3).
@@ -93,9 +93,9 @@ pub fn refract_exit<V: Vector3>(
     let inward = face_forward_shading_normal(-n2, t1);
     let refracted = refract(t1, inward, ior);
     let tir = refracted.is_zero();
-    // TIR lanes normalise `T1` (unit: no work) and are replaced below.
-    let (t2, ok) = robust_normalize_masked(V::select(tir, t1, refracted));
-    let t2 = V::select(ok, t2, t1);
+    // `robust_normalize(T2).unwrap_or(T1)`; TIR lanes are replaced below.
+    let (t2, ok) = robust_normalize_where(refracted, !tir);
+    let t2 = if ok.all() { t2 } else { V::select(ok, t2, t1) };
     if !tir.any() {
         return ExitRefraction { t2, tir };
     }

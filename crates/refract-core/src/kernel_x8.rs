@@ -23,7 +23,7 @@ use crate::kernel::{
 use crate::lanes::{F32x8, LANES, Mask, Vec2x8, Vec3x8, mask_lanes};
 use crate::optics::{face_forward_shading_normal, refract};
 use crate::real::Vector3;
-use crate::vector::robust_normalize_masked;
+use crate::vector::{robust_normalize_masked, robust_normalize_where};
 
 /// Eight front surfaces as lanes (structure of arrays): `P1`, `N1` and `d_N` of each pixel,
 /// as a rasteriser that resolves eight texels at once produces them.
@@ -83,7 +83,7 @@ fn entry(camera: &Camera, p1: Vec3x8, n1: Vec3x8, eta: F32x8) -> Entry {
     let n1 = face_forward_shading_normal(n1, view);
     let refracted = refract(view, n1, eta);
     let tir_entry = refracted.is_zero();
-    let (t1, t1_ok) = robust_normalize_masked(Vec3x8::select(tir_entry, view, refracted));
+    let (t1, t1_ok) = robust_normalize_where(refracted, !tir_entry);
     Entry {
         view,
         n1,
@@ -202,9 +202,8 @@ fn two_interface_soa<S: BackFaceSampler + ?Sized>(
     // N2 from the back faces at P~2's pixel (§3.2), else the silhouette fallback (§3.3).
     let (px, py, in_front) = camera.world_to_pixel_xy(p2);
     let far = back.back_faces_x8(Vec2x8 { x: px, y: py }, in_front);
-    // Empty lanes normalise a unit vector (no work) and are replaced by the fallback.
-    let found_n = Vec3x8::select(far.found, far.n_ws, Vec3x8::splat(Vec3::Z));
-    let (sampled_n2, normal_ok) = robust_normalize_masked(found_n);
+    // Empty lanes are replaced by the fallback.
+    let (sampled_n2, normal_ok) = robust_normalize_where(far.n_ws, far.found);
     let sampled = far.found & normal_ok;
     let n2 = if sampled.all() {
         sampled_n2

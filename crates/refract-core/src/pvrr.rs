@@ -403,10 +403,12 @@ pub fn sample_bilinear_at<M: MapTexels + ?Sized, V: Vector3>(map: &M, s: V::Real
     let y = clamp(t - V::Real::splat(0.5), h);
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0.to_lane_array(), y0.to_lane_array());
+    let (fx, fy) = (fx.to_lane_array(), fy.to_lane_array());
     V::gather(|i| {
-        let (x0, y0) = (x0.lane(i) as u32, y0.lane(i) as u32);
+        let (x0, y0) = (x0.as_ref()[i] as u32, y0.as_ref()[i] as u32);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-        let (fx, fy) = (fx.lane(i), fy.lane(i));
+        let (fx, fy) = (fx.as_ref()[i], fy.as_ref()[i]);
         let top = map.texel(x0, y0) * (1.0 - fx) + map.texel(x1, y0) * fx;
         let bottom = map.texel(x0, y1) * (1.0 - fx) + map.texel(x1, y1) * fx;
         top * (1.0 - fy) + bottom * fy

@@ -40,6 +40,8 @@ pub trait LaneMask:
     fn lanes(self) -> impl Iterator<Item = bool>;
     /// Sets lane `i` to `value`.
     fn set(&mut self, i: usize, value: bool);
+    /// Bit `i` set where lane `i` is.
+    fn bits(self) -> u32;
 }
 
 /// A real number, one per lane.
@@ -55,6 +57,8 @@ pub trait Real:
 {
     /// The mask that comparisons of this type return.
     type Mask: LaneMask;
+    /// The lanes as an array (`[f32; 1]` or `[f32; 8]`).
+    type Array: AsRef<[f32]>;
     /// The number of lanes.
     const LANES: usize;
     /// `0` in every lane.
@@ -65,6 +69,8 @@ pub trait Real:
     fn splat(v: f32) -> Self;
     /// The value of lane `i`.
     fn lane(self, i: usize) -> f32;
+    /// Every lane's value (to read several lanes one by one: one store, not one per lane).
+    fn to_lane_array(self) -> Self::Array;
     /// `√x` (IEEE, correctly rounded).
     fn sqrt(self) -> Self;
     /// `|x|`.
@@ -231,10 +237,15 @@ impl LaneMask for bool {
     fn set(&mut self, _i: usize, value: bool) {
         *self = value;
     }
+    #[inline]
+    fn bits(self) -> u32 {
+        u32::from(self)
+    }
 }
 
 impl Real for f32 {
     type Mask = bool;
+    type Array = [f32; 1];
     const LANES: usize = 1;
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
@@ -245,6 +256,10 @@ impl Real for f32 {
     #[inline]
     fn lane(self, _i: usize) -> f32 {
         self
+    }
+    #[inline]
+    fn to_lane_array(self) -> [f32; 1] {
+        [self]
     }
     #[inline]
     fn sqrt(self) -> Self {
@@ -426,10 +441,15 @@ impl LaneMask for F32x8 {
         lanes[i] = value;
         *self = mask_from_lanes(lanes);
     }
+    #[inline]
+    fn bits(self) -> u32 {
+        self.to_bitmask()
+    }
 }
 
 impl Real for F32x8 {
     type Mask = F32x8;
+    type Array = [f32; LANES];
     const LANES: usize = LANES;
     const ZERO: Self = F32x8::ZERO;
     const ONE: Self = F32x8::ONE;
@@ -440,6 +460,10 @@ impl Real for F32x8 {
     #[inline]
     fn lane(self, i: usize) -> f32 {
         self.to_array()[i]
+    }
+    #[inline]
+    fn to_lane_array(self) -> [f32; LANES] {
+        self.to_array()
     }
     #[inline]
     fn sqrt(self) -> Self {

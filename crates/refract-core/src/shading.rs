@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::lanes::{Vec2x8, Vec3x8};
-use crate::real::{Real, Vector3};
+use crate::real::{LaneMask, Real, Vector3};
 
 /// The reflectance of an opaque diffuse surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,16 +67,6 @@ pub const COLOR_CHART: [[f32; 3]; 24] = [
 /// [`Albedo::ColorChart`] outside the unit square: a mid grey.
 const COLOR_CHART_OUTSIDE: f32 = 0.18;
 
-/// [`Albedo::ColorChart`] at `uv`.
-#[inline]
-fn color_chart(uv: Vec2) -> Vec3 {
-    if !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
-        return Vec3::splat(COLOR_CHART_OUTSIDE);
-    }
-    let (col, row) = ((uv.x * 6.0) as usize, (uv.y * 4.0) as usize);
-    Vec3::from_array(COLOR_CHART[row * 6 + col])
-}
-
 impl Albedo {
     /// The albedo of the built-in wood texture.
     pub const WOOD: Albedo = Albedo::Wood {
@@ -111,7 +101,21 @@ impl Albedo {
                 let parity = cells - splat(2.0) * (cells * splat(0.5)).floor();
                 V::select(parity.lt(V::Real::ONE), V::constant(a), V::constant(b))
             }
-            Self::ColorChart => V::gather(|i| color_chart(Vec2::new(u.lane(i), v.lane(i)))),
+            Self::ColorChart => {
+                // `color_chart` with the range test and the patch index on lanes (inside the
+                // unit square `(u·6) as usize` is the truncation), then one load per lane.
+                let (zero, one) = (V::Real::ZERO, V::Real::ONE);
+                let inside = (u.ge(zero) & u.lt(one) & v.ge(zero) & v.lt(one)).bits();
+                let index = (v * splat(4.0)).trunc() * splat(6.0) + (u * splat(6.0)).trunc();
+                let index = index.to_lane_array();
+                V::gather(|i| {
+                    if inside & (1 << i) != 0 {
+                        Vec3::from_array(COLOR_CHART[index.as_ref()[i] as usize])
+                    } else {
+                        Vec3::splat(COLOR_CHART_OUTSIDE)
+                    }
+                })
+            }
             Self::Wood { light, dark, rings } => {
                 let (dx, dy) = (u - splat(0.5), (v - splat(0.5)) * splat(0.25));
                 let r = (dx * dx + dy * dy).sqrt();

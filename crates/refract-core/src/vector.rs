@@ -39,17 +39,13 @@ pub fn robust_normalize(v: Vec3) -> Option<Vec3> {
 /// length is outside `[1e-30, f32::MAX]` takes the scaled path alone.
 #[inline]
 pub fn robust_normalize_masked<V: Vector3>(v: V) -> (V, Msk<V>) {
-    let (n, common) = normalize_common(v);
-    if common.all() {
-        return (n, common);
-    }
-    rare_lanes(v, n, common)
+    robust_normalize_where(v, LaneMask::splat(true))
 }
 
-/// [`robust_normalize`]'s two common paths, `v` itself when unit to within [`UNIT_TOLERANCE`]
-/// and `v · (1/√(v·v))` when `v·v ∈ [1e-30, f32::MAX]`, and the lanes they cover.
+/// [`robust_normalize_masked`] for the lanes of `active`: the others are not taken through the
+/// scaled path (their result is discarded by the caller, e.g. a zero vector under TIR).
 #[inline]
-fn normalize_common<V: Vector3>(v: V) -> (V, Msk<V>) {
+pub fn robust_normalize_where<V: Vector3>(v: V, active: Msk<V>) -> (V, Msk<V>) {
     let length_squared = v.dot(v);
     let unit = (length_squared - V::Real::ONE)
         .abs()
@@ -63,21 +59,24 @@ fn normalize_common<V: Vector3>(v: V) -> (V, Msk<V>) {
     let in_range =
         V::Real::splat(1e-30).le(length_squared) & length_squared.le(V::Real::splat(f32::MAX));
     let scaled = v * (V::Real::ONE / length_squared.sqrt());
-    (V::select(unit, v, scaled), unit | in_range)
+    let (mut n, mut ok) = (V::select(unit, v, scaled), unit | in_range);
+    let rare = active & !ok;
+    if rare.any() {
+        rare_lanes(&v, &mut n, &mut ok, rare);
+    }
+    (n, ok)
 }
 
-/// The lanes [`normalize_common`] did not cover, one by one through the scaled path.
+/// The `rare` lanes, one by one through the scaled path.
 #[cold]
 #[inline(never)]
-fn rare_lanes<V: Vector3>(v: V, mut n: V, mut ok: Msk<V>) -> (V, Msk<V>) {
-    let common = ok;
-    for (i, covered) in common.lanes().enumerate() {
-        if !covered && let Some(lane) = robust_normalize_scaled(v.lane(i)) {
+fn rare_lanes<V: Vector3>(v: &V, n: &mut V, ok: &mut Msk<V>, rare: Msk<V>) {
+    for (i, rare) in rare.lanes().enumerate() {
+        if rare && let Some(lane) = robust_normalize_scaled(v.lane(i)) {
             n.set_lane(i, lane);
             ok.set(i, true);
         }
     }
-    (n, ok)
 }
 
 fn robust_normalize_scaled(v: Vec3) -> Option<Vec3> {

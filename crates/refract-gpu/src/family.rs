@@ -57,6 +57,11 @@ pub(crate) trait GpuFamily {
     /// The label of the frame's command encoder.
     const LABEL: &'static str;
 
+    /// Compiles the family's pipelines (with the backend's shared raster pipelines at hand).
+    fn create(device: &wgpu::Device, raster: &RasterPipelines) -> Self
+    where
+        Self: Sized;
+
     /// Prepares per-scene state besides the uploaded scene (targets are dropped by the caller:
     /// they are bound to the old scene's buffers).
     fn prepare(&mut self, _scene: &Arc<Scene>) {}

@@ -33,6 +33,11 @@ pub const PVRR_RASTER: WgslFile = (
     include_str!("../../../shaders/pvrr_raster.wgsl"),
 );
 /// The image-space kernels (Wyman 2005a), also the first part of the nearby-geometry kernel.
+pub const TWO_INTERFACE: WgslFile = (
+    "two_interface.wgsl",
+    include_str!("../../../shaders/two_interface.wgsl"),
+);
+/// The image-space methods' passes over the back-face texture (Wyman 2005a).
 pub const IMAGE_SPACE: WgslFile = (
     "image_space.wgsl",
     include_str!("../../../shaders/image_space.wgsl"),
@@ -115,6 +120,19 @@ pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
     files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
 };
 
+/// The whole-kernel conformance harness: the one- and two-interface kernels over an analytic
+/// back-face buffer and the frame uniforms (`refract_gpu::conformance::evaluate_kernel`).
+pub const CONFORMANCE_KERNELS: WgslFile = (
+    "conformance_kernels.wgsl",
+    include_str!("../../../shaders/conformance_kernels.wgsl"),
+);
+
+/// The module of [`CONFORMANCE_KERNELS`].
+pub const CONFORMANCE_KERNELS_MODULE: ShaderModule = ShaderModule {
+    name: "conformance-kernels",
+    files: &[CORE, FRAME, TWO_INTERFACE, CONFORMANCE_KERNELS],
+};
+
 /// Closest-hit queries against a flattened BVH (`refract_gpu::bvh`).
 pub const BVH_MODULE: ShaderModule = ShaderModule {
     name: "bvh",
@@ -156,11 +174,12 @@ pub fn modules() -> Vec<ShaderModule> {
     let mut modules = vec![
         RASTER_MODULE,
         CONFORMANCE_MODULE,
+        CONFORMANCE_KERNELS_MODULE,
         BVH_MODULE,
         REFERENCE_MODULE,
         REFERENCE_RAY_QUERY_MODULE,
     ];
-    modules.extend(crate::methods::SHADERS);
+    modules.extend_from_slice(crate::methods::SHADERS);
     modules
 }
 

@@ -112,3 +112,132 @@ fn frame_uniforms_layout_matches_rust() {
     }
     assert_eq!(*span as usize, std::mem::size_of::<FrameUniforms>());
 }
+
+/// `conformance::ENTRY_POINTS` and `KERNEL_ENTRY_POINTS` list every entry point of their
+/// modules, no more and no fewer (the lists are what a reader of the harness trusts).
+#[test]
+fn conformance_entry_point_lists_are_complete() {
+    for (module, listed) in [
+        ("conformance", &refract_gpu::conformance::ENTRY_POINTS[..]),
+        (
+            "conformance-kernels",
+            &refract_gpu::conformance::KERNEL_ENTRY_POINTS[..],
+        ),
+    ] {
+        let parsed = validate(module);
+        let mut found: Vec<&str> = parsed
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
+        let mut listed = listed.to_vec();
+        found.sort_unstable();
+        listed.sort_unstable();
+        assert_eq!(found, listed, "{module}");
+    }
+}
+
+/// The names of every function reachable from `entry` in `module` (calls followed through
+/// blocks, branches, loops and switches).
+fn reachable_functions(module: &naga::Module, entry: &str) -> std::collections::BTreeSet<String> {
+    fn walk(
+        module: &naga::Module,
+        block: &naga::Block,
+        seen: &mut std::collections::BTreeSet<String>,
+    ) {
+        for statement in block.iter() {
+            match statement {
+                naga::Statement::Block(inner) => walk(module, inner, seen),
+                naga::Statement::If { accept, reject, .. } => {
+                    walk(module, accept, seen);
+                    walk(module, reject, seen);
+                }
+                naga::Statement::Loop {
+                    body, continuing, ..
+                } => {
+                    walk(module, body, seen);
+                    walk(module, continuing, seen);
+                }
+                naga::Statement::Switch { cases, .. } => {
+                    for case in cases {
+                        walk(module, &case.body, seen);
+                    }
+                }
+                naga::Statement::Call { function, .. } => {
+                    let callee = &module.functions[*function];
+                    let name = callee.name.clone().unwrap_or_default();
+                    if seen.insert(name) {
+                        walk(module, &callee.body, seen);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    let point = module
+        .entry_points
+        .iter()
+        .find(|e| e.name == entry)
+        .unwrap_or_else(|| panic!("no entry point {entry}"));
+    let mut seen = std::collections::BTreeSet::new();
+    walk(module, &point.function.body, &mut seen);
+    seen
+}
+
+/// The GPU reference, like the CPU one (`tests/tests/dependency_rule.rs`), uses exact math only:
+/// nothing reachable from its entry points is one of the backends' approximations (Schlick's
+/// Fresnel, Wyman's `d~` and exit normal, the TIR policies, the distance-map search, the
+/// engines' proxies and screen lookups). The check follows the call graph that naga parses, so
+/// an approximation reached through a helper is found too; the negative control below shows it
+/// finds one that is reached.
+#[test]
+fn the_gpu_reference_uses_exact_math_only() {
+    let forbidden = |name: &str| {
+        [
+            "schlick",
+            "angle_ratio",
+            "interpolated_distance",
+            "approximate_distance",
+            "exit_normal_outside_silhouette",
+            "refract_exit",
+            "two_interface_path",
+            "one_interface",
+            "proxy_sphere_exit",
+            "proxy_box_exit",
+            "volume_exit",
+            "bevy_fallback_dir",
+            "screen_offset_px",
+            "hdrp_edge_fade",
+            "screen_fraction_to_segment",
+        ]
+        .iter()
+        .any(|f| name.starts_with(f))
+            || name.starts_with("dm_")
+    };
+    for module_name in ["reference", "reference-ray-query"] {
+        let Some(source) = module_source(module_name) else {
+            panic!("no module {module_name}")
+        };
+        let module = naga::front::wgsl::parse_str(&source).expect("parses");
+        let mut reached = 0;
+        for entry in &module.entry_points {
+            let functions = reachable_functions(&module, &entry.name);
+            reached += functions.len();
+            let bad: Vec<_> = functions.iter().filter(|f| forbidden(f)).collect();
+            assert!(
+                bad.is_empty(),
+                "{module_name}::{} reaches {bad:?}",
+                entry.name
+            );
+        }
+        assert!(
+            reached > 5,
+            "{module_name}: the call graph was walked ({reached})"
+        );
+    }
+    // Negative control: the image-space module's kernel reaches the approximations.
+    let image_space = naga::front::wgsl::parse_str(&module_source("image_space").expect("module"))
+        .expect("parses");
+    let functions = reachable_functions(&image_space, "shade_two_interface");
+    assert!(functions.iter().any(|f| forbidden(f)), "{functions:?}");
+}

@@ -4,10 +4,10 @@
 //!
 //! Each family has its own module here with its rows and its parameter type, which implements
 //! [`FamilyParams`] (parameters set and read by name, checked against the rows' [`ParamSpec`]s:
-//! names, ranges and choices are written once). Adding a family is its module, its
-//! [`MethodId`] and [`Family`] variants, a [`MethodParams`] variant and its `ROWS` in
-//! [`REGISTRY`]; every backend's exhaustive `match` over [`MethodParams`] then has to handle or
-//! decline it.
+//! names, ranges and choices are written once). Adding a family is its module, its methods'
+//! [`MethodId`] variants and one line of `method_families!` (which declares its [`Family`] and
+//! [`MethodParams`] variants and puts its `ROWS` in [`REGISTRY`]); every backend's exhaustive
+//! `match` over [`MethodParams`] then has to handle or decline it.
 
 use core::fmt;
 
@@ -72,39 +72,98 @@ pub enum MethodId {
     ProxyThin,
 }
 
-/// A family of methods: the methods of one family share their passes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Family {
-    /// Exact ray tracing (the ground truth).
-    Reference,
-    /// Wyman 2005a image-space refraction (front/back-face buffers, one kernel per pixel).
-    ImageSpace,
-    /// Wyman 2005b: the two-interface kernel, then a lookup in the nearby-geometry (NG)
-    /// texture rendered from the eye.
-    NearbyGeometry,
-    /// Umenhoffer et al. 2007: layered distance cube maps around a reference point, searched
-    /// per secondary ray (mirrors, metals, glass, several bounces).
-    DistanceMap,
-    /// Kakimoto et al. 2007: per-vertex exact rays (BVH), one map per reflector rendered from
-    /// its virtual viewpoint, texture coordinates per vertex (mirrors, lenses, stacks).
-    Pvrr,
-    /// Today's engines (Godot, three.js, Bevy, Unity HDRP, Filament): one interface or a
-    /// proxy shape, then a lookup in the screen texture of the opaque objects.
-    Engine,
+/// The one list of families: each line declares a [`Family`] variant (its name in lists and
+/// the Python package), the [`MethodParams`] variant holding the family's parameter type, the
+/// conversion `TryFrom<MethodParams>` for that type, the dispatch to its [`FamilyParams`] and
+/// its registry rows in [`REGISTRY`]. A backend's exhaustive `match` over [`MethodParams`] then
+/// fails to compile until it handles or declines the new family.
+macro_rules! method_families {
+    ($($(#[doc = $doc:literal])* $variant:ident($params:ty) = $name:literal, rows: $rows:path;)*) => {
+        /// A family of methods: the methods of one family share their passes.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Family {
+            $($(#[doc = $doc])* $variant,)*
+        }
+
+        impl Family {
+            /// Every family, in registry order.
+            pub const ALL: &[Family] = &[$(Family::$variant),*];
+
+            /// Its id in lists and the Python package (`image-space`, `nearby-geometry`, ...).
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Family::$variant => $name,)*
+                }
+            }
+        }
+
+        /// The parameters of one run of one method: one variant per family, so a backend's
+        /// exhaustive `match` decides, at compile time, what it does with every family.
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum MethodParams {
+            $($(#[doc = $doc])* $variant($params),)*
+        }
+
+        // `TryFrom<MethodParams>` for each family's parameter type: its parameters, or the
+        // parameters of another family back (the GPU builds one pipeline per row that converts).
+        $(impl TryFrom<MethodParams> for $params {
+            type Error = MethodParams;
+
+            fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
+                match params {
+                    MethodParams::$variant(p) => Ok(p),
+                    other => Err(other),
+                }
+            }
+        })*
+
+        impl MethodParams {
+            /// The family's parameter type behind these parameters.
+            fn family(&self) -> &dyn FamilyParams {
+                match self {
+                    $(MethodParams::$variant(p) => p,)*
+                }
+            }
+
+            fn family_mut(&mut self) -> &mut dyn FamilyParams {
+                match self {
+                    $(MethodParams::$variant(p) => p,)*
+                }
+            }
+
+            /// The family these parameters belong to.
+            pub fn family_id(&self) -> Family {
+                match self {
+                    $(MethodParams::$variant(_) => Family::$variant,)*
+                }
+            }
+        }
+
+        /// Every family's registry rows, in order.
+        const FAMILY_ROWS: &[&[MethodInfo]] = &[$($rows),*];
+    };
 }
 
-impl Family {
-    /// Its id in lists and the Python package (`image-space`, `nearby-geometry`, ...).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Family::Reference => "reference",
-            Family::ImageSpace => "image-space",
-            Family::NearbyGeometry => "nearby-geometry",
-            Family::DistanceMap => "distance-map",
-            Family::Pvrr => "pvrr",
-            Family::Engine => "engine",
-        }
-    }
+method_families! {
+    /// Exact ray tracing (the ground truth): `reference`.
+    Reference(TraceSettings) = "reference", rows: reference::ROWS;
+    /// Wyman 2005a image-space refraction (front/back-face buffers, one kernel per pixel):
+    /// `single`, `wyman`, `wyman-dv`, `wyman-dn`.
+    ImageSpace(ImageSpaceMethod) = "image-space", rows: image_space::ROWS;
+    /// Wyman 2005b: the two-interface kernel, then a lookup in the nearby-geometry (NG)
+    /// texture rendered from the eye: `kay-greenberg`, `ray-plane`, `iterative`,
+    /// `iterative-seeded`.
+    NearbyGeometry(NearbyParams) = "nearby-geometry", rows: nearby_geometry::ROWS;
+    /// Umenhoffer et al. 2007: layered distance cube maps around a reference point, searched
+    /// per secondary ray (mirrors, metals, glass, several bounces): `distance-map`.
+    DistanceMap(DistanceMapParams) = "distance-map", rows: distance_map::ROWS;
+    /// Kakimoto et al. 2007: per-vertex exact rays (BVH), one map per reflector rendered from
+    /// its virtual viewpoint, texture coordinates per vertex (mirrors, lenses, stacks): `pvrr`.
+    Pvrr(PvrrParams) = "pvrr", rows: pvrr::ROWS;
+    /// Today's engines (Godot, three.js, Bevy, Unity HDRP, Filament): one interface or a
+    /// proxy shape, then a lookup in the screen texture of the opaque objects:
+    /// `screen-offset`, `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`.
+    Engine(EngineParams) = "engine", rows: engine::ROWS;
 }
 
 /// A renderer implementation.
@@ -350,15 +409,6 @@ const fn concat<const N: usize>(parts: &[&[MethodInfo]]) -> [MethodInfo; N] {
     rows
 }
 
-const FAMILY_ROWS: &[&[MethodInfo]] = &[
-    reference::ROWS,
-    image_space::ROWS,
-    nearby_geometry::ROWS,
-    distance_map::ROWS,
-    pvrr::ROWS,
-    engine::ROWS,
-];
-
 const fn row_count(parts: &[&[MethodInfo]]) -> usize {
     let (mut n, mut p) = (0, 0);
     while p < parts.len() {
@@ -447,75 +497,7 @@ impl core::str::FromStr for MethodId {
     }
 }
 
-/// The parameters of one run of one method: one variant per family, so a backend's exhaustive
-/// `match` decides, at compile time, what it does with every family.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum MethodParams {
-    /// `reference`.
-    Reference(TraceSettings),
-    /// `single`, `wyman`, `wyman-dv`, `wyman-dn`.
-    ImageSpace(ImageSpaceMethod),
-    /// `kay-greenberg`, `ray-plane`, `iterative`, `iterative-seeded`.
-    NearbyGeometry(NearbyParams),
-    /// `distance-map`.
-    DistanceMap(DistanceMapParams),
-    /// `pvrr`.
-    Pvrr(PvrrParams),
-    /// `screen-offset`, `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`.
-    Engine(EngineParams),
-}
-
-/// `TryFrom<MethodParams>` for each family's parameter type: its parameters, or the
-/// parameters of another family back (the GPU builds one pipeline per row that converts).
-macro_rules! family_params_from_method_params {
-    ($($variant:ident($params:ty)),* $(,)?) => {$(
-        impl TryFrom<MethodParams> for $params {
-            type Error = MethodParams;
-
-            fn try_from(params: MethodParams) -> Result<Self, MethodParams> {
-                match params {
-                    MethodParams::$variant(p) => Ok(p),
-                    other => Err(other),
-                }
-            }
-        }
-    )*};
-}
-
-family_params_from_method_params!(
-    Reference(TraceSettings),
-    ImageSpace(ImageSpaceMethod),
-    NearbyGeometry(NearbyParams),
-    DistanceMap(DistanceMapParams),
-    Pvrr(PvrrParams),
-    Engine(EngineParams),
-);
-
 impl MethodParams {
-    /// The family's parameter type behind these parameters: the registry's one list of
-    /// families besides the variants above.
-    fn family(&self) -> &dyn FamilyParams {
-        match self {
-            MethodParams::Reference(p) => p,
-            MethodParams::ImageSpace(p) => p,
-            MethodParams::NearbyGeometry(p) => p,
-            MethodParams::DistanceMap(p) => p,
-            MethodParams::Pvrr(p) => p,
-            MethodParams::Engine(p) => p,
-        }
-    }
-
-    fn family_mut(&mut self) -> &mut dyn FamilyParams {
-        match self {
-            MethodParams::Reference(p) => p,
-            MethodParams::ImageSpace(p) => p,
-            MethodParams::NearbyGeometry(p) => p,
-            MethodParams::DistanceMap(p) => p,
-            MethodParams::Pvrr(p) => p,
-            MethodParams::Engine(p) => p,
-        }
-    }
-
     /// The default parameters of `id` (its registry row's).
     pub fn defaults(id: MethodId) -> Self {
         (id.info().defaults)()

@@ -169,6 +169,10 @@ impl GpuFamily for DistanceMapPipelines {
     type Targets = DistanceMapTargets;
     const LABEL: &'static str = "distance-map frame";
 
+    fn create(device: &wgpu::Device, _raster: &RasterPipelines) -> Self {
+        Self::new(device)
+    }
+
     fn fits(
         &self,
         targets: &DistanceMapTargets,

@@ -19,9 +19,10 @@ use crate::methods::image_space::{OutputBuffers, RefractorTargets, check_limits}
 use crate::methods::nearby_geometry::{
     NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_layout, nearby_resources, nearby_uniforms,
 };
+use crate::passes::raster::RasterPipelines;
 use crate::passes::raster::SurfaceTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
 };
 
 /// The module of the engine methods: the front faces and environment of the image-space
@@ -33,6 +34,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         PROCEDURAL_SKY,
         FRAME,
         ENVIRONMENT,
+        TWO_INTERFACE,
         IMAGE_SPACE,
         MATERIALS,
         NEARBY_GEOMETRY_WGSL,
@@ -66,6 +68,10 @@ impl GpuFamily for EnginePipelines {
     type Params = EngineParams;
     type Targets = EngineTargets;
     const LABEL: &'static str = "engine frame";
+
+    fn create(device: &wgpu::Device, _raster: &RasterPipelines) -> Self {
+        Self::new(device)
+    }
 
     fn fits(&self, targets: &EngineTargets, cx: &GpuFrameCx<'_>, _: &EngineParams) -> bool {
         targets.size == cx.size()

@@ -26,18 +26,31 @@ use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, TARGET_FORMAT, target,
 };
 use crate::scene_buffers::GpuScene;
-use crate::shaders::{CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, PROCEDURAL_SKY, ShaderModule};
+use crate::shaders::{
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
+};
 
 /// The module of the image-space kernels (Wyman 2005a).
 pub(crate) const SHADER: ShaderModule = ShaderModule {
     name: "image_space",
-    files: &[CORE, PROCEDURAL_SKY, FRAME, ENVIRONMENT, IMAGE_SPACE],
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        TWO_INTERFACE,
+        IMAGE_SPACE,
+    ],
 };
 
 impl GpuFamily for ImageSpacePipelines {
     type Params = ImageSpaceMethod;
     type Targets = ImageSpaceTargets;
     const LABEL: &'static str = "image-space frame";
+
+    fn create(device: &wgpu::Device, _raster: &RasterPipelines) -> Self {
+        Self::new(device)
+    }
 
     fn fits(&self, targets: &ImageSpaceTargets, cx: &GpuFrameCx<'_>, _: &ImageSpaceMethod) -> bool {
         let (width, height) = cx.size();

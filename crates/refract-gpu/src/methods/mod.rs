@@ -1,7 +1,8 @@
 //! One module per method family, the same names as the CPU backend's, each a
 //! [`GpuFamily`](crate::family::GpuFamily); and [`Families`]: one [`FamilySlot`] per family and
-//! the backend's one exhaustive `match` from [`MethodParams`] to the family that renders it. A
-//! new family is its module here, its slot and its arm.
+//! the backend's one exhaustive `match` from [`MethodParams`] to the family that renders it,
+//! both generated from one list (`gpu_families!`). A new family is its module here and its line
+//! in that list.
 
 pub(crate) mod distance_map;
 pub(crate) mod engine;
@@ -14,87 +15,94 @@ use std::sync::Arc;
 
 use refract_scene::{BackendId, Frame, FrameTiming, RenderError, Scene};
 
-use crate::family::{FamilySlot, GpuFrameCx};
+use crate::family::{FamilySlot, GpuFamily, GpuFrameCx};
 use crate::passes::raster::RasterPipelines;
 
-/// Every family with the targets of its last frame.
-pub(crate) struct Families {
-    image_space: FamilySlot<image_space::ImageSpacePipelines>,
-    nearby: FamilySlot<nearby_geometry::NearbyPipelines>,
-    distance_map: FamilySlot<distance_map::DistanceMapPipelines>,
-    pvrr: FamilySlot<pvrr::PvrrFamily>,
-    engine: FamilySlot<engine::EnginePipelines>,
+/// The backend's one list of families: each line is a [`Families`] slot, the family's module
+/// and type (a [`GpuFamily`], built by [`GpuFamily::create`]) and the [`MethodParams`] variant
+/// it renders. The list also makes [`SHADERS`] (each family module's `SHADER`, then the shared
+/// modules the list names), so a family's shader cannot be left out of naga's validation; the
+/// families rendered elsewhere are declined by name. A family of [`MethodParams`] missing from
+/// both lists is a non-exhaustive `match`: it does not compile.
+macro_rules! gpu_families {
+    (
+        declined: [$($declined:ident),*],
+        shared_shaders: [$($shared:path),*],
+        $($(#[doc = $doc:literal])* $field:ident: $module:ident::$family:ident => $variant:ident,)*
+    ) => {
+        /// Every family with the targets of its last frame.
+        pub(crate) struct Families {
+            $($(#[doc = $doc])* $field: FamilySlot<$module::$family>,)*
+        }
+
+        impl Families {
+            /// Compiles every family's pipelines.
+            pub(crate) fn new(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
+                Self {
+                    $($field: FamilySlot::new(<$module::$family as GpuFamily>::create(
+                        device, raster,
+                    )),)*
+                }
+            }
+
+            /// Drops every family's targets (bound to the old scene) and prepares it for
+            /// `scene`.
+            pub(crate) fn prepare(&mut self, scene: &Arc<Scene>) {
+                $(self.$field.prepare(scene);)*
+            }
+
+            /// One frame of `method` by its family ([`FamilySlot::run_frame`]); the declined
+            /// families are [`RenderError::Unsupported`] here.
+            pub(crate) fn render(
+                &mut self,
+                cx: &GpuFrameCx<'_>,
+                method: &MethodParams,
+                frame: Option<&mut Frame>,
+            ) -> Result<FrameTiming, RenderError> {
+                match method {
+                    $(MethodParams::$variant(p) => self.$field.run_frame(cx, p, frame),)*
+                    $(MethodParams::$declined(_))|* => Err(RenderError::Unsupported {
+                        backend: BackendId::Gpu,
+                        method: cx.method,
+                    }),
+                }
+            }
+
+            /// The colour buffer of the last frame of `method`'s family, `None` before its
+            /// first frame (and for the declined families).
+            pub(crate) fn color(&self, method: &MethodParams) -> Option<&wgpu::Buffer> {
+                match method {
+                    $(MethodParams::$variant(_) => self.$field.color(),)*
+                    $(MethodParams::$declined(_))|* => None,
+                }
+            }
+        }
+
+        /// Every family's shader module, then the shared ones of the list (validated by naga
+        /// in `tests/shaders.rs` with the backend's other modules).
+        pub(crate) const SHADERS: &[ShaderModule] = &[$($module::SHADER,)* $($shared,)*];
+    };
 }
 
-impl Families {
-    /// Compiles every family's pipelines.
-    pub(crate) fn new(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
-        Self {
-            image_space: FamilySlot::new(image_space::ImageSpacePipelines::new(device)),
-            nearby: FamilySlot::new(nearby_geometry::NearbyPipelines::new(device)),
-            distance_map: FamilySlot::new(distance_map::DistanceMapPipelines::new(device)),
-            pvrr: FamilySlot::new(pvrr::PvrrFamily::new(device, raster)),
-            engine: FamilySlot::new(engine::EnginePipelines::new(device)),
-        }
-    }
-
-    /// Drops every family's targets (bound to the old scene) and prepares it for `scene`.
-    pub(crate) fn prepare(&mut self, scene: &Arc<Scene>) {
-        self.image_space.prepare(scene);
-        self.nearby.prepare(scene);
-        self.distance_map.prepare(scene);
-        self.pvrr.prepare(scene);
-        self.engine.prepare(scene);
-    }
-
-    /// One frame of `method` by its family ([`FamilySlot::run_frame`]); the reference is
-    /// declined.
-    pub(crate) fn render(
-        &mut self,
-        cx: &GpuFrameCx<'_>,
-        method: &MethodParams,
-        frame: Option<&mut Frame>,
-    ) -> Result<FrameTiming, RenderError> {
-        match method {
-            MethodParams::Reference(_) => Err(RenderError::Unsupported {
-                backend: BackendId::Gpu,
-                method: cx.method,
-            }),
-            MethodParams::ImageSpace(p) => self.image_space.run_frame(cx, p, frame),
-            MethodParams::NearbyGeometry(p) => self.nearby.run_frame(cx, p, frame),
-            MethodParams::DistanceMap(p) => self.distance_map.run_frame(cx, p, frame),
-            MethodParams::Pvrr(p) => self.pvrr.run_frame(cx, p, frame),
-            MethodParams::Engine(p) => self.engine.run_frame(cx, p, frame),
-        }
-    }
-
-    /// The colour buffer of the last frame of `method`'s family, `None` before its first
-    /// frame (and for the reference, which has no GPU family).
-    pub(crate) fn color(&self, method: &MethodParams) -> Option<&wgpu::Buffer> {
-        match method {
-            MethodParams::Reference(_) => None,
-            MethodParams::ImageSpace(_) => self.image_space.color(),
-            MethodParams::NearbyGeometry(_) => self.nearby.color(),
-            MethodParams::DistanceMap(_) => self.distance_map.color(),
-            MethodParams::Pvrr(_) => self.pvrr.color(),
-            MethodParams::Engine(_) => self.engine.color(),
-        }
-    }
+gpu_families! {
+    // The GPU reference runs before the families (`GpuRenderer::render`, crate::reference).
+    declined: [Reference],
+    shared_shaders: [objects_over_frame::SHADER],
+    /// Wyman 2005a.
+    image_space: image_space::ImageSpacePipelines => ImageSpace,
+    /// Wyman 2005b.
+    nearby: nearby_geometry::NearbyPipelines => NearbyGeometry,
+    /// Umenhoffer et al. 2007.
+    distance_map: distance_map::DistanceMapPipelines => DistanceMap,
+    /// Kakimoto et al. 2007.
+    pvrr: pvrr::PvrrFamily => Pvrr,
+    /// Today's engines.
+    engine: engine::EnginePipelines => Engine,
 }
 
 use refract_scene::{FrameOutputs, MethodId, MethodParams, REGISTRY};
 
 use crate::shaders::ShaderModule;
-
-/// Every family's shader module (validated by naga in `tests/shaders.rs` with the shared ones).
-pub(crate) const SHADERS: [ShaderModule; 6] = [
-    image_space::SHADER,
-    objects_over_frame::SHADER,
-    nearby_geometry::SHADER,
-    distance_map::SHADER,
-    pvrr::SHADER,
-    engine::SHADER,
-];
 
 /// The compute pipelines of one method family: one per registry method of the family, each
 /// compiled with and without AOV stores (the `WRITE_AOVS` override), over one bind-group layout.

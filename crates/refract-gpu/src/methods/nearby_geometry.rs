@@ -24,7 +24,7 @@ use crate::methods::image_space::{DecodedPixel, OutputBuffers, RefractorTargets,
 use crate::passes::raster::{RasterPipelines, SurfaceTargets};
 use crate::scene_buffers::GpuScene;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
 };
 
 /// The module of the nearby-geometry kernel (Wyman 2005b): the image-space path, then the lookups.
@@ -35,6 +35,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         PROCEDURAL_SKY,
         FRAME,
         ENVIRONMENT,
+        TWO_INTERFACE,
         IMAGE_SPACE,
         MATERIALS,
         NEARBY_GEOMETRY_WGSL,
@@ -116,6 +117,10 @@ impl GpuFamily for NearbyPipelines {
     type Params = NearbyParams;
     type Targets = NearbyTargets;
     const LABEL: &'static str = "nearby-geometry frame";
+
+    fn create(device: &wgpu::Device, _raster: &RasterPipelines) -> Self {
+        Self::new(device)
+    }
 
     fn fits(&self, targets: &NearbyTargets, cx: &GpuFrameCx<'_>, params: &NearbyParams) -> bool {
         let (ng_desc, _) = guard_band_camera(cx.camera.desc(), params.guard_band_percent);

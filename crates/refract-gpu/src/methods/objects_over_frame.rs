@@ -14,7 +14,7 @@ use crate::methods::image_space::{OutputBuffers, RefractorTargets};
 use crate::methods::nearby_geometry::{NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_uniforms};
 use crate::passes::raster::SurfaceTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
 };
 
 /// The module of `draw_objects`: the image-space shader's front-face readers and outputs, the
@@ -26,6 +26,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         PROCEDURAL_SKY,
         FRAME,
         ENVIRONMENT,
+        TWO_INTERFACE,
         IMAGE_SPACE,
         MATERIALS,
         NEARBY_GEOMETRY_WGSL,

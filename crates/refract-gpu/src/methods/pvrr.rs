@@ -272,6 +272,10 @@ impl GpuFamily for PvrrFamily {
     type Targets = PvrrTargets;
     const LABEL: &'static str = "pvrr frame";
 
+    fn create(device: &wgpu::Device, raster: &RasterPipelines) -> Self {
+        Self::new(device, raster)
+    }
+
     fn prepare(&mut self, scene: &Arc<Scene>) {
         self.planner.prepare(scene);
     }
