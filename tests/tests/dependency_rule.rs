@@ -329,3 +329,40 @@ fn the_core_builds_without_std() {
         println!("note: thumbv7em-none-eabihf is not installed; built for the host without std");
     }
 }
+
+/// The library crates meant for crates.io embed nothing from outside their own directory
+/// (`include_str!`/`include_bytes!` paths resolve inside the crate), so `cargo package` ships
+/// what they compile: refract-core's WGSL in `crates/refract-core/wgsl/`, the GPU backend's in
+/// `crates/refract-gpu/shaders/`.
+#[test]
+fn packaged_crates_embed_only_their_own_files() {
+    let root = refract_tests::workspace_root();
+    let mut embedded = 0;
+    for krate in ["refract-core", "refract-scene", "refract-gpu"] {
+        let dir = root.join("crates").join(krate);
+        let dir = dir.canonicalize().expect("crate directory");
+        for file in rust_files(&dir.join("src")) {
+            let text = std::fs::read_to_string(&file).expect("source");
+            for macro_name in ["include_str!(\"", "include_bytes!(\""] {
+                for (at, _) in text.match_indices(macro_name) {
+                    let rest = &text[at + macro_name.len()..];
+                    let relative = &rest[..rest.find('"').expect("closing quote")];
+                    let path = file.parent().expect("parent").join(relative);
+                    let path = path
+                        .canonicalize()
+                        .unwrap_or_else(|e| panic!("{}: {relative}: {e}", file.display()));
+                    assert!(
+                        path.starts_with(&dir),
+                        "{} embeds {relative}, outside {krate}: `cargo package -p {krate}` would not ship it",
+                        file.display()
+                    );
+                    embedded += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        embedded >= 20,
+        "found the WGSL files the crates embed ({embedded})"
+    );
+}

@@ -1,4 +1,4 @@
-//! The GPU's BVH traversal (`shaders/bvh.wgsl` over `refract_geometry::FlatBvh`) against the
+//! The GPU's BVH traversal (`refract-gpu/shaders/bvh.wgsl` over `refract_geometry::FlatBvh`) against the
 //! CPU's (`MeshBvh`, obvhs's wide BVH): the first building block of the exact reference in WGSL
 //! (issue 32). Both test the same watertight Möller–Trumbore; the trees differ, so only ties
 //! (a ray through a shared edge) may pick different triangles, at the same distance.

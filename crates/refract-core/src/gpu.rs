@@ -14,7 +14,7 @@ use crate::nearby_geometry::{MAX_PLANES, NearbyLookup, SeedSpacing};
 use crate::optics::FACE_FORWARD_EPSILON;
 use crate::vector::UNIT_TOLERANCE;
 
-/// Per-frame uniforms of the GPU passes (`shaders/frame.wgsl`, `struct FrameUniforms`).
+/// Per-frame uniforms of the GPU passes (`refract-gpu/shaders/frame.wgsl`, `struct FrameUniforms`).
 /// Matrices are column-major, as glam and WGSL store them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -53,7 +53,7 @@ pub struct FrameUniforms {
     pub _padding: [u32; 2],
 }
 
-/// Uniforms of the nearby-geometry pass (`shaders/nearby_geometry.wgsl`,
+/// Uniforms of the nearby-geometry pass (`refract-gpu/shaders/nearby_geometry.wgsl`,
 /// `struct NearbyUniforms`): the NG camera, the light of the opaque objects, the planes of the
 /// ray-plane lookup and the lookup's counts.
 #[repr(C)]

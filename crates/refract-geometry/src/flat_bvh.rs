@@ -1,6 +1,6 @@
 //! A mesh's BVH flattened for a GPU shader: an obvhs binary BVH (BVH2) whose nodes are 32-byte
 //! records and whose triangles are stored in leaf order, so that a WGSL traversal
-//! (`shaders/bvh.wgsl`) reads two storage arrays and nothing else. The CPU queries stay on
+//! (`refract-gpu/shaders/bvh.wgsl`) reads two storage arrays and nothing else. The CPU queries stay on
 //! [`crate::MeshBvh`] (a wide BVH); both index the same triangles and test them with the same
 //! watertight Möller–Trumbore ([`crate::bvh::EDGE_TOLERANCE`]), so their closest hits agree
 //! (the GPU conformance test holds them to it).
@@ -16,11 +16,11 @@ use obvhs::bvh2::builder::build_bvh2_from_tris;
 use crate::error::GeometryError;
 use crate::mesh::Mesh;
 
-/// The deepest traversal stack `shaders/bvh.wgsl` has (`BVH_STACK`): a flattened BVH is at most
+/// The deepest traversal stack `refract-gpu/shaders/bvh.wgsl` has (`BVH_STACK`): a flattened BVH is at most
 /// this deep.
 pub const FLAT_BVH_MAX_DEPTH: u32 = 64;
 
-/// One node, as `struct BvhNode` in `shaders/bvh.wgsl`: the bounds, then `prim_count` (0 for an
+/// One node, as `struct BvhNode` in `refract-gpu/shaders/bvh.wgsl`: the bounds, then `prim_count` (0 for an
 /// inner node, whose children are `first_index` and `first_index + 1`; otherwise a leaf of
 /// `prim_count` triangles from `first_index` in [`FlatBvh::triangles`]).
 #[repr(C)]
@@ -36,7 +36,7 @@ pub struct FlatNode {
     pub first_index: u32,
 }
 
-/// One triangle's corners, as `struct BvhTriangle` in `shaders/bvh.wgsl` (`w` unused).
+/// One triangle's corners, as `struct BvhTriangle` in `refract-gpu/shaders/bvh.wgsl` (`w` unused).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FlatTriangle {

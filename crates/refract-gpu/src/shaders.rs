@@ -14,65 +14,56 @@ pub const CORE: WgslFile = ("core.wgsl", refract_core::wgsl::CORE);
 /// The procedural sky (`refract_core::wgsl`).
 pub const PROCEDURAL_SKY: WgslFile = ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY);
 /// The frame uniforms, coverage codes, the unknown-code colour.
-pub const FRAME: WgslFile = ("frame.wgsl", include_str!("../../../shaders/frame.wgsl"));
+pub const FRAME: WgslFile = ("frame.wgsl", include_str!("../shaders/frame.wgsl"));
 /// The environment lookup.
 pub const ENVIRONMENT: WgslFile = (
     "environment.wgsl",
-    include_str!("../../../shaders/environment.wgsl"),
+    include_str!("../shaders/environment.wgsl"),
 );
 /// Diffuse materials and conductors.
-pub const MATERIALS: WgslFile = (
-    "materials.wgsl",
-    include_str!("../../../shaders/materials.wgsl"),
-);
+pub const MATERIALS: WgslFile = ("materials.wgsl", include_str!("../shaders/materials.wgsl"));
 /// The raster passes (any mesh, any camera).
-pub const RASTER: WgslFile = ("raster.wgsl", include_str!("../../../shaders/raster.wgsl"));
+pub const RASTER: WgslFile = ("raster.wgsl", include_str!("../shaders/raster.wgsl"));
 /// The raster passes of `pvrr`'s views.
 pub const PVRR_RASTER: WgslFile = (
     "pvrr_raster.wgsl",
-    include_str!("../../../shaders/pvrr_raster.wgsl"),
+    include_str!("../shaders/pvrr_raster.wgsl"),
 );
 /// The image-space kernels (Wyman 2005a), also the first part of the nearby-geometry kernel.
 pub const TWO_INTERFACE: WgslFile = (
     "two_interface.wgsl",
-    include_str!("../../../shaders/two_interface.wgsl"),
+    include_str!("../shaders/two_interface.wgsl"),
 );
 /// The image-space methods' passes over the back-face texture (Wyman 2005a).
 pub const IMAGE_SPACE: WgslFile = (
     "image_space.wgsl",
-    include_str!("../../../shaders/image_space.wgsl"),
+    include_str!("../shaders/image_space.wgsl"),
 );
 /// The distance-map search (Umenhoffer et al. 2007), also run by the conformance harness.
 pub const DISTANCE_SEARCH: WgslFile = (
     "distance_search.wgsl",
-    include_str!("../../../shaders/distance_search.wgsl"),
+    include_str!("../shaders/distance_search.wgsl"),
 );
 /// Closest hits against a flattened BVH (the exact reference's traversal, issue 32).
-pub const BVH: WgslFile = ("bvh.wgsl", include_str!("../../../shaders/bvh.wgsl"));
+pub const BVH: WgslFile = ("bvh.wgsl", include_str!("../shaders/bvh.wgsl"));
 /// The exact reference's transmission path (`refract_gpu::reference`).
-pub const REFERENCE: WgslFile = (
-    "reference.wgsl",
-    include_str!("../../../shaders/reference.wgsl"),
-);
+pub const REFERENCE: WgslFile = ("reference.wgsl", include_str!("../shaders/reference.wgsl"));
 /// The ray-query module's enable directive (its first file).
 pub const RAY_QUERY_ENABLE: WgslFile = (
     "ray_query_enable.wgsl",
-    include_str!("../../../shaders/ray_query_enable.wgsl"),
+    include_str!("../shaders/ray_query_enable.wgsl"),
 );
 /// Closest hits by the adapter's ray queries, `bvh.wgsl`'s interface.
 pub const BVH_RAY_QUERY: WgslFile = (
     "bvh_ray_query.wgsl",
-    include_str!("../../../shaders/bvh_ray_query.wgsl"),
+    include_str!("../shaders/bvh_ray_query.wgsl"),
 );
 /// The BVH's batch kernel (`refract_gpu::bvh::GpuBvh::closest_hits`).
-pub const BVH_TRACE: WgslFile = (
-    "bvh_trace.wgsl",
-    include_str!("../../../shaders/bvh_trace.wgsl"),
-);
+pub const BVH_TRACE: WgslFile = ("bvh_trace.wgsl", include_str!("../shaders/bvh_trace.wgsl"));
 /// The conformance harness's entry points.
 pub const CONFORMANCE: WgslFile = (
     "conformance.wgsl",
-    include_str!("../../../shaders/conformance.wgsl"),
+    include_str!("../shaders/conformance.wgsl"),
 );
 
 /// A module the backend compiles: its name and the files it is made of, in order.
@@ -124,7 +115,7 @@ pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
 /// back-face buffer and the frame uniforms (`refract_gpu::conformance::evaluate_kernel`).
 pub const CONFORMANCE_KERNELS: WgslFile = (
     "conformance_kernels.wgsl",
-    include_str!("../../../shaders/conformance_kernels.wgsl"),
+    include_str!("../shaders/conformance_kernels.wgsl"),
 );
 
 /// The module of [`CONFORMANCE_KERNELS`].

@@ -31,7 +31,7 @@ fn every_module_parses_and_validates() {
 #[test]
 fn every_wgsl_file_is_in_a_validated_module() {
     let dirs = [
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/shaders"),
         concat!(env!("CARGO_MANIFEST_DIR"), "/../refract-core/wgsl"),
     ];
     let on_disk: Vec<String> = dirs
@@ -54,7 +54,7 @@ fn every_wgsl_file_is_in_a_validated_module() {
         let dir = if file.as_str() == "core.wgsl" || file.as_str() == "procedural_sky.wgsl" {
             concat!(env!("CARGO_MANIFEST_DIR"), "/../refract-core/wgsl")
         } else {
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders")
+            concat!(env!("CARGO_MANIFEST_DIR"), "/shaders")
         };
         let on_disk_text = std::fs::read_to_string(format!("{dir}/{file}")).expect("read");
         assert_eq!(*text, on_disk_text, "{file}");

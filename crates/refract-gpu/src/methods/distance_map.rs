@@ -41,7 +41,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         DISTANCE_SEARCH,
         (
             "distance_map.wgsl",
-            include_str!("../../../../shaders/distance_map.wgsl"),
+            include_str!("../../shaders/distance_map.wgsl"),
         ),
     ],
 };

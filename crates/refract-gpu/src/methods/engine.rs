@@ -38,10 +38,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         IMAGE_SPACE,
         MATERIALS,
         NEARBY_GEOMETRY_WGSL,
-        (
-            "engine.wgsl",
-            include_str!("../../../../shaders/engine.wgsl"),
-        ),
+        ("engine.wgsl", include_str!("../../shaders/engine.wgsl")),
     ],
 };
 

@@ -46,7 +46,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
 /// `ng_color`), which the engine family's shader reads its screen texture with.
 pub(crate) const NEARBY_GEOMETRY_WGSL: crate::shaders::WgslFile = (
     "nearby_geometry.wgsl",
-    include_str!("../../../../shaders/nearby_geometry.wgsl"),
+    include_str!("../../shaders/nearby_geometry.wgsl"),
 );
 
 /// The `shade_nearby` pipelines: one per nearby-geometry method (`LOOKUP` fixed per method).

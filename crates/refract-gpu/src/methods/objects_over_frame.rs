@@ -30,10 +30,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         IMAGE_SPACE,
         MATERIALS,
         NEARBY_GEOMETRY_WGSL,
-        (
-            "objects.wgsl",
-            include_str!("../../../../shaders/objects.wgsl"),
-        ),
+        ("objects.wgsl", include_str!("../../shaders/objects.wgsl")),
     ],
 };
 

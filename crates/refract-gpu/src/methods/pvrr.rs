@@ -38,7 +38,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         FRAME,
         ENVIRONMENT,
         MATERIALS,
-        ("pvrr.wgsl", include_str!("../../../../shaders/pvrr.wgsl")),
+        ("pvrr.wgsl", include_str!("../../shaders/pvrr.wgsl")),
     ],
 };
 
