@@ -86,29 +86,24 @@ impl Vec3x8 {
     }
 }
 
-impl Add for Vec3x8 {
-    type Output = Self;
-    #[inline]
-    fn add(self, rhs: Self) -> Self {
-        Self {
-            x: self.x + rhs.x,
-            y: self.y + rhs.y,
-            z: self.z + rhs.z,
+/// Component by component, as glam's `Vec3` operators: `+`, `-` and `*` of two vectors.
+macro_rules! componentwise {
+    ($($trait:ident $method:ident),*) => {$(
+        impl $trait for Vec3x8 {
+            type Output = Self;
+            #[inline]
+            fn $method(self, rhs: Self) -> Self {
+                Self {
+                    x: self.x.$method(rhs.x),
+                    y: self.y.$method(rhs.y),
+                    z: self.z.$method(rhs.z),
+                }
+            }
         }
-    }
+    )*};
 }
 
-impl Sub for Vec3x8 {
-    type Output = Self;
-    #[inline]
-    fn sub(self, rhs: Self) -> Self {
-        Self {
-            x: self.x - rhs.x,
-            y: self.y - rhs.y,
-            z: self.z - rhs.z,
-        }
-    }
-}
+componentwise!(Add add, Sub sub, Mul mul);
 
 impl Neg for Vec3x8 {
     type Output = Self;
@@ -118,19 +113,6 @@ impl Neg for Vec3x8 {
             x: -self.x,
             y: -self.y,
             z: -self.z,
-        }
-    }
-}
-
-/// Component by component, as `Vec3 * Vec3`.
-impl Mul for Vec3x8 {
-    type Output = Self;
-    #[inline]
-    fn mul(self, rhs: Self) -> Self {
-        Self {
-            x: self.x * rhs.x,
-            y: self.y * rhs.y,
-            z: self.z * rhs.z,
         }
     }
 }

@@ -108,9 +108,10 @@ impl Albedo {
                 let inside = (u.ge(zero) & u.lt(one) & v.ge(zero) & v.lt(one)).bits();
                 let index = (v * splat(4.0)).trunc() * splat(6.0) + (u * splat(6.0)).trunc();
                 let index = index.to_lane_array();
+                let index = index.as_ref();
                 V::gather(|i| {
                     if inside & (1 << i) != 0 {
-                        Vec3::from_array(COLOR_CHART[index.as_ref()[i] as usize])
+                        Vec3::from_array(COLOR_CHART[index[i] as usize])
                     } else {
                         Vec3::splat(COLOR_CHART_OUTSIDE)
                     }
