@@ -334,8 +334,8 @@ impl ClipRay {
 }
 
 impl ClipRay<Vec3x8> {
-    /// Eight rays as lanes.
-    pub fn from_rays(rays: &[ClipRay; LANES]) -> Self {
+    /// Eight rays as lanes: `rays[i]` is the ray `origin + t dir` of lane `i` (as lanes too).
+    pub fn from_rays(rays: &[ClipRay; LANES], origin: Vec3x8, dir: Vec3x8) -> Self {
         let (mut c0, mut c1) = ([[0.0; LANES]; 4], [[0.0; LANES]; 4]);
         for (i, ray) in rays.iter().enumerate() {
             for k in 0..4 {
@@ -343,8 +343,8 @@ impl ClipRay<Vec3x8> {
             }
         }
         Self {
-            origin: Vec3x8::gather(|i| rays[i].origin),
-            dir: Vec3x8::gather(|i| rays[i].dir),
+            origin,
+            dir,
             c0: c0.map(F32x8::new),
             c1: c1.map(F32x8::new),
             width: F32x8::splat(rays[0].width),

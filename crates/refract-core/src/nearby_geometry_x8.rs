@@ -77,7 +77,7 @@ pub fn find_nearby_x8<T: NearbyGeometryTexture + ?Sized>(
     let (p2_lanes, t2_lanes) = (p2.to_lanes(), t2.to_lanes());
     let scalar_rays: [ClipRay; LANES] =
         core::array::from_fn(|i| ClipRay::new(camera, p2_lanes[i], t2_lanes[i]));
-    let rays = ClipRayLanes::from_rays(&scalar_rays);
+    let rays = ClipRayLanes::from_rays(&scalar_rays, *p2, *t2);
     let active_lanes = mask_lanes(active);
     // Per lane the ray parameter the lookup starts from (or `None`: a miss).
     let plane_starts = || -> [Option<f32>; LANES] {
@@ -396,7 +396,11 @@ mod tests {
                 let dirs: [Vec3; LANES] = core::array::from_fn(|i| spiral(group * LANES + i, 800));
                 let scalar: [ClipRay; LANES] =
                     core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
-                let lanes = ClipRayLanes::from_rays(&scalar);
+                let lanes = ClipRayLanes::from_rays(
+                    &scalar,
+                    Vec3x8::splat(origin),
+                    Vec3x8::from_lanes(&dirs),
+                );
                 let segment = scalar.map(|r| r.segment().unwrap_or((0.0, 1.0)));
                 for f in [-1.0, 0.0, 0.25, 0.5, 0.999, 1.0, 1.5, 100.0] {
                     let t: [f32; LANES] =
@@ -461,8 +465,12 @@ mod tests {
                     });
                     let scalar: [ClipRay; LANES] =
                         core::array::from_fn(|i| ClipRay::new(&cam, origin, dirs[i]));
-                    let (t0, t1, ok) = ClipRayLanes::from_rays(&scalar)
-                        .segment_lanes(F32x8::splat(f32::from_bits(u32::MAX)));
+                    let (t0, t1, ok) = ClipRayLanes::from_rays(
+                        &scalar,
+                        Vec3x8::splat(origin),
+                        Vec3x8::from_lanes(&dirs),
+                    )
+                    .segment_lanes(F32x8::splat(f32::from_bits(u32::MAX)));
                     let (t0, t1, ok) = (t0.to_array(), t1.to_array(), mask_lanes(ok));
                     for i in 0..LANES {
                         let lanes = ok[i].then_some((t0[i], t1[i]));
