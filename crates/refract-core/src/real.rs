@@ -216,6 +216,17 @@ pub trait Vector3:
 /// The mask of a vector type's components.
 pub type Msk<V> = <<V as Vector3>::Real as Real>::Mask;
 
+/// Trait methods that forward to a function of the implementing type: `name(args) -> ret = path`
+/// becomes `fn name(self, args) -> ret { path(self, args) }`.
+macro_rules! forward {
+    ($(fn $name:ident($($arg:ident),*) -> $ret:ty = $path:path;)*) => {$(
+        #[inline]
+        fn $name(self $(, $arg: Self)*) -> $ret {
+            $path(self $(, $arg)*)
+        }
+    )*};
+}
+
 impl LaneMask for bool {
     #[inline]
     fn splat(value: bool) -> Self {
@@ -266,10 +277,6 @@ impl Real for f32 {
         crate::math::sqrt(self)
     }
     #[inline]
-    fn abs(self) -> Self {
-        f32::abs(self)
-    }
-    #[inline]
     fn floor(self) -> Self {
         crate::math::floor(self)
     }
@@ -298,10 +305,6 @@ impl Real for f32 {
         }
     }
     #[inline]
-    fn copysign(self, sign: Self) -> Self {
-        f32::copysign(self, sign)
-    }
-    #[inline]
     fn lt(self, rhs: Self) -> bool {
         self < rhs
     }
@@ -321,17 +324,12 @@ impl Real for f32 {
     fn eq(self, rhs: Self) -> bool {
         self == rhs
     }
-    #[inline]
-    fn is_finite(self) -> bool {
-        f32::is_finite(self)
-    }
-    #[inline]
-    fn is_nan(self) -> bool {
-        f32::is_nan(self)
-    }
-    #[inline]
-    fn is_sign_negative(self) -> bool {
-        f32::is_sign_negative(self)
+    forward! {
+        fn abs() -> Self = f32::abs;
+        fn copysign(sign) -> Self = f32::copysign;
+        fn is_finite() -> bool = f32::is_finite;
+        fn is_nan() -> bool = f32::is_nan;
+        fn is_sign_negative() -> bool = f32::is_sign_negative;
     }
     #[inline]
     fn select(mask: bool, a: Self, b: Self) -> Self {
@@ -466,22 +464,6 @@ impl Real for F32x8 {
         self.to_array()
     }
     #[inline]
-    fn sqrt(self) -> Self {
-        F32x8::sqrt(self)
-    }
-    #[inline]
-    fn abs(self) -> Self {
-        F32x8::abs(self)
-    }
-    #[inline]
-    fn floor(self) -> Self {
-        F32x8::floor(self)
-    }
-    #[inline]
-    fn trunc(self) -> Self {
-        F32x8::trunc(self)
-    }
-    #[inline]
     fn map(self, mut f: impl FnMut(f32) -> f32) -> Self {
         let mut lanes = self.to_array();
         for lane in &mut lanes {
@@ -489,49 +471,22 @@ impl Real for F32x8 {
         }
         F32x8::new(lanes)
     }
-    #[inline]
-    fn min(self, rhs: Self) -> Self {
-        F32x8::min(self, rhs)
-    }
-    #[inline]
-    fn max(self, rhs: Self) -> Self {
-        F32x8::max(self, rhs)
-    }
-    #[inline]
-    fn copysign(self, sign: Self) -> Self {
-        F32x8::copysign(self, sign)
-    }
-    #[inline]
-    fn lt(self, rhs: Self) -> Self {
-        self.simd_lt(rhs)
-    }
-    #[inline]
-    fn le(self, rhs: Self) -> Self {
-        self.simd_le(rhs)
-    }
-    #[inline]
-    fn gt(self, rhs: Self) -> Self {
-        self.simd_gt(rhs)
-    }
-    #[inline]
-    fn ge(self, rhs: Self) -> Self {
-        self.simd_ge(rhs)
-    }
-    #[inline]
-    fn eq(self, rhs: Self) -> Self {
-        self.simd_eq(rhs)
-    }
-    #[inline]
-    fn is_finite(self) -> Self {
-        F32x8::is_finite(self)
-    }
-    #[inline]
-    fn is_nan(self) -> Self {
-        F32x8::is_nan(self)
-    }
-    #[inline]
-    fn is_sign_negative(self) -> Self {
-        F32x8::is_sign_negative(self)
+    forward! {
+        fn sqrt() -> Self = F32x8::sqrt;
+        fn abs() -> Self = F32x8::abs;
+        fn floor() -> Self = F32x8::floor;
+        fn trunc() -> Self = F32x8::trunc;
+        fn min(rhs) -> Self = F32x8::min;
+        fn max(rhs) -> Self = F32x8::max;
+        fn copysign(sign) -> Self = F32x8::copysign;
+        fn lt(rhs) -> Self = F32x8::simd_lt;
+        fn le(rhs) -> Self = F32x8::simd_le;
+        fn gt(rhs) -> Self = F32x8::simd_gt;
+        fn ge(rhs) -> Self = F32x8::simd_ge;
+        fn eq(rhs) -> Self = F32x8::simd_eq;
+        fn is_finite() -> Self = F32x8::is_finite;
+        fn is_nan() -> Self = F32x8::is_nan;
+        fn is_sign_negative() -> Self = F32x8::is_sign_negative;
     }
     #[inline]
     fn select(mask: Self, a: Self, b: Self) -> Self {
