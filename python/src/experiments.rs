@@ -108,8 +108,8 @@ pub fn compare(
             .ok_or_else(|| value_error(format!("{name} = {v}: expected 1 to {max}")))
     };
     let (res, spp, frames) = (
-        checked("res", res, 8192)?,
-        checked("spp", spp, 1024)?,
+        checked("res", res, refract_scene::MAX_FRAME_SIZE)?,
+        checked("spp", spp, refract_scene::MAX_SPP)?,
         checked("frames", frames, 10000)?,
     );
     if scenes.is_empty() {

@@ -116,7 +116,7 @@ struct CompareArgs {
     #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
     backends: Vec<String>,
     /// Square resolution in pixels.
-    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=8192))]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=i64::from(refract_scene::MAX_FRAME_SIZE)))]
     res: u32,
     /// Reference samples per pixel.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]

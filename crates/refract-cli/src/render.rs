@@ -37,7 +37,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "512x512")]
     pub res: String,
     /// Samples per pixel of the reference.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=i64::from(refract_scene::MAX_SPP)))]
     pub spp: u32,
     /// Reference mode: `transmission` (refracted path only, TIR reflects) or `full` (Fresnel
     /// splitting at every interface).
@@ -65,13 +65,16 @@ fn parse_res(res: &str) -> anyhow::Result<(u32, u32)> {
         s.trim()
             .parse::<u32>()
             .ok()
-            .filter(|&v| (1..=16384).contains(&v))
+            .filter(|&v| (1..=refract_scene::MAX_FRAME_SIZE).contains(&v))
     };
     let parsed = match res.split_once(['x', 'X']) {
         Some((w, h)) => parse(w).zip(parse(h)),
         None => parse(res).map(|n| (n, n)),
     };
-    parsed.with_context(|| format!("--res {res}: expected WxH or N with sizes from 1 to 16384"))
+    parsed.with_context(|| {
+        let max = refract_scene::MAX_FRAME_SIZE;
+        format!("--res {res}: expected WxH or N with sizes from 1 to {max}")
+    })
 }
 
 /// The method of `--method`, with `--tir`, `--spp`, `--trace`, `--depth` and every `--param`

@@ -838,3 +838,42 @@ fn errors_name_each_file_once() {
     assert_eq!(err.matches("file/out").count(), 1, "{err}");
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
+
+/// The resolution and sample bounds are one each (`refract_scene::MAX_FRAME_SIZE`,
+/// `refract_scene::MAX_SPP`): `render`, `compare` and sweep files refuse one past them, and
+/// the CLI (which once allowed 16384 in `render` but 8192 in `compare`) names the same bound.
+#[test]
+fn resolution_and_sample_bounds_are_the_same_everywhere() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let too_big = (refract_scene::MAX_FRAME_SIZE + 1).to_string();
+    let render = refract(
+        &["render", "sphere", "--res", &too_big, "--out", "x.png"],
+        dir.path(),
+    );
+    assert!(!render.status.success());
+    let max = refract_scene::MAX_FRAME_SIZE.to_string();
+    assert!(stderr(&render).contains(&max), "{}", stderr(&render));
+    let compare = refract(&["compare", "sphere", "--res", &too_big], dir.path());
+    assert!(!compare.status.success());
+    assert!(stderr(&compare).contains(&max), "{}", stderr(&compare));
+    let spp = (refract_scene::MAX_SPP + 1).to_string();
+    let render = refract(
+        &["render", "sphere", "--spp", &spp, "--out", "x.png"],
+        dir.path(),
+    );
+    assert!(!render.status.success());
+    assert!(
+        stderr(&render).contains(&refract_scene::MAX_SPP.to_string()),
+        "{}",
+        stderr(&render)
+    );
+    let sweep = dir.path().join("sweep.toml");
+    std::fs::write(
+        &sweep,
+        format!("scenes = [\"sphere\"]\nmethods = [\"single\"]\nres = [{too_big}]\n"),
+    )
+    .expect("write sweep");
+    let run = refract(&["sweep", "sweep.toml", "--out", "s"], dir.path());
+    assert!(!run.status.success());
+    assert!(stderr(&run).contains(&max), "{}", stderr(&run));
+}

@@ -52,7 +52,7 @@ pub struct BenchArgs {
     )]
     pub backends: Vec<String>,
     /// Square resolution (Table 1: 1024).
-    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=8192)))]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=i64::from(refract_scene::MAX_FRAME_SIZE))))]
     pub res: u32,
     /// Timed frames per method (median reported; at least 20 for the table).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000)))]

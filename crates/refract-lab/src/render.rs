@@ -15,8 +15,8 @@ use refract_scene::{
 };
 use refract_trace::ReferenceRenderer;
 
-/// The largest width or height of a rendered frame (pixels).
-pub const MAX_SIZE: u32 = 16384;
+/// The largest width or height of a rendered frame (pixels): [`refract_scene::MAX_FRAME_SIZE`].
+pub const MAX_SIZE: u32 = refract_scene::MAX_FRAME_SIZE;
 
 /// The frames one scene renders, with a renderer per backend prepared once.
 pub struct Renders {

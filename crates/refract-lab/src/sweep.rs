@@ -179,8 +179,9 @@ impl Sweep {
         crate::ensure!(!file.methods.is_empty(), "{origin}: `methods` is empty");
         for &res in &file.res {
             crate::ensure!(
-                (1..=8192).contains(&res),
-                "{origin}: res = {res}: expected sizes from 1 to 8192"
+                (1..=refract_scene::MAX_FRAME_SIZE).contains(&res),
+                "{origin}: res = {res}: expected sizes from 1 to {}",
+                refract_scene::MAX_FRAME_SIZE
             );
         }
         for &ior in &file.ior {
@@ -191,9 +192,10 @@ impl Sweep {
             );
         }
         crate::ensure!(
-            (1..=4096).contains(&file.spp),
-            "{origin}: spp = {}: expected 1 to 4096",
-            file.spp
+            (1..=refract_scene::MAX_SPP).contains(&file.spp),
+            "{origin}: spp = {}: expected 1 to {}",
+            file.spp,
+            refract_scene::MAX_SPP
         );
         crate::ensure!(
             (1..=1000).contains(&file.frames),

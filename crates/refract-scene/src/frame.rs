@@ -214,6 +214,10 @@ impl Layer {
     }
 }
 
+/// The largest width or height of a frame any command renders, in pixels: the one bound the
+/// CLI (`render`, `compare`, `bench`), sweep files, the experiments library and Python check.
+pub const MAX_FRAME_SIZE: u32 = 16384;
+
 /// A rendered frame: linear RGB colour and the AOV layers the renderer wrote.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Frame {

@@ -28,11 +28,11 @@ pub mod tonemap;
 
 pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::{SceneError, full_message};
-pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, PixelLayers};
+pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, MAX_FRAME_SIZE, PixelLayers};
 pub use registry::{
     BackendId, DistanceMapParams, EngineParams, Family, FamilyParams, ImageSpaceMethod,
-    InterfaceRule, MethodId, MethodInfo, MethodParams, NearbyParams, ParamValue, PvrrParams,
-    REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
+    InterfaceRule, MAX_SPP, MethodId, MethodInfo, MethodParams, NearbyParams, ParamValue,
+    PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

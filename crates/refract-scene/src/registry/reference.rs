@@ -99,7 +99,10 @@ const REFERENCE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "spp",
         doc: "samples per pixel (1 = the pixel centre; more: stratified, box filter)",
-        kind: ParamKind::Integer { min: 1, max: 4096 },
+        kind: ParamKind::Integer {
+            min: 1,
+            max: MAX_SPP,
+        },
         default: "1",
     },
 ];
@@ -172,3 +175,7 @@ impl FamilyParams for TraceSettings {
         }
     }
 }
+
+/// The most reference samples per pixel (`spp`): the bound the registry row, the CLI and sweep
+/// files check.
+pub const MAX_SPP: u32 = 4096;
