@@ -366,3 +366,70 @@ fn packaged_crates_embed_only_their_own_files() {
         "found the WGSL files the crates embed ({embedded})"
     );
 }
+
+/// Every declared dependency of every workspace package is used: its crate name (`-` as `_`,
+/// or its `rename`) appears as a path, a `use`, a macro or an attribute in the package's
+/// sources (`src/`, `tests/`, `benches/`, `examples/`, `build.rs`), for normal and dev
+/// dependencies alike (a text check, as `cargo-machete` makes: it found 10 unused ones when it
+/// was written).
+#[test]
+fn declared_dependencies_are_used() {
+    let output = Command::new(env!("CARGO"))
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(refract_tests::workspace_root())
+        .output()
+        .expect("cargo metadata");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).expect("json");
+    let mut unused = Vec::new();
+    let mut checked = 0;
+    for package in metadata["packages"].as_array().expect("packages") {
+        let name = package["name"].as_str().expect("name");
+        let manifest = std::path::PathBuf::from(package["manifest_path"].as_str().expect("path"));
+        let dir = manifest.parent().expect("package directory");
+        let mut text = String::new();
+        for sub in ["src", "tests", "benches", "examples"] {
+            let sub = dir.join(sub);
+            if sub.is_dir() {
+                for file in rust_files(&sub) {
+                    text.push_str(&std::fs::read_to_string(file).expect("source"));
+                }
+            }
+        }
+        if let Ok(build) = std::fs::read_to_string(dir.join("build.rs")) {
+            text.push_str(&build);
+        }
+        for dep in package["dependencies"].as_array().expect("dependencies") {
+            let dep_name = dep["rename"]
+                .as_str()
+                .or(dep["name"].as_str())
+                .expect("dependency name");
+            let ident = dep_name.replace('-', "_");
+            let used = [
+                format!("{ident}::"),
+                format!("use {ident}"),
+                format!("extern crate {ident}"),
+                format!("{ident}!"),
+                format!("#[{ident}"),
+            ]
+            .iter()
+            .any(|pattern| text.contains(pattern.as_str()));
+            if !used {
+                unused.push(format!("{name}: {dep_name}"));
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "read the dependencies ({checked})");
+    assert!(unused.is_empty(), "declared but never used: {unused:#?}");
+}
