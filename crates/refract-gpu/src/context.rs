@@ -326,6 +326,6 @@ fn experimental_ray_queries() -> wgpu::ExperimentalFeatures {
     // SAFETY: the token acknowledges that wgpu's experimental ray-query API may still have
     // bugs. We use it only as wgpu's own example does (one triangle BLAS, one TLAS instance,
     // `rayQueryProceed` over opaque geometry), the results are held to the WGSL traversal's by
-    // tests/tests/gpu_ray_query.rs, and `REFRACT_RAY_QUERY=off` turns it off.
+    // crates/refract-cli/tests/ray_query.rs, and `REFRACT_RAY_QUERY=off` turns it off.
     unsafe { wgpu::ExperimentalFeatures::enabled() }
 }

@@ -29,8 +29,9 @@ pub struct Renders {
 pub struct FrameRequest<'a> {
     /// The method and its parameters (`MethodParams::Reference` for the reference).
     pub method: &'a MethodParams,
-    /// The backend of a method: `cpu` or `gpu`. The reference runs on the CPU tracer: asking
-    /// for it on the GPU is an error, never a silent fallback.
+    /// The backend of a method: `cpu` or `gpu` (`trace` is refused for a method). For the
+    /// reference, `gpu` runs the GPU tracer (`refract_gpu::reference`) and anything else the CPU
+    /// tracer.
     pub backend: BackendId,
     /// The camera; its `width` and `height` are the frame's, each in `1..=`[`MAX_SIZE`].
     pub camera: CameraDesc,
