@@ -11,23 +11,7 @@ use std::process::Command;
 /// Every workspace package with the workspace crates it depends on (any kind: normal, dev,
 /// build) and those it links outside its tests (normal and build).
 fn workspace_dependencies() -> Vec<(String, BTreeSet<String>, BTreeSet<String>)> {
-    let output = Command::new(env!("CARGO"))
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--no-deps",
-            "--offline",
-        ])
-        .current_dir(refract_tests::workspace_root())
-        .output()
-        .expect("cargo metadata");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).expect("json");
+    let metadata = cargo_metadata();
     let packages = metadata["packages"].as_array().expect("packages");
     let names: BTreeSet<String> = packages
         .iter()
@@ -54,6 +38,27 @@ fn workspace_dependencies() -> Vec<(String, BTreeSet<String>, BTreeSet<String>)>
             )
         })
         .collect()
+}
+
+/// `cargo metadata` of the workspace's own packages.
+fn cargo_metadata() -> serde_json::Value {
+    let output = Command::new(env!("CARGO"))
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(refract_tests::workspace_root())
+        .output()
+        .expect("cargo metadata");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("json")
 }
 
 fn set(names: &[&str]) -> BTreeSet<String> {
@@ -374,23 +379,7 @@ fn packaged_crates_embed_only_their_own_files() {
 /// was written).
 #[test]
 fn declared_dependencies_are_used() {
-    let output = Command::new(env!("CARGO"))
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--no-deps",
-            "--offline",
-        ])
-        .current_dir(refract_tests::workspace_root())
-        .output()
-        .expect("cargo metadata");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).expect("json");
+    let metadata = cargo_metadata();
     let mut unused = Vec::new();
     let mut checked = 0;
     for package in metadata["packages"].as_array().expect("packages") {

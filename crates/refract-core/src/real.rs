@@ -67,8 +67,6 @@ pub trait Real:
     const ONE: Self;
     /// `v` in every lane.
     fn splat(v: f32) -> Self;
-    /// The value of lane `i`.
-    fn lane(self, i: usize) -> f32;
     /// Every lane's value (to read several lanes one by one: one store, not one per lane).
     fn to_lane_array(self) -> Self::Array;
     /// `√x` (IEEE, correctly rounded).
@@ -265,10 +263,6 @@ impl Real for f32 {
         v
     }
     #[inline]
-    fn lane(self, _i: usize) -> f32 {
-        self
-    }
-    #[inline]
     fn to_lane_array(self) -> [f32; 1] {
         [self]
     }
@@ -454,10 +448,6 @@ impl Real for F32x8 {
     #[inline]
     fn splat(v: f32) -> Self {
         F32x8::splat(v)
-    }
-    #[inline]
-    fn lane(self, i: usize) -> f32 {
-        self.to_array()[i]
     }
     #[inline]
     fn to_lane_array(self) -> [f32; LANES] {

@@ -104,8 +104,8 @@ proptest! {
         check_mask(Real::is_finite(x), |i| a[i].is_finite(), "is_finite")?;
         check_mask(Real::is_nan(x), |i| a[i].is_nan(), "is_nan")?;
         check_mask(Real::is_sign_negative(x), |i| a[i].is_sign_negative(), "is_sign_negative")?;
-        for (i, expected) in a.into_iter().enumerate() {
-            prop_assert!(same(Real::lane(x, i), expected));
+        for (lane, expected) in Real::to_lane_array(x).into_iter().zip(a) {
+            prop_assert!(same(lane, expected));
         }
     }
 

@@ -375,7 +375,7 @@ impl ScreenTriangle {
     /// from the depth plane where the triangle has one, else `Σₖ λₖ·depthₖ` in `f32` with the
     /// screen-space barycentrics `λₖ = eₖ / area` from the exact integer edge functions,
     /// scaled in `f64` and rounded (what the distance maps need: they turn window depths into
-    /// distances, which magnifies their last bits; performance.md, session 20).
+    /// distances, which magnifies their last bits; performance.md, "Tried and not kept").
     #[inline]
     fn depth_at(&self, x: u32, y: u32) -> f32 {
         if let Some(plane) = self.depth_plane {
