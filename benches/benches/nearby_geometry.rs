@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use refract_cpu::CpuRenderer;
-use refract_cpu::nearby_geometry::{NearbyMeshes, NearbyTexture};
+use refract_cpu::object_surfaces::{NearbyMeshes, NearbyTexture};
 use refract_eval::load_scene;
 use refract_scene::{Aov, Family, Frame, FrameOutputs, MethodParams, REGISTRY, Renderer};
 

@@ -181,6 +181,134 @@ fn rust_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
     files
 }
 
+/// The modules of the crate at `src` (a directory) and the modules each imports by a
+/// `crate::` path, as edges `(from, to)`. A module is a source file's path under `src` without
+/// its extension (`mod.rs` is its directory), cut to its first two components, so that a
+/// family's own submodules (`families/distance_map/eye_pass.rs`) are the family; test modules
+/// (from the first `#[cfg(test)]`) and comments are left out.
+fn module_imports(src: &std::path::Path) -> Vec<(String, String)> {
+    let module_of = |rel: &std::path::Path| {
+        let mut parts: Vec<String> = rel
+            .with_extension("")
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect();
+        if parts.last().is_some_and(|p| p == "mod") {
+            parts.pop();
+        }
+        parts.truncate(2);
+        parts.join("/")
+    };
+    // Modules the crate root re-exports under a shorter path (`pub use families::{pvrr, ..}`
+    // makes `crate::pvrr` the module `families/pvrr`).
+    let root = std::fs::read_to_string(src.join("lib.rs")).unwrap_or_default();
+    let mut aliases = std::collections::BTreeMap::new();
+    for line in root.lines() {
+        let Some(rest) = line.trim().strip_prefix("pub use ") else {
+            continue;
+        };
+        let Some((dir, names)) = rest.split_once("::") else {
+            continue;
+        };
+        let names = names
+            .trim_end_matches(';')
+            .trim_matches(|c| c == '{' || c == '}');
+        for name in names.split(',').map(str::trim) {
+            if src.join(dir).join(format!("{name}.rs")).is_file() {
+                aliases.insert(name.to_owned(), format!("{dir}/{name}"));
+            }
+        }
+    }
+    let mut edges = Vec::new();
+    for path in rust_files(src) {
+        let rel = path.strip_prefix(src).expect("under src").to_owned();
+        let from = module_of(&rel);
+        let text = std::fs::read_to_string(&path).expect("read");
+        // The code outside tests and comments (a doc link is no import).
+        let code: String = text
+            .split("#[cfg(test)]")
+            .next()
+            .unwrap_or_default()
+            .lines()
+            .filter(|line| !line.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        for (i, _) in code.match_indices("crate::") {
+            // The longest run of path segments after `crate::` that names a module file.
+            let mut segments: Vec<String> = code[i + "crate::".len()..]
+                .split("::")
+                .map(|s| {
+                    s.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .next()
+                })
+                .map(|s| s.unwrap_or_default().to_owned())
+                .take_while(|s| !s.is_empty())
+                .collect();
+            if let Some(alias) = segments.first().and_then(|first| aliases.get(first)) {
+                segments[0] = alias.clone();
+            }
+            let target = (1..=segments.len()).rev().find_map(|n| {
+                let dir = segments[..n].join("/");
+                [format!("{dir}.rs"), format!("{dir}/mod.rs")]
+                    .into_iter()
+                    .map(std::path::PathBuf::from)
+                    .find(|candidate| src.join(candidate).is_file())
+            });
+            if let Some(target) = target {
+                let to = module_of(&target);
+                if to != from {
+                    edges.push((from.clone(), to));
+                }
+            }
+        }
+    }
+    edges
+}
+
+/// A module of `edges` that reaches itself through the imports of others, with its path.
+fn import_cycle(edges: &[(String, String)]) -> Option<Vec<String>> {
+    for (start, _) in edges {
+        // Depth-first from `start`, remembering how each module was reached.
+        let mut parent = std::collections::BTreeMap::new();
+        let mut stack = vec![start.clone()];
+        while let Some(m) = stack.pop() {
+            for (a, b) in edges.iter().filter(|(a, _)| *a == m) {
+                if b == start {
+                    let mut path = vec![b.clone(), a.clone()];
+                    while let Some(p) = parent.get(path.last().expect("non-empty")) {
+                        path.push(String::clone(p));
+                    }
+                    path.reverse();
+                    return Some(path);
+                }
+                if !parent.contains_key(b) {
+                    parent.insert(b.clone(), a.clone());
+                    stack.push(b.clone());
+                }
+            }
+        }
+    }
+    None
+}
+
+/// The cycle finder finds a cycle where there is one and none in a layered graph: the negative
+/// control of the tests below.
+#[test]
+fn the_import_cycle_finder_finds_cycles() {
+    let edge = |a: &str, b: &str| (a.to_owned(), b.to_owned());
+    let layered = [edge("a", "b"), edge("b", "c"), edge("a", "c")];
+    assert_eq!(import_cycle(&layered), None);
+    let cycle = [
+        edge("a", "b"),
+        edge("b", "c"),
+        edge("c", "a"),
+        edge("c", "d"),
+    ];
+    let found = import_cycle(&cycle).expect("a cycle");
+    assert_eq!(found.first(), found.last());
+    assert_eq!(found.len(), 4, "{found:?}");
+}
+
 /// The experiments library never prints (progress and notes go through its `Progress`
 /// callback), and its modules import each other without a circle.
 #[test]
@@ -188,18 +316,6 @@ fn the_experiments_library_is_quiet_and_layered() {
     let src = refract_tests::workspace_root().join("crates/refract-lab/src");
     let files = rust_files(&src);
     assert!(files.len() >= 10, "read refract-lab's sources");
-    let mut edges: Vec<(String, String)> = Vec::new();
-    let module_of = |path: &std::path::Path| {
-        let rel = path.strip_prefix(&src).expect("under src");
-        let first = rel
-            .components()
-            .next()
-            .expect("a component")
-            .as_os_str()
-            .to_string_lossy()
-            .into_owned();
-        first.trim_end_matches(".rs").to_owned()
-    };
     for path in &files {
         let text = std::fs::read_to_string(path).expect("read");
         for needle in ["println!", "eprintln!", "print!(", "eprint!(", "dbg!"] {
@@ -209,36 +325,36 @@ fn the_experiments_library_is_quiet_and_layered() {
                 path.display()
             );
         }
-        let from = module_of(path);
-        for (i, _) in text.match_indices("crate::") {
-            let rest = &text[i + "crate::".len()..];
-            let to: String = rest
-                .chars()
-                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                .collect();
-            if src.join(format!("{to}.rs")).is_file() && to != from {
-                edges.push((from.clone(), to));
-            }
-        }
     }
-    // No module reaches itself through the imports of others.
-    let reaches = |start: &str| {
-        let mut seen = std::collections::BTreeSet::new();
-        let mut stack = vec![start.to_owned()];
-        while let Some(m) = stack.pop() {
-            for (a, b) in &edges {
-                if *a == m && seen.insert(b.clone()) {
-                    stack.push(b.clone());
-                }
-            }
+    let edges = module_imports(&src);
+    assert!(edges.len() >= 20, "read refract-lab's imports: {edges:?}");
+    if let Some(cycle) = import_cycle(&edges) {
+        panic!("refract-lab's modules import each other in a circle: {cycle:?}");
+    }
+}
+
+/// The backends' modules import each other without a circle: the plumbing several families
+/// share lives outside the family modules (`refract-gpu/src/passes/`, refract-cpu's
+/// `object_surfaces`, `shade`, `buffers`), and no family module imports another family's.
+#[test]
+fn the_backends_are_layered() {
+    for (krate, families) in [("refract-gpu", "methods/"), ("refract-cpu", "families/")] {
+        let src = refract_tests::workspace_root()
+            .join("crates")
+            .join(krate)
+            .join("src");
+        let edges = module_imports(&src);
+        assert!(edges.len() >= 20, "read {krate}'s imports: {edges:?}");
+        if let Some(cycle) = import_cycle(&edges) {
+            panic!("{krate}'s modules import each other in a circle: {cycle:?}");
         }
-        seen
-    };
-    for (from, _) in &edges {
-        assert!(
-            !reaches(from).contains(from),
-            "refract-lab's module `{from}` imports itself through others: {edges:?}"
-        );
+        for (from, to) in &edges {
+            assert!(
+                !(from.starts_with(families) && to.starts_with(families)),
+                "{krate}: the family module {from} imports the family module {to}; move what \
+                 they share out of the family"
+            );
+        }
     }
 }
 

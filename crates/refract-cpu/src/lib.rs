@@ -21,6 +21,7 @@ pub mod buffers;
 pub mod families;
 pub mod family;
 pub mod instruction_set;
+pub mod object_surfaces;
 mod pixel_group;
 mod prefetch;
 pub mod raster;

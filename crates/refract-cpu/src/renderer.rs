@@ -12,8 +12,8 @@ use refract_scene::{
 };
 
 use crate::families::Families;
+use crate::families::pvrr::PvrrPasses;
 use crate::family::FrameCx;
-use crate::pvrr::PvrrPasses;
 
 /// The CPU renderer: it keeps its buffers between frames, so that after the first frame at a
 /// resolution a colour-only frame allocates nothing.

@@ -13,18 +13,64 @@ use core::ops::Range;
 use glam::{UVec2, Vec2, Vec3};
 use refract_core::Camera;
 use refract_core::exit::ExitNormalSource;
+use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::kernel_x8::{FrontLanes, one_interface_lanes, two_interface_lanes};
 use refract_core::lanes::{F32x8, LANES, Vec2x8, Vec3x8, mask_from_lanes};
 use refract_core::nearby_geometry::view_depth;
 use refract_core::real::Vector3;
-use refract_scene::Environment;
+use refract_scene::{Aov, Environment, LayerValue, PixelLayers};
 
 use crate::buffers::BackFaces;
-use crate::image_space::MethodAov;
-use crate::nearby_geometry::{NearbyTexel, NearbyTexture};
+use crate::object_surfaces::{NearbyTexel, NearbyTexture};
 use crate::pixel_group::{PixelGroup, for_each_group};
 use crate::raster::{Attribute, Band, SurfaceBuffer, Texel, TexelLanes};
+
+/// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
+/// not apply (background pixels, degenerate inputs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct MethodAov {
+    /// The pixel sees the refractor.
+    pub covered: bool,
+    /// `P~2` (two-interface methods).
+    pub p2: Vec3,
+    /// The direction looked up in the environment (`T1` for `single`).
+    pub t2: Vec3,
+    /// The exit normal used (two-interface methods).
+    pub n2: Vec3,
+    /// Where `N2` came from.
+    pub n2_source: Option<ExitNormalSource>,
+    /// Total internal reflection at the entry or exit.
+    pub tir: bool,
+}
+
+impl PixelLayers for MethodAov {
+    fn value(&self, aov: Aov) -> Option<LayerValue> {
+        Some(match aov {
+            Aov::Covered => LayerValue::Flag(self.covered),
+            Aov::Tir => LayerValue::Flag(self.tir),
+            Aov::P2 => LayerValue::Vec3(self.p2),
+            Aov::N2 => LayerValue::Vec3(self.n2),
+            Aov::T2 => LayerValue::Vec3(self.t2),
+            Aov::ExitNormalSource => {
+                LayerValue::Count(self.n2_source.map_or(0, exit_normal_source_code))
+            }
+            _ => return None,
+        })
+    }
+}
+
+impl MethodAov {
+    /// A pixel that does not see the refractor.
+    pub const BACKGROUND: Self = Self {
+        covered: false,
+        p2: Vec3::NAN,
+        t2: Vec3::NAN,
+        n2: Vec3::NAN,
+        n2_source: None,
+        tir: false,
+    };
+}
 
 /// What the per-pixel work of a frame reads.
 pub(crate) struct ShadeContext<'a> {

@@ -1,9 +1,12 @@
 //! Rasterising any mesh of a scene (the refractor or an opaque object) from any camera, cube-map
 //! faces included: per pixel the nearest front surface with its uv and object id, the pass the
-//! nearby-geometry and distance-map methods build on.
+//! nearby-geometry and distance-map methods build on; and the material a surface texel shows
+//! (the distance maps' and `pvrr`'s texels).
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use refract_core::Camera;
+use refract_core::distance_map::TexelMaterial;
+use refract_core::lanes::{Vec2x8, Vec3x8};
 use refract_scene::{Scene, SceneMesh, SurfaceTexel};
 
 use crate::raster::{DepthTest, Faces, RasterMesh, rasterize};
@@ -41,4 +44,61 @@ pub fn rasterize_surface(
         })
         .collect();
     Some(texels)
+}
+
+/// The material and normal of the surface of mesh `mesh` at triangle `triangle` with
+/// barycentrics `w` (diffuse: its radiance under the scene light).
+pub fn surface_material(
+    scene: &Scene,
+    mesh: SceneMesh,
+    triangle: u32,
+    w: Vec3,
+    p_ws: Vec3,
+    n_ws: Vec3,
+) -> TexelMaterial {
+    match mesh {
+        SceneMesh::Refractor => scene.refractor.texel_material(),
+        SceneMesh::Object(k) => {
+            let object = &scene.objects[k];
+            match object.conductor() {
+                Some(c) => TexelMaterial {
+                    rgb: c.f0(),
+                    ior: -1.0,
+                },
+                None => TexelMaterial {
+                    rgb: object.shade(
+                        &scene.light,
+                        object.uv_at(triangle, Vec2::new(w.y, w.z), p_ws),
+                        n_ws,
+                    ),
+                    ior: 0.0,
+                },
+            }
+        }
+    }
+}
+
+/// [`surface_material`]'s `rgb` at eight points of one triangle (barycentrics `w`, positions
+/// `p_ws`, normals `n_ws` as lanes): lane `i` bit for bit the scalar function's.
+pub fn surface_rgb_x8(
+    scene: &Scene,
+    mesh: SceneMesh,
+    triangle: u32,
+    w: Vec3x8,
+    p_ws: Vec3x8,
+    n_ws: Vec3x8,
+) -> Vec3x8 {
+    match mesh {
+        SceneMesh::Refractor => Vec3x8::splat(scene.refractor.texel_material().rgb),
+        SceneMesh::Object(k) => {
+            let object = &scene.objects[k];
+            match object.conductor() {
+                Some(c) => Vec3x8::splat(c.f0()),
+                None => {
+                    let uv = object.uv_at_x8(triangle, Vec2x8 { x: w.y, y: w.z }, p_ws);
+                    object.shade_x8(&scene.light, uv, n_ws)
+                }
+            }
+        }
+    }
 }

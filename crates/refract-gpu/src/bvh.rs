@@ -9,7 +9,16 @@ use wgpu::util::DeviceExt;
 
 use crate::bindings::storage_entry;
 use crate::context::{GpuContext, GpuError};
-use crate::shaders::BVH_MODULE;
+use crate::shaders::{BVH, ShaderModule, WgslFile};
+
+/// The BVH's batch kernel ([`GpuBvh::closest_hits`]).
+const BVH_TRACE: WgslFile = ("bvh_trace.wgsl", include_str!("bvh_trace.wgsl"));
+
+/// Closest-hit queries against a flattened BVH (`refract_gpu::bvh`).
+pub const BVH_MODULE: ShaderModule = ShaderModule {
+    name: "bvh",
+    files: &[BVH, BVH_TRACE],
+};
 
 /// A flattened BVH in storage buffers.
 pub struct GpuBvh {

@@ -1,6 +1,8 @@
-//! Runs one entry point of `shaders/conformance.wgsl` (leaves and the distance-map search) or of
-//! `shaders/conformance_kernels.wgsl` (whole image-space kernels over an analytic back-face
-//! buffer) on rows of inputs: the harness that holds the WGSL twin to refract-core.
+//! Runs one entry point of `src/conformance.wgsl` (core leaves and the distance-map search), of
+//! `src/conformance_kernels.wgsl` (whole image-space kernels over an analytic back-face buffer)
+//! or of a family's own conformance module (its `CONFORMANCE`, beside its module under
+//! `src/methods/`: [`evaluate_family`]) on rows of inputs: the harness that holds the WGSL twin
+//! to refract-core. A new family brings its conformance module with it and edits nothing here.
 
 use glam::Vec4;
 use wgpu::util::DeviceExt;
@@ -12,10 +14,33 @@ use crate::bindings::{storage_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::scene_buffers::EnvironmentUniforms;
-use crate::shaders::{CONFORMANCE_KERNELS_MODULE, CONFORMANCE_MODULE, ShaderModule};
+use crate::shaders::{
+    CORE, DISTANCE_SEARCH, FRAME, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE, WgslFile,
+};
+
+/// The leaves' entry points (`src/conformance.wgsl`).
+const CONFORMANCE: WgslFile = ("conformance.wgsl", include_str!("conformance.wgsl"));
+
+/// The whole-kernel entry points (`src/conformance_kernels.wgsl`).
+const CONFORMANCE_KERNELS: WgslFile = (
+    "conformance_kernels.wgsl",
+    include_str!("conformance_kernels.wgsl"),
+);
+
+/// The conformance harness (`refract_gpu::conformance`).
+pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
+    name: "conformance",
+    files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
+};
+
+/// The module of [`CONFORMANCE_KERNELS`].
+pub const CONFORMANCE_KERNELS_MODULE: ShaderModule = ShaderModule {
+    name: "conformance-kernels",
+    files: &[CORE, FRAME, TWO_INTERFACE, CONFORMANCE_KERNELS],
+};
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 21] = [
+pub const ENTRY_POINTS: [&str; 16] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
@@ -32,11 +57,6 @@ pub const ENTRY_POINTS: [&str; 21] = [
     "test_dm_texel",
     "test_dm_hit",
     "test_dm_path",
-    "test_proxy_sphere_point",
-    "test_proxy_sphere_dir",
-    "test_proxy_box",
-    "test_volume_exit",
-    "test_engine_screen",
 ];
 
 /// The entry points of the whole-kernel module (`shaders/conformance_kernels.wgsl`).
@@ -54,7 +74,7 @@ pub fn evaluate(
     a: &[Vec4],
     b: &[Vec4],
 ) -> Result<Vec<Vec4>, GpuError> {
-    run(context, &CONFORMANCE_MODULE, entry, None, &[], a, b)
+    run(context, &CONFORMANCE_MODULE, entry, &[], &[], a, b)
 }
 
 /// The frame a whole-kernel evaluation runs in: the camera, and the index of refraction, TIR
@@ -96,27 +116,86 @@ pub fn evaluate_kernel(
         context,
         &CONFORMANCE_KERNELS_MODULE,
         entry,
-        Some(bytes),
+        &[(0, bytes)],
         &constants,
         a,
         b,
     )
 }
 
-/// Runs `entry` of `module` over the rows; with `uniforms`, binding 0 is that uniform block and
-/// the rows are bindings 1–3, else the rows are bindings 0–2.
+/// One evaluation of a family's own conformance module (a family module's `CONFORMANCE`, in
+/// [`crate::shader_modules`]): the module and entry point, the frame (its uniforms at binding 0:
+/// the camera and the IOR), the family's own uniform blocks at their bindings, and the
+/// pipeline's override constants. The rows are bindings 1–3, as in
+/// `src/conformance_kernels.wgsl`.
+#[derive(Clone, Copy, Debug)]
+pub struct FamilyEvaluation<'a> {
+    /// The conformance module's name (`engine-conformance`, ...).
+    pub module: &'a str,
+    /// Its entry point.
+    pub entry: &'a str,
+    /// The camera of the frame uniforms.
+    pub camera: &'a Camera,
+    /// The index of refraction of the frame uniforms.
+    pub ior: f32,
+    /// The family's uniform blocks besides the frame's: `(binding, bytes)`.
+    pub uniforms: &'a [(u32, &'a [u8])],
+    /// Override constants (`ENGINE_MODEL`, ...).
+    pub constants: &'a [(&'a str, f64)],
+}
+
+/// Evaluates `evaluation` on `a[i], b[i]` for every row and returns one `Vec4` per row; a
+/// module of that name that does not exist is a [`GpuError::Wgpu`] naming it.
+pub fn evaluate_family(
+    context: &GpuContext,
+    evaluation: &FamilyEvaluation<'_>,
+    a: &[Vec4],
+    b: &[Vec4],
+) -> Result<Vec<Vec4>, GpuError> {
+    let module = crate::shader_modules()
+        .into_iter()
+        .find(|m| m.name == evaluation.module)
+        .ok_or_else(|| GpuError::Wgpu(format!("no shader module {}", evaluation.module)))?;
+    let environment = EnvironmentUniforms {
+        kind: 0,
+        width: 0,
+        height: 0,
+        intensity: 0.0,
+        constant: [0.0; 4],
+    };
+    let frame = frame_uniforms(
+        evaluation.camera,
+        &environment,
+        evaluation.ior,
+        TirPolicy::default(),
+    );
+    let mut uniforms = vec![(0, bytemuck::bytes_of(&frame))];
+    uniforms.extend_from_slice(evaluation.uniforms);
+    run(
+        context,
+        &module,
+        evaluation.entry,
+        &uniforms,
+        evaluation.constants,
+        a,
+        b,
+    )
+}
+
+/// Runs `entry` of `module` over the rows; with `uniforms` (`(binding, bytes)` blocks), the
+/// rows are bindings 1–3, else bindings 0–2.
 fn run(
     context: &GpuContext,
     module: &ShaderModule,
     entry: &str,
-    uniforms: Option<&[u8]>,
+    uniforms: &[(u32, &[u8])],
     constants: &[(&str, f64)],
     a: &[Vec4],
     b: &[Vec4],
 ) -> Result<Vec<Vec4>, GpuError> {
     assert_eq!(a.len(), b.len(), "one b row per a row");
     let device = &context.device;
-    let first = u32::from(uniforms.is_some());
+    let first = u32::from(!uniforms.is_empty());
     let (pipeline, layout_group) = context.checked(|| {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(module.name),
@@ -128,8 +207,8 @@ fn run(
             storage_entry(first + 1, true),
             storage_entry(first + 2, false),
         ];
-        if uniforms.is_some() {
-            entries.insert(0, uniform_entry(0, wgpu::ShaderStages::COMPUTE));
+        for (binding, _) in uniforms {
+            entries.push(uniform_entry(*binding, wgpu::ShaderStages::COMPUTE));
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("conformance"),
@@ -177,13 +256,17 @@ fn run(
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let uniform_buffer = uniforms.map(|bytes| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("frame uniforms"),
-            contents: bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
+    let uniform_buffers: Vec<(u32, wgpu::Buffer)> = uniforms
+        .iter()
+        .map(|(binding, bytes)| {
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("conformance uniforms"),
+                contents: bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            (*binding, buffer)
         })
-    });
+        .collect();
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = [&in_a, &in_b, &out]
         .into_iter()
         .zip(first..)
@@ -192,14 +275,11 @@ fn run(
             resource: buffer.as_entire_binding(),
         })
         .collect();
-    if let Some(buffer) = &uniform_buffer {
-        entries.insert(
-            0,
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            },
-        );
+    for (binding, buffer) in &uniform_buffers {
+        entries.push(wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        });
     }
     let group = context.checked(|| {
         device.create_bind_group(&wgpu::BindGroupDescriptor {

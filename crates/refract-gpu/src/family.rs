@@ -56,6 +56,10 @@ pub(crate) trait GpuFamily {
     type Targets;
     /// The label of the frame's command encoder.
     const LABEL: &'static str;
+    /// Whether the frame is timed by its passes' timestamp queries (where the adapter has
+    /// them); `false`: by the wall clock, for a family that submits more than one command
+    /// buffer a frame.
+    const TIMESTAMPS: bool = true;
 
     /// Compiles the family's pipelines (with the backend's shared raster pipelines at hand).
     fn create(device: &wgpu::Device, raster: &RasterPipelines) -> Self
@@ -76,8 +80,9 @@ pub(crate) trait GpuFamily {
         params: &Self::Params,
     ) -> Result<Self::Targets, GpuError>;
 
-    /// The CPU part of a frame before its passes are encoded (`pvrr`'s per-vertex plan); its
-    /// time is part of the frame's.
+    /// The CPU part of a frame, before its targets are reused or allocated and its passes
+    /// encoded (`pvrr`'s per-vertex plan; the reference's upload of a new scene); its time is
+    /// part of the frame's.
     fn plan(&mut self, _cx: &GpuFrameCx<'_>, _params: &Self::Params) -> Result<(), RenderError> {
         Ok(())
     }
@@ -142,16 +147,23 @@ impl<F: GpuFamily> FamilySlot<F> {
         self.targets.as_ref().map(|t| self.family.color(t))
     }
 
-    /// One frame: targets reused when they fit (else the old ones are freed first, then new
-    /// ones allocated), the family's CPU part, its passes encoded and submitted, the queue
-    /// waited for, the time read (GPU timestamps plus the CPU part, or the wall clock), the
-    /// outputs read back into `frame` (when given; `cx.readback` must say the same).
+    /// One frame: the family's CPU part, targets reused when they fit (else the old ones are
+    /// freed first, then new ones allocated), its passes encoded and submitted, the queue
+    /// waited for, the time read (GPU timestamps plus the CPU part, or the wall clock of both
+    /// without the allocation), the outputs read back into `frame` (when given; `cx.readback`
+    /// must say the same).
     pub(crate) fn run_frame(
         &mut self,
         cx: &GpuFrameCx<'_>,
         params: &F::Params,
         frame: Option<&mut Frame>,
     ) -> Result<FrameTiming, RenderError> {
+        let start = Instant::now();
+        if let Some(timestamps) = cx.timestamps {
+            timestamps.begin_frame();
+        }
+        self.family.plan(cx, params)?;
+        let plan_ms = start.elapsed().as_secs_f64() * 1e3;
         let targets = match self.targets.take() {
             Some(targets) if self.family.fits(&targets, cx, params) => self.targets.insert(targets),
             stale => {
@@ -173,11 +185,6 @@ impl<F: GpuFamily> FamilySlot<F> {
             }
         };
         let start = Instant::now();
-        if let Some(timestamps) = cx.timestamps {
-            timestamps.begin_frame();
-        }
-        self.family.plan(cx, params)?;
-        let plan_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut encoder =
             cx.context
                 .device
@@ -188,8 +195,8 @@ impl<F: GpuFamily> FamilySlot<F> {
         let context = cx.context;
         context.checked(|| context.queue.submit([encoder.finish()]))?;
         context.wait()?;
-        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let timing = match cx.timestamps {
+        let wall_ms = plan_ms + start.elapsed().as_secs_f64() * 1e3;
+        let timing = match cx.timestamps.filter(|_| F::TIMESTAMPS) {
             Some(timestamps) => FrameTiming {
                 // The GPU's passes plus the CPU work the frame waited for.
                 ms: timestamps.read_ms(context)? + plan_ms,

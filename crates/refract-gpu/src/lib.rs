@@ -32,3 +32,27 @@ mod timestamps;
 pub use context::{AdapterSummary, GpuContext, GpuError, RayQueryPolicy, list_adapters};
 pub use renderer::{GpuFrame, GpuRenderer};
 pub use timestamps::PassTime;
+
+use shaders::ShaderModule;
+
+/// Every WGSL module the backend compiles: the shared ones, then each family's (the list
+/// `tests/shaders.rs` validates with naga). Here, at the crate's root, so that the modules that
+/// declare them import the shared files from [`shaders`] without a circle.
+pub fn shader_modules() -> Vec<ShaderModule> {
+    let mut modules = vec![
+        shaders::RASTER_MODULE,
+        crate::conformance::CONFORMANCE_MODULE,
+        crate::conformance::CONFORMANCE_KERNELS_MODULE,
+        crate::bvh::BVH_MODULE,
+    ];
+    modules.extend(crate::methods::shaders());
+    modules
+}
+
+/// The full source of the module called `name`, `None` for no such module.
+pub fn shader_source(name: &str) -> Option<String> {
+    shader_modules()
+        .into_iter()
+        .find(|m| m.name == name)
+        .map(|m| m.source())
+}

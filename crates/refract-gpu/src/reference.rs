@@ -35,7 +35,49 @@ use crate::bvh::{GpuBvh, bvh_layout};
 use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::scene_buffers::{EnvironmentUniforms, GpuScene};
-use crate::shaders::{REFERENCE_MODULE, REFERENCE_RAY_QUERY_MODULE};
+use crate::shaders::{
+    BVH, CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule, WgslFile,
+};
+
+/// The exact reference's paths (`src/reference.wgsl`).
+const REFERENCE: WgslFile = ("reference.wgsl", include_str!("reference.wgsl"));
+/// The ray-query module's enable directive (its first file).
+const RAY_QUERY_ENABLE: WgslFile = (
+    "ray_query_enable.wgsl",
+    include_str!("ray_query_enable.wgsl"),
+);
+/// Closest hits by the adapter's ray queries, `bvh.wgsl`'s interface.
+const BVH_RAY_QUERY: WgslFile = ("bvh_ray_query.wgsl", include_str!("bvh_ray_query.wgsl"));
+
+/// The exact reference on the GPU (`refract_gpu::reference`).
+pub const REFERENCE_MODULE: ShaderModule = ShaderModule {
+    name: "reference",
+    files: &[
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        BVH,
+        REFERENCE,
+    ],
+};
+
+/// The exact reference over the adapter's ray queries (`refract_gpu::reference`, where the
+/// adapter has `EXPERIMENTAL_RAY_QUERY`).
+pub const REFERENCE_RAY_QUERY_MODULE: ShaderModule = ShaderModule {
+    name: "reference-ray-query",
+    files: &[
+        RAY_QUERY_ENABLE,
+        CORE,
+        PROCEDURAL_SKY,
+        FRAME,
+        ENVIRONMENT,
+        MATERIALS,
+        BVH_RAY_QUERY,
+        REFERENCE,
+    ],
+};
 
 /// `struct TraceTriangle` of `shaders/reference.wgsl`.
 #[repr(C)]
@@ -331,7 +373,7 @@ pub struct GpuReference {
 
 /// A frame's buffers: the uniforms, the colour (the running sum between dispatches) and the
 /// path records, each with its readback twin, and the bind group over them.
-struct OutputBuffers {
+pub(crate) struct OutputBuffers {
     width: u32,
     height: u32,
     with_records: bool,
@@ -340,6 +382,14 @@ struct OutputBuffers {
     color: (wgpu::Buffer, wgpu::Buffer),
     record: (wgpu::Buffer, wgpu::Buffer),
     group: wgpu::BindGroup,
+}
+
+impl OutputBuffers {
+    /// Whether these buffers serve a `width × height` frame with `outputs`.
+    pub(crate) fn fits(&self, width: u32, height: u32, outputs: FrameOutputs) -> bool {
+        let with_records = outputs == FrameOutputs::ColorAndAovs;
+        (self.width, self.height, self.with_records) == (width, height, with_records)
+    }
 }
 
 impl GpuReference {
@@ -480,9 +530,35 @@ impl GpuReference {
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
+        let buffers =
+            self.take_output_buffers(context, camera.width(), camera.height(), outputs)?;
+        let mut encoder = context
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("reference"),
+            });
+        self.encode(context, camera, settings, &buffers, &mut encoder)?;
+        context.checked(|| context.queue.submit([encoder.finish()]))?;
+        let read = self.read(context, &buffers, frame);
+        self.outputs = Some(buffers);
+        read
+    }
+
+    /// Encodes the frame's passes into `encoder`: the samples traced a batch per dispatch
+    /// ([`Self::set_samples_per_dispatch`]), every batch but the last submitted here (the
+    /// running sum stays in `buffers` on the GPU), the last one encoded with the copies to the
+    /// readback buffers. The caller submits `encoder` and then reads with [`Self::read`].
+    pub(crate) fn encode(
+        &self,
+        context: &GpuContext,
+        camera: &Camera,
+        settings: &TraceSettings,
+        buffers: &OutputBuffers,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), RenderError> {
         let (width, height) = (camera.width(), camera.height());
+        debug_assert_eq!((width, height), (buffers.width, buffers.height));
         let pixels = u64::from(width) * u64::from(height);
-        let with_records = outputs == FrameOutputs::ColorAndAovs;
         let frame_uniforms: FrameUniforms = frame_uniforms(
             camera,
             &self.environment,
@@ -496,7 +572,7 @@ impl GpuReference {
                 InterfaceRule::ShadingNormal => 0,
                 InterfaceRule::GeometricNormal => 1,
             },
-            write_records: u32::from(with_records),
+            write_records: u32::from(buffers.with_records),
             mode: match settings.mode {
                 TraceMode::Transmission => 0,
                 TraceMode::Full => 1,
@@ -508,7 +584,6 @@ impl GpuReference {
         let batch = self.samples_per_dispatch.unwrap_or_else(|| {
             (DEFAULT_PIXEL_SAMPLES_PER_DISPATCH / pixels.max(1)).clamp(1, u64::from(spp)) as u32
         });
-        let buffers = self.take_output_buffers(context, width, height, with_records)?;
         let device = &context.device;
         let queue = &context.queue;
         queue.write_buffer(&buffers.frame, 0, bytemuck::bytes_of(&frame_uniforms));
@@ -522,12 +597,17 @@ impl GpuReference {
             } else {
                 (first + batch).min(spp)
             };
+            let last = trace.sample_end == 0 || trace.sample_end == spp;
+            // Each batch's uniforms are written before the submission that reads them.
             queue.write_buffer(&buffers.trace, 0, bytemuck::bytes_of(&trace));
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("reference"),
+            let mut batch_encoder = (!last).then(|| {
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("reference batch"),
+                })
             });
+            let target = batch_encoder.as_mut().unwrap_or(&mut *encoder);
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                let mut pass = target.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("trace_reference"),
                     timestamp_writes: None,
                 });
@@ -536,35 +616,50 @@ impl GpuReference {
                 pass.set_bind_group(1, &self.bvh_group, &[]);
                 pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
             }
-            let last = trace.sample_end == 0 || trace.sample_end == spp;
-            if last {
-                let (color, record) = (&buffers.color, &buffers.record);
-                encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
-                if with_records {
-                    encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+            match batch_encoder {
+                Some(batch_encoder) => {
+                    context.checked(|| queue.submit([batch_encoder.finish()]))?;
+                    first = trace.sample_end;
+                }
+                None => {
+                    let (color, record) = (&buffers.color, &buffers.record);
+                    encoder.copy_buffer_to_buffer(&color.0, 0, &color.1, 0, color.0.size());
+                    if buffers.with_records {
+                        encoder.copy_buffer_to_buffer(&record.0, 0, &record.1, 0, record.0.size());
+                    }
+                    return Ok(());
                 }
             }
-            context.checked(|| queue.submit([encoder.finish()]))?;
-            if last {
-                break;
-            }
-            first = trace.sample_end;
         }
+    }
+
+    /// Reads the frame last submitted with `buffers` into `frame` (the colour, the rays and,
+    /// with records, the `reference` row's layers).
+    pub(crate) fn read(
+        &self,
+        context: &GpuContext,
+        buffers: &OutputBuffers,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
         let colors = context.read_buffer(&buffers.color.1)?;
-        let records = if with_records {
+        let records = if buffers.with_records {
             context.read_buffer(&buffers.record.1)?
         } else {
             Vec::new()
         };
         write_frame(
             frame,
-            width,
-            height,
+            buffers.width,
+            buffers.height,
             bytemuck::cast_slice(&colors),
-            with_records.then(|| bytemuck::cast_slice(&records)),
+            buffers.with_records.then(|| bytemuck::cast_slice(&records)),
         );
-        self.outputs = Some(buffers);
         Ok(())
+    }
+
+    /// The colour buffer of `buffers`' last frame: one `vec4<f32>` per pixel.
+    pub(crate) fn color(buffers: &OutputBuffers) -> &wgpu::Buffer {
+        &buffers.color.0
     }
 
     /// The buffers of a `width × height` frame: the last frame's when it had that size and
@@ -575,13 +670,24 @@ impl GpuReference {
         context: &GpuContext,
         width: u32,
         height: u32,
-        with_records: bool,
-    ) -> Result<OutputBuffers, RenderError> {
-        if let Some(o) = self.outputs.take()
-            && (o.width, o.height, o.with_records) == (width, height, with_records)
-        {
-            return Ok(o);
+        outputs: FrameOutputs,
+    ) -> Result<OutputBuffers, GpuError> {
+        match self.outputs.take() {
+            Some(o) if o.fits(width, height, outputs) => Ok(o),
+            _ => self.output_buffers(context, width, height, outputs),
         }
+    }
+
+    /// New buffers for a `width × height` frame with `outputs`, refused with the adapter's
+    /// limit when a binding would exceed it.
+    pub(crate) fn output_buffers(
+        &self,
+        context: &GpuContext,
+        width: u32,
+        height: u32,
+        outputs: FrameOutputs,
+    ) -> Result<OutputBuffers, GpuError> {
+        let with_records = outputs == FrameOutputs::ColorAndAovs;
         let device = &context.device;
         let pixels = u64::from(width) * u64::from(height);
         let record_bytes = if with_records {
@@ -599,8 +705,7 @@ impl GpuReference {
                     "max storage buffer binding size {limit} bytes (16 bytes of colour a pixel, {} of path records with the AOV layers)",
                     4 * RECORD_WORDS
                 ),
-            }
-            .into());
+            });
         }
         let made = context.checked(|| {
             let storage = |label: &str, size: u64| {

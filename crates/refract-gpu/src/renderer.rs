@@ -4,12 +4,11 @@
 //! encode, submit, read back, time) is `family::FamilySlot::run_frame`, written once.
 
 use std::sync::Arc;
-use std::time::Instant;
 
 use refract_core::Camera;
 use refract_scene::{
     BackendId, Frame, FrameOutputs, FrameTiming, MethodParams, RenderError, Renderer, Scene,
-    SceneMesh, SurfaceTexel, TimingSource,
+    SceneMesh, SurfaceTexel,
 };
 
 use crate::context::{GpuContext, GpuError};
@@ -17,7 +16,6 @@ use crate::family::GpuFrameCx;
 use crate::methods::Families;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
-use crate::reference::{GpuReference, ReferencePipeline};
 use crate::scene_buffers::GpuScene;
 use crate::timestamps::{PassTime, Timestamps};
 
@@ -35,10 +33,6 @@ pub struct GpuRenderer {
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     families: Families,
-    /// The exact reference's pipeline, compiled at the first reference frame.
-    reference_pipeline: Option<Arc<ReferencePipeline>>,
-    /// The exact reference of the prepared scene, uploaded at its first frame.
-    reference: Option<GpuReference>,
 }
 
 impl GpuRenderer {
@@ -61,8 +55,6 @@ impl GpuRenderer {
             timestamps,
             scene: None,
             families,
-            reference_pipeline: None,
-            reference: None,
         })
     }
 
@@ -128,7 +120,6 @@ impl Renderer for GpuRenderer {
             .checked(|| GpuScene::new(&self.context.device, scene))?;
         self.families.prepare(scene);
         self.scene = Some((Arc::clone(scene), uploaded));
-        self.reference = None;
         Ok(())
     }
 
@@ -145,32 +136,6 @@ impl Renderer for GpuRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let id = method.id();
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
-        if let MethodParams::Reference(settings) = method {
-            let start = Instant::now();
-            let reference = match &mut self.reference {
-                Some(reference) => reference,
-                empty => {
-                    let pipeline = match &self.reference_pipeline {
-                        Some(pipeline) => Arc::clone(pipeline),
-                        None => Arc::clone(
-                            self.reference_pipeline
-                                .insert(Arc::new(ReferencePipeline::new(&self.context)?)),
-                        ),
-                    };
-                    empty.insert(GpuReference::upload(
-                        &self.context,
-                        pipeline,
-                        scene,
-                        gpu_scene,
-                    )?)
-                }
-            };
-            reference.render(&self.context, camera, settings, outputs, frame)?;
-            return Ok(FrameTiming {
-                ms: start.elapsed().as_secs_f64() * 1e3,
-                source: TimingSource::Wall,
-            });
-        }
         let cx = GpuFrameCx {
             context: &self.context,
             raster: &self.raster,

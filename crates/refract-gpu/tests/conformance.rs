@@ -3,14 +3,9 @@
 //! relative tolerance of 1e-5 (2e-5 for the chained exit refraction). Needs an adapter
 //! (lavapipe in CI); prints `skipped: no GPU adapter` without one unless REFRACT_REQUIRE_GPU=1.
 
-use std::sync::OnceLock;
-
 use glam::Vec2;
 use glam::{Vec3, Vec4};
 use proptest::prelude::*;
-use refract_core::engine::{
-    hdrp_edge_fade, proxy_box_exit, proxy_sphere_exit, screen_offset_px, smoothstep01, volume_exit,
-};
 use refract_core::environment::{Polynomial, direction_to_latlong};
 use refract_core::exit::{TirPolicy, exit_normal_outside_silhouette, refract_exit};
 use refract_core::fresnel::{
@@ -22,55 +17,17 @@ use refract_core::nearby_geometry::{Plane, screen_fraction_to_segment};
 use refract_core::optics::{critical_angle, face_forward_shading_normal, reflect, refract};
 use refract_core::procedural_sky::procedural_radiance;
 use refract_core::vector::{angle_between, robust_normalize};
-use refract_gpu::GpuContext;
 use refract_gpu::conformance::evaluate;
 
-/// One context for the whole file (adapters are slow to open on lavapipe).
-fn context() -> Option<&'static GpuContext> {
-    static CONTEXT: OnceLock<Option<GpuContext>> = OnceLock::new();
-    CONTEXT.get_or_init(GpuContext::for_tests).as_ref()
-}
-
-const ROWS: usize = 256;
-
-fn config() -> ProptestConfig {
-    ProptestConfig {
-        cases: 6,
-        ..ProptestConfig::default()
-    }
-}
-
-fn unit() -> impl Strategy<Value = Vec3> {
-    (-1.0f32..=1.0, 0.0f32..std::f32::consts::TAU).prop_map(|(z, phi)| {
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    })
-}
-
-fn close(gpu: f32, rust: f32, relative: f32) -> bool {
-    (gpu - rust).abs() <= relative * rust.abs().max(1.0)
-}
-
-fn close3(gpu: Vec4, rust: Vec3, relative: f32) -> bool {
-    close(gpu.x, rust.x, relative)
-        && close(gpu.y, rust.y, relative)
-        && close(gpu.z, rust.z, relative)
-}
+#[macro_use]
+mod common;
+use common::{ROWS, close, close3, config, context, unit};
 
 /// Rows away from the TIR boundary, where rounding may legitimately pick the other branch.
 fn clear_of_tir_boundary(i: Vec3, n: Vec3, eta: f32) -> bool {
     let n_dot_i = n.dot(i);
     let k = (1.0 - eta * eta) + eta * eta * n_dot_i * n_dot_i;
     k.abs() > 1e-4
-}
-
-macro_rules! gpu_or_skip {
-    () => {
-        match context() {
-            Some(context) => context,
-            None => return Ok(()),
-        }
-    };
 }
 
 proptest! {
@@ -301,37 +258,6 @@ proptest! {
             mismatches += usize::from(!same);
         }
         prop_assert!(mismatches <= 2, "{} path mismatches", mismatches);
-    }
-
-    /// The engine exit models (HDRP sphere and box, three.js/Bevy volume) and Godot's offset
-    /// with HDRP's edge fade: incidence kept 3° off grazing, where `cos θt` is well defined.
-    #[test]
-    fn engine_models_agree(rows in prop::collection::vec((unit(), unit(), 1.0f32..2.5, 0.0f32..3.0, 0.0f32..1.0, 0.0f32..1.0, -0.5f32..1.5), ROWS)) {
-        let context = gpu_or_skip!();
-        let rows: Vec<_> = rows.into_iter()
-            .map(|(n, i, ior, d, u, v, x)| (n, if n.dot(i) > 0.0 { -i } else { i }, ior, d, u, v, x))
-            .filter(|(n, i, ..)| n.dot(*i) < -0.05)
-            .collect();
-        let a: Vec<Vec4> = rows.iter().map(|r| r.0.extend(r.2)).collect();
-        let b: Vec<Vec4> = rows.iter().map(|r| r.1.extend(r.3)).collect();
-        let sphere_p = evaluate(context, "test_proxy_sphere_point", &a, &b).expect("gpu");
-        let sphere_dir = evaluate(context, "test_proxy_sphere_dir", &a, &b).expect("gpu");
-        let slab = evaluate(context, "test_proxy_box", &a, &b).expect("gpu");
-        let volume = evaluate(context, "test_volume_exit", &a, &b).expect("gpu");
-        let screen_a: Vec<Vec4> = rows.iter().map(|r| r.0.extend(0.05 * r.3)).collect();
-        let screen_b: Vec<Vec4> = rows.iter().map(|r| Vec4::new(r.4, r.5, r.6, 0.0)).collect();
-        let screen = evaluate(context, "test_engine_screen", &screen_a, &screen_b).expect("gpu");
-        for (k, &(n, i, ior, d, u, v, x)) in rows.iter().enumerate() {
-            let (p1, r2) = proxy_sphere_exit(Vec3::ZERO, n, i, ior, d);
-            prop_assert!(close3(sphere_p[k], p1, 2e-5), "{} vs {}", sphere_p[k], p1);
-            prop_assert!(close3(sphere_dir[k], r2, 2e-5), "{} vs {}", sphere_dir[k], r2);
-            prop_assert!(close3(slab[k], proxy_box_exit(Vec3::ZERO, n, i, ior, d).0, 2e-5));
-            prop_assert!(close3(volume[k], volume_exit(Vec3::ZERO, n, i, ior, d).0, 2e-5));
-            let offset = screen_offset_px(n, 0.05 * d, Vec2::new(640.0, 480.0));
-            prop_assert!(close(screen[k].x, offset.x, 1e-5) && close(screen[k].y, offset.y, 1e-5));
-            prop_assert!(close(screen[k].z, hdrp_edge_fade(Vec2::new(u, v)), 1e-5));
-            prop_assert!(close(screen[k].w, smoothstep01(x), 1e-5));
-        }
     }
 }
 

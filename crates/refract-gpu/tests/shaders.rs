@@ -4,7 +4,7 @@
 use std::mem::offset_of;
 
 use refract_core::gpu::FrameUniforms;
-use refract_gpu::shaders::{module_source, modules};
+use refract_gpu::{shader_modules as modules, shader_source as module_source};
 
 fn validate(name: &str) -> naga::Module {
     let source = module_source(name).unwrap_or_else(|| panic!("no module {name}"));
@@ -28,36 +28,47 @@ fn every_module_parses_and_validates() {
     }
 }
 
+/// The `.wgsl` files under `dir`, recursively, with their paths.
+fn wgsl_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir)
+        .expect("a source directory")
+        .flatten()
+    {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(wgsl_files(&path));
+        } else if path.extension().is_some_and(|e| e == "wgsl") {
+            files.push(path);
+        }
+    }
+    files
+}
+
+/// Every `.wgsl` file of the crate (the shared ones in `shaders/`, each module's own beside it
+/// under `src/`) and of refract-core's twin is in a module naga validates, as it is on disk.
 #[test]
 fn every_wgsl_file_is_in_a_validated_module() {
-    let dirs = [
-        concat!(env!("CARGO_MANIFEST_DIR"), "/shaders"),
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../refract-core/wgsl"),
-    ];
-    let on_disk: Vec<String> = dirs
+    let crate_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let on_disk: Vec<std::path::PathBuf> = ["shaders", "src", "../refract-core/wgsl"]
         .iter()
-        .flat_map(|dir| std::fs::read_dir(dir).expect("a shader directory"))
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".wgsl"))
+        .flat_map(|dir| wgsl_files(&crate_dir.join(dir)))
         .collect();
+    assert!(on_disk.len() >= 20, "read the WGSL files: {on_disk:?}");
     let modules = modules();
-    for file in &on_disk {
-        let embedded = modules
+    for path in &on_disk {
+        let file = path.file_name().expect("a name").to_string_lossy();
+        let embedded: Vec<_> = modules
             .iter()
             .flat_map(|m| m.files)
-            .find(|(name, _)| name == file);
-        let Some((_, text)) = embedded else {
-            panic!("{file} is in no module")
-        };
-        // The module embeds the file as it is on disk (not a stale copy under its name).
-        let dir = if file.as_str() == "core.wgsl" || file.as_str() == "procedural_sky.wgsl" {
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../refract-core/wgsl")
-        } else {
-            concat!(env!("CARGO_MANIFEST_DIR"), "/shaders")
-        };
-        let on_disk_text = std::fs::read_to_string(format!("{dir}/{file}")).expect("read");
-        assert_eq!(*text, on_disk_text, "{file}");
+            .filter(|(name, _)| *name == file)
+            .collect();
+        assert!(!embedded.is_empty(), "{} is in no module", path.display());
+        // Every module embeds the file as it is on disk (not a stale copy under its name).
+        let on_disk_text = std::fs::read_to_string(path).expect("read");
+        for (_, text) in embedded {
+            assert_eq!(*text, on_disk_text, "{}", path.display());
+        }
     }
 }
 

@@ -13,13 +13,13 @@ mod eye_pass;
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use refract_core::distance_map::{
     DistanceLayers, DistanceMapScene, MAX_LAYERS, PathResult, TexelMaterial, TexelSurface,
     cube_texel, cube_texel_direction, cube_texel_index, cube_texel_indices_x8,
 };
-use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
+use refract_core::lanes::{LANES, Vec3x8};
 use refract_core::{Camera, CubeFace};
 use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, PixelLayers, RenderError, Scene,
@@ -32,6 +32,7 @@ use crate::raster::{
     DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands, rasterize_into,
 };
 use crate::scene_meshes::SceneMeshes;
+use crate::surfaces::surface_material;
 use eye_pass::EyePass;
 
 /// What geometry a layer holds.
@@ -315,63 +316,6 @@ impl DistanceLayers for MapScene<'_> {
 
     fn two_sided(&self, layer: usize) -> bool {
         layer < 2
-    }
-}
-
-/// The material and normal of the surface of mesh `mesh` at triangle `triangle` with
-/// barycentrics `w` (diffuse: its radiance under the scene light).
-pub fn surface_material(
-    scene: &Scene,
-    mesh: SceneMesh,
-    triangle: u32,
-    w: Vec3,
-    p_ws: Vec3,
-    n_ws: Vec3,
-) -> TexelMaterial {
-    match mesh {
-        SceneMesh::Refractor => scene.refractor.texel_material(),
-        SceneMesh::Object(k) => {
-            let object = &scene.objects[k];
-            match object.conductor() {
-                Some(c) => TexelMaterial {
-                    rgb: c.f0(),
-                    ior: -1.0,
-                },
-                None => TexelMaterial {
-                    rgb: object.shade(
-                        &scene.light,
-                        object.uv_at(triangle, Vec2::new(w.y, w.z), p_ws),
-                        n_ws,
-                    ),
-                    ior: 0.0,
-                },
-            }
-        }
-    }
-}
-
-/// [`surface_material`]'s `rgb` at eight points of one triangle (barycentrics `w`, positions
-/// `p_ws`, normals `n_ws` as lanes): lane `i` bit for bit the scalar function's.
-pub fn surface_rgb_x8(
-    scene: &Scene,
-    mesh: SceneMesh,
-    triangle: u32,
-    w: Vec3x8,
-    p_ws: Vec3x8,
-    n_ws: Vec3x8,
-) -> Vec3x8 {
-    match mesh {
-        SceneMesh::Refractor => Vec3x8::splat(scene.refractor.texel_material().rgb),
-        SceneMesh::Object(k) => {
-            let object = &scene.objects[k];
-            match object.conductor() {
-                Some(c) => Vec3x8::splat(c.f0()),
-                None => {
-                    let uv = object.uv_at_x8(triangle, Vec2x8 { x: w.y, y: w.z }, p_ws);
-                    object.shade_x8(&scene.light, uv, n_ws)
-                }
-            }
-        }
     }
 }
 

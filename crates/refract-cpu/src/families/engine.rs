@@ -21,9 +21,9 @@ use refract_scene::{
     Aov, EngineParams, Environment, Frame, LayerValue, PixelLayers, RenderError, Scene,
 };
 
-use super::nearby_geometry::{NearbyMeshes, NearbyTexel, NearbyTexture};
 use crate::buffers::front_faces_into;
 use crate::family::{CpuFamily, FrameCx};
+use crate::object_surfaces::{NearbyMeshes, NearbyTexel, NearbyTexture};
 use crate::pixel_group::PixelGroup;
 use crate::raster::SurfaceBuffer;
 use crate::scene_meshes::SceneMeshes;

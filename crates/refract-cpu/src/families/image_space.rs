@@ -11,67 +11,18 @@ use std::sync::Arc;
 use glam::Vec3;
 use rayon::iter::Either;
 use rayon::prelude::*;
-use refract_core::exit::ExitNormalSource;
-use refract_core::gpu::exit_normal_source_code;
 use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, Camera};
 use refract_scene::{
-    Aov, Environment, Frame, FrameOutputs, ImageSpaceMethod, LayerValue, MethodId, PixelLayers,
-    RenderError, Scene,
+    Environment, Frame, FrameOutputs, ImageSpaceMethod, MethodId, RenderError, Scene,
 };
 
 use crate::buffers::{BackFaces, front_faces_into, raster_mesh};
 use crate::family::{CpuFamily, FrameCx};
-use crate::nearby_geometry::NearbyTexture;
+use crate::object_surfaces::NearbyTexture;
 use crate::raster::{Band, DepthTest, Faces, SurfaceBuffer, band_pixels, rasterize_bands};
 use crate::scene_meshes::SceneMeshes;
-use crate::shade::{BandRow, BufferRow, ShadeContext};
-
-/// Per-pixel outputs of the image-space kernels beside the colour; NaN / `None` where they do
-/// not apply (background pixels, degenerate inputs).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct MethodAov {
-    /// The pixel sees the refractor.
-    pub covered: bool,
-    /// `P~2` (two-interface methods).
-    pub p2: Vec3,
-    /// The direction looked up in the environment (`T1` for `single`).
-    pub t2: Vec3,
-    /// The exit normal used (two-interface methods).
-    pub n2: Vec3,
-    /// Where `N2` came from.
-    pub n2_source: Option<ExitNormalSource>,
-    /// Total internal reflection at the entry or exit.
-    pub tir: bool,
-}
-
-impl PixelLayers for MethodAov {
-    fn value(&self, aov: Aov) -> Option<LayerValue> {
-        Some(match aov {
-            Aov::Covered => LayerValue::Flag(self.covered),
-            Aov::Tir => LayerValue::Flag(self.tir),
-            Aov::P2 => LayerValue::Vec3(self.p2),
-            Aov::N2 => LayerValue::Vec3(self.n2),
-            Aov::T2 => LayerValue::Vec3(self.t2),
-            Aov::ExitNormalSource => {
-                LayerValue::Count(self.n2_source.map_or(0, exit_normal_source_code))
-            }
-            _ => return None,
-        })
-    }
-}
-
-impl MethodAov {
-    /// A pixel that does not see the refractor.
-    pub const BACKGROUND: Self = Self {
-        covered: false,
-        p2: Vec3::NAN,
-        t2: Vec3::NAN,
-        n2: Vec3::NAN,
-        n2_source: None,
-        tir: false,
-    };
-}
+use crate::shade::{BandRow, BufferRow, MethodAov, ShadeContext};
 
 /// The buffers of one frame: front faces always, back faces for two-interface methods, the
 /// opaque objects seen from the eye where the scene has any.

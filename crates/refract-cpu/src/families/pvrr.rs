@@ -25,7 +25,6 @@ use refract_scene::{
     Aov, Frame, FrameOutputs, LayerValue, PixelLayers, PvrrParams, RenderError, Scene, SceneMesh,
 };
 
-use crate::distance_map::{surface_material, surface_rgb_x8};
 use crate::family::{CpuFamily, FrameCx};
 use crate::pixel_group::PixelGroup;
 use crate::prefetch::prefetch;
@@ -34,6 +33,7 @@ use crate::raster::{
 };
 use crate::scene_meshes::SceneMeshes;
 use crate::shade::ViewRow;
+use crate::surfaces::{surface_material, surface_rgb_x8};
 use demand::Demand;
 
 /// A rendered view's radiance, row-major from the top. A map holds the texels the frame's

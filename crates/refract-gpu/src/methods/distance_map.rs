@@ -18,8 +18,8 @@ use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
-use crate::methods::MethodPipelines;
-use crate::methods::image_space::{OutputBuffers, check_limits};
+use crate::passes::outputs::{OutputBuffers, check_limits};
+use crate::passes::pipelines::MethodPipelines;
 use crate::passes::raster::{
     DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
 };
@@ -28,6 +28,9 @@ use crate::shaders::{
     CORE, DISTANCE_SEARCH, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule,
 };
 use refract_core::gpu::FrameUniforms;
+
+/// The family's modules (its conformance is in the shared harness).
+pub(crate) const SHADERS: &[ShaderModule] = &[SHADER];
 
 /// The module of the distance-map passes and paths (Umenhoffer et al. 2007).
 pub(crate) const SHADER: ShaderModule = ShaderModule {
@@ -39,10 +42,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         ENVIRONMENT,
         MATERIALS,
         DISTANCE_SEARCH,
-        (
-            "distance_map.wgsl",
-            include_str!("../../shaders/distance_map.wgsl"),
-        ),
+        ("distance_map.wgsl", include_str!("distance_map.wgsl")),
     ],
 };
 

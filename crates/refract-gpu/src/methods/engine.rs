@@ -14,19 +14,28 @@ use crate::bindings::{bind_group, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
-use crate::methods::MethodPipelines;
-use crate::methods::image_space::{OutputBuffers, RefractorTargets, check_limits};
-use crate::methods::nearby_geometry::{
-    NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_layout, nearby_resources, nearby_uniforms,
+use crate::passes::object_surfaces::{
+    NearbyFrame, nearby_layout, nearby_resources, nearby_uniforms,
 };
+use crate::passes::outputs::{OutputBuffers, check_limits};
+use crate::passes::pipelines::MethodPipelines;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::raster::SurfaceTargets;
+use crate::passes::refractor::RefractorTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, PROCEDURAL_SKY,
+    ShaderModule, TWO_INTERFACE, WgslFile,
 };
 
+/// Where each engine reads the screen (`engine_path`), over a `screen_depth` its includer
+/// provides.
+const ENGINE_PATH: WgslFile = ("engine_path.wgsl", include_str!("engine_path.wgsl"));
+
+/// The family's modules: its pass, and its conformance module.
+pub(crate) const SHADERS: &[ShaderModule] = &[SHADER, CONFORMANCE];
+
 /// The module of the engine methods: the front faces and environment of the image-space
-/// shader, the screen texture readers of the nearby-geometry shader, then `shade_engine`.
+/// shader, the readers of the objects' surfaces from the eye, the path, then `shade_engine`.
 pub(crate) const SHADER: ShaderModule = ShaderModule {
     name: "engine",
     files: &[
@@ -37,8 +46,25 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         TWO_INTERFACE,
         IMAGE_SPACE,
         MATERIALS,
-        NEARBY_GEOMETRY_WGSL,
-        ("engine.wgsl", include_str!("../../shaders/engine.wgsl")),
+        OBJECT_SURFACES,
+        ENGINE_PATH,
+        ("engine.wgsl", include_str!("engine.wgsl")),
+    ],
+};
+
+/// The conformance module (`engine_conformance.wgsl`): the path over an analytic screen and
+/// the models' leaves, run by `crate::conformance::evaluate_family` (entry points:
+/// [`CONFORMANCE_ENTRY_POINTS`]).
+pub(crate) const CONFORMANCE: ShaderModule = ShaderModule {
+    name: "engine-conformance",
+    files: &[
+        CORE,
+        FRAME,
+        ENGINE_PATH,
+        (
+            "engine_conformance.wgsl",
+            include_str!("engine_conformance.wgsl"),
+        ),
     ],
 };
 

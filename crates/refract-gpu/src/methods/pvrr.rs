@@ -22,12 +22,15 @@ use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
-use crate::methods::MethodPipelines;
-use crate::methods::image_space::{OutputBuffers, check_limits};
+use crate::passes::outputs::{OutputBuffers, check_limits};
+use crate::passes::pipelines::MethodPipelines;
 use crate::passes::raster::{DEPTH_FORMAT, RasterPipelines, TARGET_FORMAT, target};
 use crate::scene_buffers::{GpuMesh, GpuScene, Vertex};
 use crate::shaders::{CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule};
 use refract_core::gpu::FrameUniforms;
+
+/// The family's modules (its conformance is in the shared harness).
+pub(crate) const SHADERS: &[ShaderModule] = &[SHADER];
 
 /// The module of the shading of `pvrr`'s views (Kakimoto et al. 2007).
 pub(crate) const SHADER: ShaderModule = ShaderModule {
@@ -38,7 +41,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         FRAME,
         ENVIRONMENT,
         MATERIALS,
-        ("pvrr.wgsl", include_str!("../../shaders/pvrr.wgsl")),
+        ("pvrr.wgsl", include_str!("pvrr.wgsl")),
     ],
 };
 

@@ -12,11 +12,12 @@ use refract_core::lanes::{LANES, Vec3x8, mask_from_lanes};
 use refract_core::real::Vector3;
 use refract_scene::{Scene, SceneMesh};
 
-use super::{DistanceAov, MapScene, start_layer, surface_material, surface_rgb_x8};
+use super::{DistanceAov, MapScene, start_layer};
 use crate::pixel_group::PixelGroup;
 use crate::raster::{Attribute, SurfaceBuffer, Texel, TexelLanes, at_most_three};
 use crate::scene_meshes::SceneMeshes;
 use crate::shade::ViewRow;
+use crate::surfaces::{surface_material, surface_rgb_x8};
 
 /// What the eye pass of one frame reads.
 pub(super) struct EyePass<'a> {
@@ -143,7 +144,7 @@ mod tests {
     use refract_scene::{DistanceMapParams, Frame, FrameOutputs, MethodId};
 
     use super::*;
-    use crate::distance_map::DistancePasses;
+    use crate::families::distance_map::DistancePasses;
     use crate::family::{CpuFamily, FrameCx};
 
     /// Every pixel of the eye pass (colour and AOVs) is that pixel shaded alone, bit for bit:

@@ -9,12 +9,14 @@ use refract_scene::FrameOutputs;
 
 use crate::bindings::{bind_group_at, storage_entry, texture_entry, uniform_entry};
 use crate::family::GpuFrameCx;
-use crate::methods::PipelineCompiler;
-use crate::methods::image_space::{OutputBuffers, RefractorTargets};
-use crate::methods::nearby_geometry::{NEARBY_GEOMETRY_WGSL, NearbyFrame, nearby_uniforms};
+use crate::passes::object_surfaces::{NearbyFrame, nearby_uniforms};
+use crate::passes::outputs::OutputBuffers;
+use crate::passes::pipelines::PipelineCompiler;
 use crate::passes::raster::SurfaceTargets;
+use crate::passes::refractor::RefractorTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, PROCEDURAL_SKY,
+    ShaderModule, TWO_INTERFACE,
 };
 
 /// The module of `draw_objects`: the image-space shader's front-face readers and outputs, the
@@ -29,8 +31,11 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         TWO_INTERFACE,
         IMAGE_SPACE,
         MATERIALS,
-        NEARBY_GEOMETRY_WGSL,
-        ("objects.wgsl", include_str!("../../shaders/objects.wgsl")),
+        OBJECT_SURFACES,
+        (
+            "objects_over_frame.wgsl",
+            include_str!("objects_over_frame.wgsl"),
+        ),
     ],
 };
 

@@ -1,9 +1,9 @@
-// The refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament), the final
-// pass: the twin of refract_core::engine::engine_path and crates/refract-cpu/src/families/engine.rs.
-// One pipeline per method (ENGINE_MODEL an override constant). The module also holds
-// image_space.wgsl (front faces, environment) and nearby_geometry.wgsl (the opaque objects'
-// surface pass from the eye: ng_surface, ng_color), whose bindings it shares; the engine
-// writes its flags (off screen, screen weight) in the N2 slot.
+// The refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament): where each
+// reads the screen for one refractor pixel, the twin of refract_core::engine::engine_path. It
+// reads the opaque objects' view depth through `screen_depth(texel)` (F32_MAX where the
+// environment), which the module including it provides: engine.wgsl from the screen texture,
+// engine_conformance.wgsl analytically. ENGINE_MODEL is an override constant (one pipeline per
+// method).
 
 struct EngineUniforms {
     world_to_view: mat4x4<f32>,
@@ -19,30 +19,9 @@ struct EngineUniforms {
 // refract_core::engine::ENGINE_* (one pipeline per method).
 override ENGINE_MODEL: u32 = ENGINE_SCREEN_OFFSET;
 
-// The screen texel: xyz = P, w = 1 where it holds an object.
-fn screen_surface(texel: vec2<i32>) -> vec4<f32> {
-    if engine.has_objects == 0u {
-        return vec4<f32>(0.0);
-    }
-    return ng_surface(texel);
-}
-
-// The view depth of what screen texel `texel` shows (F32_MAX where the environment).
-fn screen_depth(texel: vec2<i32>) -> f32 {
-    let s = screen_surface(texel);
-    if s.w < 0.5 {
-        return F32_MAX;
-    }
-    return ng_view_depth(s.xyz);
-}
-
-// The screen texture's colour at `texel`: the object drawn there or the environment along the
-// texel's eye ray.
-fn screen_color(texel: vec2<i32>) -> vec3<f32> {
-    if screen_surface(texel).w > 0.5 {
-        return ng_color(texel);
-    }
-    return environment_radiance(pixel_ray_dir(vec2<f32>(texel) + vec2<f32>(0.5)));
+// The view depth of `p` from the eye (refract_core::nearby_geometry::view_depth).
+fn eye_view_depth(p: vec3<f32>) -> f32 {
+    return dot(p - frame.eye.xyz, frame.look_dir.xyz);
 }
 
 // engine.rs: clamp_to_screen. xy = texel, z = 1 when outside the frame.
@@ -82,7 +61,7 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
     path.has_exit = ENGINE_MODEL != ENGINE_SCREEN_OFFSET;
     let size = vec2<f32>(f32(frame.width), f32(frame.height));
     let incident = normalize_or_zero(p1_ws - frame.eye.xyz);
-    let fragment_depth = ng_view_depth(p1_ws);
+    let fragment_depth = eye_view_depth(p1_ws);
     let own = clamp_to_screen(uv_px);
     if ENGINE_MODEL == ENGINE_SCREEN_OFFSET {
         let n_view = (engine.world_to_view * vec4<f32>(n1_ws, 0.0)).xyz;
@@ -144,59 +123,3 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
     return path;
 }
 
-fn write_engine_aovs(i: u32, path: EnginePath, covered: bool) {
-    if WRITE_AOVS {
-        let exit = covered && path.has_exit;
-        out_t2[i] = vec4<f32>(path.t2, select(0.0, 1.0, exit));
-        out_p2[i] = vec4<f32>(path.p2, select(0.0, 1.0, exit));
-        out_n2[i] = vec4<f32>(select(0.0, 1.0, covered && path.off_screen), path.screen_weight, 0.0, 0.0);
-        var object = 0.0;
-        var hit = 0.0;
-        var p_geom = vec3<f32>(0.0);
-        let s = screen_surface(path.texel);
-        if covered && path.screen_weight > 0.0 && s.w > 0.5 {
-            object = textureLoad(ng_uv_object, path.texel, 0).z;
-            hit = 1.0;
-            p_geom = s.xyz;
-        }
-        out_p_geom[i] = vec4<f32>(p_geom, hit);
-        out_ng[i] = vec4<f32>(vec2<f32>(path.texel), object, 0.0);
-    }
-}
-
-// Methods `screen-offset`, `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`.
-@compute @workgroup_size(8, 8)
-fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.width || id.y >= frame.height {
-        return;
-    }
-    let px = front_pixel(id);
-    let i = px.index;
-    var none: EnginePath;
-    none.screen_weight = 0.0;
-    if ENGINE_MODEL > ENGINE_PROXY_THIN {
-        out_color[i] = vec4<f32>(UNKNOWN_CODE_COLOR, f32(COVERAGE_BACKGROUND));
-        write_engine_aovs(i, none, false);
-        return;
-    }
-    let texel = vec2<i32>(i32(id.x), i32(id.y));
-    let object = screen_surface(texel);
-    let in_front = !px.covered || (object.w > 0.5 && ng_view_depth(object.xyz) < ng_view_depth(px.p1));
-    if in_front {
-        out_color[i] = vec4<f32>(screen_color(texel), f32(COVERAGE_BACKGROUND));
-        write_engine_aovs(i, none, false);
-        return;
-    }
-    let n4 = robust_normalize(px.n1);
-    let n1 = select(px.n1, n4.xyz, n4.w > 0.5);
-    let path = engine_path(px.uv, px.p1, n1);
-    var color = vec3<f32>(0.0);
-    if path.screen_weight > 0.0 {
-        color += path.screen_weight * screen_color(path.texel);
-    }
-    if path.screen_weight < 1.0 {
-        color += (1.0 - path.screen_weight) * environment_radiance(path.environment_dir);
-    }
-    out_color[i] = vec4<f32>(color, f32(COVERAGE_PATH));
-    write_engine_aovs(i, path, true);
-}
