@@ -1,9 +1,7 @@
-// The opaque objects' surfaces seen from a camera (crates/refract-gpu/src/passes/object_surfaces.rs):
-// the surface pass (raster.wgsl fs_surface) of every opaque object, (P, 0), (N, covered),
-// (uv, object id, 1), from the nearby-geometry (NG) camera of Wyman 2005b or from the eye (the
-// engines' screen texture, the objects over an image-space frame); its uniforms, the outputs
-// of the kernels that read it, and its readers. Colours are shaded here from the object's
-// material (refract_scene::Albedo, Object::shade) at the texel that is used.
+// The camera the opaque objects' surfaces are seen from (crates/refract-gpu/src/passes/
+// object_surfaces.rs): the nearby-geometry (NG) camera of Wyman 2005b or the eye (the engines'
+// screen texture, the objects over an image-space frame), with the scene's light and the
+// lookups' planes and settings; projecting a point to its texel, a point's view depth.
 
 struct NearbyUniforms {
     world_to_clip: mat4x4<f32>,
@@ -23,33 +21,7 @@ struct NearbyUniforms {
     spacing: u32,
 }
 
-@group(0) @binding(9) var<storage, read_write> out_p_geom: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> out_ng: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read> materials: array<Material>;
-@group(0) @binding(12) var ng_p: texture_2d<f32>;
-@group(0) @binding(13) var ng_n: texture_2d<f32>;
-@group(0) @binding(14) var ng_uv_object: texture_2d<f32>;
 @group(0) @binding(15) var<uniform> nearby: NearbyUniforms;
-
-// The NG texel at integer coordinates: xyz = P, w = 1 when covered.
-fn ng_surface(texel: vec2<i32>) -> vec4<f32> {
-    let covered = textureLoad(ng_n, texel, 0).w >= 0.5;
-    return vec4<f32>(textureLoad(ng_p, texel, 0).xyz, select(0.0, 1.0, covered));
-}
-
-// Object::shade at an NG texel: albedo × (ambient + |N·L| radiance).
-fn ng_color(texel: vec2<i32>) -> vec3<f32> {
-    let n = textureLoad(ng_n, texel, 0).xyz;
-    let uv_object = textureLoad(ng_uv_object, texel, 0);
-    let m = materials[u32(round(uv_object.z)) - 1u];
-    var uv = uv_object.xy;
-    if m.world_uv != 0u {
-        let p = textureLoad(ng_p, texel, 0).xyz;
-        uv = vec2<f32>(p.x, p.z);
-    }
-    let shading = nearby.light_ambient.xyz + abs(dot(n, nearby.light_direction.xyz)) * nearby.light_radiance.xyz;
-    return albedo(m, uv) * shading;
-}
 
 // nearby_geometry.rs: texel_of. xy = texel, z = 1 when inside the NG view.
 fn ng_texel_of(p: vec3<f32>) -> vec3<i32> {

@@ -144,6 +144,23 @@ pub struct FamilyEvaluation<'a> {
     pub constants: &'a [(&'a str, f64)],
 }
 
+/// The uniform block of the objects' surfaces (binding 15 of the nearby-geometry shaders) for
+/// an NG camera with `planes` and `lookup`, as a nearby-geometry frame writes it: for
+/// [`FamilyEvaluation::uniforms`].
+pub fn nearby_uniforms(
+    ng_camera: &Camera,
+    planes: &[refract_core::nearby_geometry::Plane],
+    lookup: refract_core::nearby_geometry::NearbyLookup,
+) -> refract_core::gpu::NearbyUniforms {
+    crate::passes::object_surfaces::nearby_uniforms(&crate::passes::object_surfaces::NearbyFrame {
+        ng_camera,
+        pad: glam::UVec2::ZERO,
+        planes,
+        lookup,
+        light: refract_scene::DirectionalLight::default(),
+    })
+}
+
 /// Evaluates `evaluation` on `a[i], b[i]` for every row and returns one `Vec4` per row; a
 /// module of that name that does not exist is a [`GpuError::Wgpu`] naming it.
 pub fn evaluate_family(

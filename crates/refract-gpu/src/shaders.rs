@@ -36,11 +36,17 @@ pub const TWO_INTERFACE: WgslFile = (
     "two_interface.wgsl",
     include_str!("../shaders/two_interface.wgsl"),
 );
-/// The opaque objects' surfaces seen from a camera and their readers
+/// The camera the opaque objects' surfaces are seen from: its uniforms, texels and view depth
 /// (`crate::passes::object_surfaces`).
 pub const OBJECT_SURFACES: WgslFile = (
     "object_surfaces.wgsl",
     include_str!("../shaders/object_surfaces.wgsl"),
+);
+/// The opaque objects' surfaces (the NG or screen texture), their readers, the outputs of the
+/// kernels that read them (`crate::passes::object_surfaces`).
+pub const OBJECT_TEXTURE: WgslFile = (
+    "object_texture.wgsl",
+    include_str!("../shaders/object_texture.wgsl"),
 );
 /// The image-space methods' passes over the back-face texture (Wyman 2005a).
 pub const IMAGE_SPACE: WgslFile = (

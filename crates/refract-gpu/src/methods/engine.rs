@@ -23,8 +23,8 @@ use crate::passes::raster::RasterPipelines;
 use crate::passes::raster::SurfaceTargets;
 use crate::passes::refractor::RefractorTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, PROCEDURAL_SKY,
-    ShaderModule, TWO_INTERFACE, WgslFile,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, OBJECT_TEXTURE,
+    PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE, WgslFile,
 };
 
 /// Where each engine reads the screen (`engine_path`), over a `screen_depth` its includer
@@ -47,6 +47,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         IMAGE_SPACE,
         MATERIALS,
         OBJECT_SURFACES,
+        OBJECT_TEXTURE,
         ENGINE_PATH,
         ("engine.wgsl", include_str!("engine.wgsl")),
     ],

@@ -25,12 +25,31 @@ use crate::passes::raster::{RasterPipelines, SurfaceTargets};
 use crate::passes::refractor::RefractorTargets;
 use crate::scene_buffers::GpuScene;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, PROCEDURAL_SKY,
-    ShaderModule, TWO_INTERFACE,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, OBJECT_TEXTURE,
+    PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE, WgslFile,
 };
 
-/// The family's modules (its conformance is in the shared harness).
-pub(crate) const SHADERS: &[ShaderModule] = &[SHADER];
+/// The lookups (Wyman 2005b §4) over an `ng_surface` their includer provides.
+const NEARBY_LOOKUP: WgslFile = ("nearby_lookup.wgsl", include_str!("nearby_lookup.wgsl"));
+
+/// The family's modules: its pass, and its conformance module.
+pub(crate) const SHADERS: &[ShaderModule] = &[SHADER, CONFORMANCE];
+
+/// The conformance module (`nearby_conformance.wgsl`): the lookups over an analytic NG texture,
+/// run by `crate::conformance::evaluate_family`.
+pub(crate) const CONFORMANCE: ShaderModule = ShaderModule {
+    name: "nearby-conformance",
+    files: &[
+        CORE,
+        FRAME,
+        OBJECT_SURFACES,
+        NEARBY_LOOKUP,
+        (
+            "nearby_conformance.wgsl",
+            include_str!("nearby_conformance.wgsl"),
+        ),
+    ],
+};
 
 /// The module of the nearby-geometry kernel (Wyman 2005b): the image-space path, then the lookups.
 pub(crate) const SHADER: ShaderModule = ShaderModule {
@@ -44,6 +63,8 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         IMAGE_SPACE,
         MATERIALS,
         OBJECT_SURFACES,
+        OBJECT_TEXTURE,
+        NEARBY_LOOKUP,
         ("nearby_geometry.wgsl", include_str!("nearby_geometry.wgsl")),
     ],
 };

@@ -15,8 +15,8 @@ use crate::passes::pipelines::PipelineCompiler;
 use crate::passes::raster::SurfaceTargets;
 use crate::passes::refractor::RefractorTargets;
 use crate::shaders::{
-    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, PROCEDURAL_SKY,
-    ShaderModule, TWO_INTERFACE,
+    CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, OBJECT_TEXTURE,
+    PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE,
 };
 
 /// The module of `draw_objects`: the image-space shader's front-face readers and outputs, the
@@ -32,6 +32,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         IMAGE_SPACE,
         MATERIALS,
         OBJECT_SURFACES,
+        OBJECT_TEXTURE,
         (
             "objects_over_frame.wgsl",
             include_str!("objects_over_frame.wgsl"),
