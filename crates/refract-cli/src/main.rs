@@ -79,7 +79,7 @@ enum Command {
 pub enum ReferenceBackendArg {
     /// The CPU tracer.
     Cpu,
-    /// The GPU tracer (`refract-gpu/shaders/reference.wgsl`; docs/reference.md).
+    /// The GPU tracer (`refract-gpu/src/reference.wgsl`; docs/reference.md).
     Gpu,
 }
 

@@ -248,13 +248,20 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 14] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
         (
             &[
                 "render", "sphere", "--ior", "1e20", "--res", "8", "--out", "x.png",
             ],
             "ior",
+        ),
+        // Issue 54: 5e-20 was inside the documented range and gave +inf in the reference.
+        (
+            &[
+                "render", "sphere", "--ior", "5e-20", "--res", "8", "--out", "x.png",
+            ],
+            "from 0.01 to 1000",
         ),
         (&["compare", "sphere", "--methods", "wyman,magic"], "magic"),
         (

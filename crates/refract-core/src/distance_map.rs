@@ -726,7 +726,7 @@ fn continue_path<S: DistanceMapScene + ?Sized>(
     }
 }
 
-/// Analytic layers for tests and the WGSL conformance harness (`refract-gpu/shaders/conformance.wgsl`
+/// Analytic layers for tests and the WGSL conformance harness (`refract-gpu/src/conformance.wgsl`
 /// has the same): layer 0 a mirror sphere of radius 1 around `o` (`F_p` = 1; empty where the
 /// texel-centre direction has `y > 0.8`), two-sided; layer 1 the diffuse cube `|p|∞ = 3` of
 /// radiance `(0.5, 0.25, 0.125)`; a background of 7. Both sampled at texel centres of a

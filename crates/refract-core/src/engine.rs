@@ -452,7 +452,7 @@ pub const ENGINE_PROXY_BOX: u32 = 3;
 /// Model code of [`ProxyShape::Thin`].
 pub const ENGINE_PROXY_THIN: u32 = 4;
 
-/// The per-frame parameters of the engine shader (`refract-gpu/shaders/engine.wgsl`, `EngineUniforms`).
+/// The per-frame parameters of the engine shader (`refract-gpu/src/methods/engine_path.wgsl`, `EngineUniforms`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct EngineUniforms {

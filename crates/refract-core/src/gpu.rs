@@ -53,7 +53,7 @@ pub struct FrameUniforms {
     pub _padding: [u32; 2],
 }
 
-/// Uniforms of the nearby-geometry pass (`refract-gpu/shaders/nearby_geometry.wgsl`,
+/// Uniforms of the nearby-geometry pass (`refract-gpu/shaders/object_surfaces.wgsl`,
 /// `struct NearbyUniforms`): the NG camera, the light of the opaque objects, the planes of the
 /// ray-plane lookup and the lookup's counts.
 #[repr(C)]

@@ -117,7 +117,7 @@ pub struct FrontSurface {
     pub d_n: f32,
 }
 
-/// The index of refraction was not a finite number `> 0`.
+/// The index of refraction was outside [`crate::optics::IOR_RANGE`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InvalidIor(pub f32);
 
@@ -125,8 +125,9 @@ impl fmt::Display for InvalidIor {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "index of refraction {}: expected a finite number greater than 0",
-            self.0
+            "index of refraction {}: expected {}",
+            self.0,
+            crate::optics::IOR_EXPECTED
         )
     }
 }
@@ -150,7 +151,7 @@ impl ImageSpaceParams {
         distance_mode: DistanceMode,
         tir_policy: TirPolicy,
     ) -> Result<Self, InvalidIor> {
-        if !(ior > 0.0 && ior.is_finite()) {
+        if !crate::optics::ior_in_range(ior) {
             return Err(InvalidIor(ior));
         }
         Ok(Self {
@@ -508,6 +509,21 @@ mod tests {
             assert!(
                 ImageSpaceParams::new(ior, DistanceMode::Interpolated, TirPolicy::Black).is_err()
             );
+        }
+    }
+
+    /// The kernels take exactly `IOR_RANGE`: both ends, not one step past either, and not the
+    /// 1e-20 that issue 54 found turning the reference's radiance into +inf; the error says
+    /// the range.
+    #[test]
+    fn the_ior_range_is_the_one_range() {
+        use crate::optics::{IOR_RANGE, MAX_IOR, MIN_IOR};
+        let params = |ior| ImageSpaceParams::new(ior, DistanceMode::Interpolated, TirPolicy::Black);
+        assert_eq!(IOR_RANGE, MIN_IOR..=MAX_IOR);
+        assert!(params(MIN_IOR).is_ok() && params(MAX_IOR).is_ok() && params(1.5).is_ok());
+        for ior in [MIN_IOR.next_down(), MAX_IOR.next_up(), 1e-20, 5e-20] {
+            let err = params(ior).expect_err("outside the range");
+            assert!(err.to_string().contains("from 0.01 to 1000"), "{err}");
         }
     }
 }

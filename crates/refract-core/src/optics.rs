@@ -2,9 +2,28 @@
 //! direction `I` points *toward* the surface, the normal `N` faces the incident side
 //! (`N · I ≤ 0`), and `eta = n_i / n_t`.
 
+use core::ops::RangeInclusive;
+
 use glam::Vec3;
 
 use crate::real::{LaneMask, Msk, Real, Vector3};
+
+/// The smallest index of refraction accepted (a refractor 100 times less dense than its
+/// surroundings; below it `η² = 1/n²` scalings overflow the reference's radiance, issue 54).
+pub const MIN_IOR: f32 = 0.01;
+/// The largest index of refraction accepted (beyond any material; the kernels stay finite up
+/// to it, `docs/methods.md`).
+pub const MAX_IOR: f32 = 1000.0;
+/// The indices of refraction accepted everywhere: scene files and `--ior`, sweep files,
+/// Python, the viewer's slider, the kernels' parameters ([`ior_in_range`]).
+pub const IOR_RANGE: RangeInclusive<f32> = MIN_IOR..=MAX_IOR;
+/// What an error about an index of refraction says was expected.
+pub const IOR_EXPECTED: &str = "an index of refraction from 0.01 to 1000";
+
+/// Whether `ior` is in [`IOR_RANGE`] (NaN is not).
+pub fn ior_in_range(ior: f32) -> bool {
+    IOR_RANGE.contains(&ior)
+}
 
 /// Snell refraction (Wyman 2005a §2: `n_i sin θi = n_t sin θt`), exactly as WGSL's `refract`:
 ///

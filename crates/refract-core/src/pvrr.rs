@@ -488,7 +488,7 @@ fn prefetch_ahead<M: MapTexels + ?Sized>(map: &M, st: Vec2x8) {
 }
 
 /// One vertex of a reflector as both backends draw it: its map position per channel (R, G, B)
-/// and its state (`refract-gpu/shaders/pvrr.wgsl`, `struct PvrrVertex`; the second vertex buffer of the
+/// and its state (`refract-gpu/src/methods/pvrr.wgsl`, `struct PvrrVertex`; the second vertex buffer of the
 /// reflector pass).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

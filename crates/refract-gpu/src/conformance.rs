@@ -59,7 +59,7 @@ pub const ENTRY_POINTS: [&str; 16] = [
     "test_dm_path",
 ];
 
-/// The entry points of the whole-kernel module (`shaders/conformance_kernels.wgsl`).
+/// The entry points of the whole-kernel module (`src/conformance_kernels.wgsl`).
 pub const KERNEL_ENTRY_POINTS: [&str; 4] = [
     "test_one_interface",
     "test_two_interface_t2",

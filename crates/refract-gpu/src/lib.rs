@@ -1,16 +1,20 @@
 //! # refract-gpu
 //!
 //! The wgpu backend of refract behind [`refract_scene::Renderer`] ([`GpuRenderer`]): the same
-//! passes as the CPU backend with WGSL from `shaders/`, held to refract-core by conformance
-//! tests, results read back into a [`refract_scene::Frame`].
+//! passes as the CPU backend in WGSL, held to refract-core by conformance tests, results read
+//! back into a [`refract_scene::Frame`].
 //!
 //! * [`context`]: adapter and device, headless, with clear errors.
 //! * `scene_buffers`: a scene uploaded once (every mesh, the environment).
-//! * `passes`: rasterising any mesh from any camera (back faces, front faces, surfaces).
-//! * `methods`: one module per method family (`image_space`: Wyman 2005a), one pipeline per
-//!   method.
-//! * [`shaders`]: the WGSL modules, composed after the constants header from Rust.
-//! * [`conformance`]: the harness that evaluates WGSL core functions on rows of inputs.
+//! * `passes`: what several families use: rasterising any mesh from any camera (back faces,
+//!   front faces, surfaces), the refractor's targets, the opaque objects seen from a camera,
+//!   the kernels' outputs, pipelines per registry row.
+//! * `methods`: one module per method family, its WGSL beside it (`image_space`: Wyman 2005a;
+//!   `reference`: the exact reference), and the backend's one list of families.
+//! * [`shaders`]: the WGSL files several modules include (`shaders/`), composed after the
+//!   constants header from Rust; [`shader_modules`] lists every module.
+//! * [`conformance`]: the harness that evaluates WGSL functions and whole kernels on rows of
+//!   inputs, the shared ones and each family's own module.
 //!
 //! Headless; runs on any Vulkan/Metal/DX12/GL adapter, including lavapipe (Mesa's CPU Vulkan
 //! driver). `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` choose the adapter.

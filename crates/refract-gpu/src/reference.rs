@@ -1,4 +1,4 @@
-//! The exact reference on the GPU (issue 32): `shaders/reference.wgsl`, the twin of
+//! The exact reference on the GPU (issue 32): `src/reference.wgsl`, the twin of
 //! `refract_trace::Tracer` (both modes: `transmission` and `full`'s Fresnel splitting, any
 //! `spp` with the CPU's sample positions) over one BVH of the whole scene ([`crate::bvh`]; each
 //! triangle tagged with its mesh). It writes the colour and every AOV layer of the `reference`
@@ -79,7 +79,7 @@ pub const REFERENCE_RAY_QUERY_MODULE: ShaderModule = ShaderModule {
     ],
 };
 
-/// `struct TraceTriangle` of `shaders/reference.wgsl`.
+/// `struct TraceTriangle` of `src/reference.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct TraceTriangle {
@@ -90,7 +90,7 @@ struct TraceTriangle {
     uv2: [f32; 4],
 }
 
-/// `struct TraceUniforms` of `shaders/reference.wgsl`.
+/// `struct TraceUniforms` of `src/reference.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct TraceUniforms {
@@ -112,7 +112,7 @@ struct TraceUniforms {
     _padding: [u32; 2],
 }
 
-/// `struct ObjectConductor` of `shaders/reference.wgsl` (`eta.w` = 1 for a conductor).
+/// `struct ObjectConductor` of `src/reference.wgsl` (`eta.w` = 1 for a conductor).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct ObjectConductor {
@@ -132,7 +132,7 @@ const DEFAULT_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 21;
 pub enum Traversal {
     /// The WGSL traversal of a flattened BVH (`shaders/bvh.wgsl`), on every adapter.
     Software,
-    /// The adapter's hardware ray queries (`shaders/bvh_ray_query.wgsl`) over an acceleration
+    /// The adapter's hardware ray queries (`src/bvh_ray_query.wgsl`) over an acceleration
     /// structure of the scene, where the device has them ([`GpuContext::ray_queries`]).
     RayQuery,
 }
@@ -147,7 +147,7 @@ pub struct ReferencePipeline {
 }
 
 impl ReferencePipeline {
-    /// Compiles `shaders/reference.wgsl` on `context`'s device, over its ray queries when the
+    /// Compiles `src/reference.wgsl` on `context`'s device, over its ray queries when the
     /// device has them enabled, else over the WGSL BVH traversal.
     pub fn new(context: &GpuContext) -> Result<Self, GpuError> {
         let device = &context.device;

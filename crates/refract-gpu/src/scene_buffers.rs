@@ -90,7 +90,7 @@ pub(crate) struct EnvironmentUniforms {
     pub constant: [f32; 4],
 }
 
-/// An opaque object's material as `shaders/nearby_geometry.wgsl` reads it (`struct Material`):
+/// An opaque object's material as `shaders/object_texture.wgsl` reads it (`struct Material`):
 /// the twin of [`refract_scene::Albedo`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

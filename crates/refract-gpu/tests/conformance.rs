@@ -285,7 +285,7 @@ fn unknown_distance_modes_are_not_another_mode() {
 }
 
 /// The far side of a unit sphere at the origin through each texel's centre, as
-/// `shaders/conformance_kernels.wgsl`'s `back_face` computes it: the analytic back-face buffer
+/// `src/conformance_kernels.wgsl`'s `back_face` computes it: the analytic back-face buffer
 /// of the whole-kernel tests.
 struct SphereBackFaces(refract_core::Camera);
 

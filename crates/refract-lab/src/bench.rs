@@ -533,7 +533,7 @@ fn run_reference(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Str
 1 sample per pixel, depth 8, colour only, the median \
          of {frames} frame(s) after one warm-up, wall clock (the GPU's includes the readback of \
          the colour). `trace` is the CPU tracer (rayon over rows); `gpu` is \
-         `refract-gpu/shaders/reference.wgsl`. Rays are closest-hit queries (a camera ray and every \
+         `refract-gpu/src/reference.wgsl`. Rays are closest-hit queries (a camera ray and every \
          continuation), counted on both; the CPU also traces each pixel's centre path for its \
          AOV layers, the GPU only when they are asked for (in `full` mode its count is lower by \
          one path a pixel).\n\n\

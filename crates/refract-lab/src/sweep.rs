@@ -186,7 +186,7 @@ impl Sweep {
         }
         for &ior in &file.ior {
             crate::ensure!(
-                ior > 0.0 && ior <= refract_scene::scene::MAX_IOR,
+                refract_scene::scene::ior_in_range(ior),
                 "{origin}: ior = {ior}: expected {}",
                 refract_scene::scene::IOR_EXPECTED
             );

@@ -28,12 +28,7 @@ pub struct Refractor {
     volume_thickness: Option<f32>,
 }
 
-/// The largest index of refraction accepted (beyond any material; the kernels stay finite up
-/// to it, `docs/methods.md`).
-pub const MAX_IOR: f32 = 1000.0;
-
-/// The range of an index of refraction.
-pub const IOR_EXPECTED: &str = "an index of refraction greater than 0 and at most 1000";
+pub use refract_core::optics::{IOR_EXPECTED, IOR_RANGE, MAX_IOR, MIN_IOR, ior_in_range};
 
 impl Refractor {
     /// A refractor of index `ior` (the outside is 1): builds the BVH and `d_N` (Wyman 2005a §3.1,
@@ -188,9 +183,9 @@ fn try_bvh(mesh: &Mesh) -> Result<MeshBvh, SceneError> {
     })
 }
 
-/// `ior` in `(0, MAX_IOR]`.
+/// `ior` in [`IOR_RANGE`].
 pub fn check_ior(ior: f32) -> Result<(), SceneError> {
-    if ior > 0.0 && ior <= MAX_IOR {
+    if ior_in_range(ior) {
         Ok(())
     } else {
         Err(SceneError::field("refractor", "ior", ior, IOR_EXPECTED))

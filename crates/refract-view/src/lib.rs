@@ -428,7 +428,11 @@ impl Viewer {
                             }
                         }
                     }
-                    ui.add(egui::Slider::new(&mut ior, 1.0..=3.0).text("IOR (i/k)"));
+                    ui.add(
+                        egui::Slider::new(&mut ior, refract_scene::scene::IOR_RANGE)
+                            .logarithmic(true)
+                            .text("IOR (i/k)"),
+                    );
                     ui.horizontal(|ui| {
                         ui.label("backend (b)");
                         if has_gpu {
@@ -478,9 +482,10 @@ impl Viewer {
 
     /// Changes the refractor's IOR (re-uploading the scene to both renderers).
     fn set_ior(&mut self, ior: f32) -> anyhow::Result<()> {
-        Arc::make_mut(&mut self.scene)
-            .refractor
-            .set_ior(ior.clamp(1.0, 3.0))?;
+        Arc::make_mut(&mut self.scene).refractor.set_ior(ior.clamp(
+            *refract_scene::scene::IOR_RANGE.start(),
+            *refract_scene::scene::IOR_RANGE.end(),
+        ))?;
         self.scene_version += 1;
         if let Some(gpu) = &mut self.gpu {
             gpu.prepare(&self.scene)?;

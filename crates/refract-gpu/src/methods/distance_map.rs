@@ -3,7 +3,7 @@
 //! cube-face cameras into array layers `layer·6 + face` of three `Rgba32Float` 2D array
 //! textures: P, N, uv + object; WebGPU's face order and orientation), each layer's distance
 //! range is reduced with atomics (min-max), the eye's surface pass of every mesh gives the
-//! visible surface, and `shaders/distance_map.wgsl` runs the bounce loop per pixel. The twin of
+//! visible surface, and `distance_map.wgsl` (beside this module) runs the bounce loop per pixel. The twin of
 //! `refract_cpu::distance_map`.
 
 use bytemuck::{Pod, Zeroable};
@@ -50,7 +50,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
 /// CPU backend's `PEEL_MARGIN`).
 const PEEL_MARGIN: f32 = 1e-3;
 
-/// The uniform block of `shaders/distance_map.wgsl` (`DmUniforms`, field for field).
+/// The uniform block of `distance_map.wgsl` (beside this module) (`DmUniforms`, field for field).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct DmUniforms {

@@ -1,7 +1,7 @@
 //! The refraction today's engines ship, on the GPU (methods `screen-offset`,
 //! `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`): the opaque objects' surface
 //! pass from the eye (the nearby-geometry family's NG targets without a guard band), the
-//! refractor's front faces (no back faces), then `shade_engine` of `shaders/engine.wgsl` as a
+//! refractor's front faces (no back faces), then `shade_engine` of `engine.wgsl` (beside this module) as a
 //! compute pass, one pipeline per method (`ENGINE_MODEL` fixed per pipeline).
 
 use glam::Vec3;

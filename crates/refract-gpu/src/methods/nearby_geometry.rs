@@ -1,7 +1,7 @@
 //! Wyman 2005b refraction of nearby geometry on the GPU (methods `kay-greenberg`, `ray-plane`,
 //! `iterative`, `iterative-seeded`): the three passes of §5 — the refractor's back faces, every
 //! opaque object from the NG camera into the NG targets (surface pass: P, N, uv + object id),
-//! the refractor's front faces — then `shade_nearby` of `shaders/nearby_geometry.wgsl` as a
+//! the refractor's front faces — then `shade_nearby` of `nearby_geometry.wgsl` (beside this module) as a
 //! compute pass, one pipeline per method (`LOOKUP` fixed per pipeline).
 
 use glam::Vec3;

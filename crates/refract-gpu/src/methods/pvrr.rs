@@ -2,7 +2,7 @@
 //! [`refract_scene::pvrr`] (per-vertex rays traced with the CPU BVH, as the paper does), then
 //! every view is rendered on the GPU, deepest first, in one command buffer: a surface pass of
 //! the diffuse objects (`fs_surface`) and of the view's reflectors with their vertices' map
-//! positions as a second vertex buffer (`shaders/pvrr_raster.wgsl`), then `shaders/pvrr.wgsl`
+//! positions as a second vertex buffer (`shaders/pvrr_raster.wgsl`), then `pvrr.wgsl` (beside this module)
 //! shades the view into its map (one storage buffer holds every map of the frame) or, for the
 //! eye, into the frame. The twin of `refract_cpu::pvrr`.
 
@@ -45,7 +45,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
     ],
 };
 
-/// `PvrrDraw` of `shaders/pvrr.wgsl`: one reflector drawn in one view.
+/// `PvrrDraw` of `pvrr.wgsl` (beside this module): one reflector drawn in one view.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct GpuPvrrDraw {
@@ -59,7 +59,7 @@ struct GpuPvrrDraw {
 
 const _: () = assert!(core::mem::size_of::<GpuPvrrDraw>() == 32);
 
-/// `PvrrView` of `shaders/pvrr.wgsl`.
+/// `PvrrView` of `pvrr.wgsl` (beside this module).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct PvrrViewUniforms {

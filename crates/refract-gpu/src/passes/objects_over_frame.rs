@@ -1,6 +1,6 @@
 //! The opaque objects over an image-space frame (`single`, `wyman`, `wyman-dv`, `wyman-dn`):
 //! the objects' surface pass from the eye (the engine family's screen targets), then
-//! `draw_objects` of `shaders/objects.wgsl` as a compute pass after the kernel, writing each
+//! `draw_objects` of `objects_over_frame.wgsl` (beside this module) as a compute pass after the kernel, writing each
 //! pixel whose nearest surface is an object. Scenes without objects skip both. The twin of the
 //! CPU backend's `ShadeContext::object`.
 
