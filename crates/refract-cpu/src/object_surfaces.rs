@@ -65,7 +65,7 @@ impl NearbyGeometryTexture for NearbyTexture {
     }
 
     /// The scalar reads without a branch per lane: every lane loads (a lane not read or
-    /// outside the texture loads [`EMPTY_SURFACE`]) and the depth's sign decides on lanes.
+    /// outside the texture loads `EMPTY_SURFACE`) and the depth's sign decides on lanes.
     #[inline]
     fn surfaces_x8(&self, x: I32x8, y: I32x8, read: Mask) -> NearbySurfaceLanes {
         let (x, y, read) = (x.to_array(), y.to_array(), read.to_bitmask());

@@ -33,7 +33,7 @@ pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
     files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
 };
 
-/// The module of [`CONFORMANCE_KERNELS`].
+/// The module of `src/conformance_kernels.wgsl`.
 pub const CONFORMANCE_KERNELS_MODULE: ShaderModule = ShaderModule {
     name: "conformance-kernels",
     files: &[CORE, FRAME, TWO_INTERFACE, CONFORMANCE_KERNELS],

@@ -15,9 +15,11 @@
 //! `REFRACT_RAY_QUERY`), from the adapter's ray queries over one acceleration structure of the
 //! scene ([`Traversal::RayQuery`]); the path code after the hit is the same WGSL.
 //!
-//! [`crate::GpuRenderer`] renders the `reference` method with it (`render --method reference
-//! --backend gpu`, `compare`/`claims --reference-backend gpu`, sweeps, the viewer's split
-//! view).
+//! [`crate::GpuRenderer`] renders the `reference` method with it as one of its families
+//! (`methods::reference`: the upload in its plan, `GpuReference::encode` and
+//! `GpuReference::read` in the shared frame routine), for `render --method reference --backend
+//! gpu`, `compare`/`claims --reference-backend gpu` and sweeps; the viewer's split view uses a
+//! [`GpuReference`] of its own ([`GpuReference::render`]).
 
 use std::sync::Arc;
 

@@ -7,7 +7,7 @@
 //! barycentrics) and reads its map bilinearly (§3.1 step 4).
 //!
 //! Before any view is rendered, each view's reflector triangles mark the texels of their maps
-//! that a lookup can read ([`demand`]); a map view then shades only those texels, so a frame's
+//! that a lookup can read (`demand`); a map view then shades only those texels, so a frame's
 //! colours are those of shading every texel, bit for bit, for less work.
 
 mod demand;
