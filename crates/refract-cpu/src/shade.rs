@@ -45,6 +45,9 @@ pub(crate) struct MethodAov {
 }
 
 impl PixelLayers for MethodAov {
+    // Called per pixel and layer by `Frame::write_row_layers`; out of line it cost 6.5 M
+    // instructions of a 256² frame's 36 M (callgrind), inlined or not by codegen-unit chance.
+    #[inline]
     fn value(&self, aov: Aov) -> Option<LayerValue> {
         Some(match aov {
             Aov::Covered => LayerValue::Flag(self.covered),
