@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use refract_scene::{Aov, AovKind, Frame, SceneError};
+use refract_scene::{Aov, AovKind, Frame, MAX_FRAME_SIZE, SceneError};
 
 use crate::atomic_write::{write_atomically, write_png_rgb8};
 use crate::images::check_finite;
@@ -91,6 +91,26 @@ impl FrameFiles for Frame {
             path: path.to_owned(),
             message,
         };
+        let read_error = |err: exr::error::Error| match err {
+            // A missing or unreadable file is an OS error (with its kind), not a format error.
+            exr::error::Error::Io(source) => SceneError::Io {
+                path: path.to_owned(),
+                action: "cannot read the frame file",
+                source,
+            },
+            err => format(format!("not a readable OpenEXR file: {err}")),
+        };
+        // The header first: a file that declares more pixels than any frame has is refused
+        // before its pixels are allocated (issue 54: a 1 KB file declaring 100000² aborted).
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(read_error)?;
+        for header in &meta.headers {
+            let (w, h) = (header.layer_size.width(), header.layer_size.height());
+            if w > MAX_FRAME_SIZE as usize || h > MAX_FRAME_SIZE as usize {
+                return Err(format(format!(
+                    "the file declares {w}x{h} pixels; expected a refract frame of at most {MAX_FRAME_SIZE} a side"
+                )));
+            }
+        }
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -98,15 +118,7 @@ impl FrameFiles for Frame {
             .first_valid_layer()
             .all_attributes()
             .from_file(path)
-            .map_err(|err| match err {
-                // A missing or unreadable file is an OS error (with its kind), not a format error.
-                exr::error::Error::Io(source) => SceneError::Io {
-                    path: path.to_owned(),
-                    action: "cannot read the frame file",
-                    source,
-                },
-                err => format(format!("not a readable OpenEXR file: {err}")),
-            })?;
+            .map_err(read_error)?;
         let layer = image.layer_data;
         let (width, height) = (layer.size.width() as u32, layer.size.height() as u32);
         let channel = |name: &str| -> Option<Vec<f32>> {
@@ -165,6 +177,41 @@ impl FrameFiles for Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 54: an EXR whose header claims 100000² pixels (a file of a few hundred bytes) is
+    /// refused with the file's name and the bound, before anything that size is allocated;
+    /// it used to abort the process ("memory allocation of 40000000000 bytes failed").
+    #[test]
+    fn a_header_declaring_a_huge_frame_is_refused_before_allocating() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("huge.exr");
+        Frame::new(4, 4).write_exr(&path).expect("write");
+        let mut bytes = std::fs::read(&path).expect("read");
+        // dataWindow and displayWindow: box2i (xMin, yMin, xMax, yMax) after their names and
+        // types; make both 100000 pixels a side.
+        for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+            let at = bytes
+                .windows(name.len())
+                .position(|w| w == name)
+                .expect("the attribute")
+                + name.len()
+                + 4;
+            for k in [2, 3] {
+                bytes[at + 4 * k..at + 4 * k + 4].copy_from_slice(&99_999i32.to_le_bytes());
+            }
+        }
+        std::fs::write(&path, &bytes).expect("write");
+        assert!(bytes.len() < 2048, "{} bytes", bytes.len());
+        let err = Frame::read_exr(&path).expect_err("refused").to_string();
+        assert!(
+            err.contains("huge.exr") && err.contains("100000x100000") && err.contains("16384"),
+            "{err}"
+        );
+        // A frame of the largest size the header check lets through still reads as before.
+        let small = dir.path().join("small.exr");
+        Frame::new(3, 2).write_exr(&small).expect("write");
+        assert_eq!(Frame::read_exr(&small).expect("read").width, 3);
+    }
 
     /// The same frame written twice gives the same bytes (chunks in a fixed order), also when
     /// it has many chunks compressed in parallel.
