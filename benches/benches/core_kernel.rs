@@ -6,10 +6,10 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::kernel::{one_interface, two_interface};
-use refract_core::kernel_x8::{one_interface_x8, two_interface_x8};
+use refract_core::kernel_x8::{FrontLanes, one_interface_lanes, two_interface_lanes};
 use refract_core::{
     BackFaceSample, BackFaceSampler, Camera, CameraDesc, DistanceMode, FrontSurface,
     ImageSpaceParams, TirPolicy,
@@ -114,41 +114,41 @@ fn kernels(c: &mut Criterion) {
         })
     });
     // The lane twins, eight pixels per call (the CPU backend's path).
-    let groups: Vec<([Vec2; 8], [FrontSurface; 8])> = pixels
+    let groups: Vec<([Vec2; 8], FrontLanes)> = pixels
         .chunks_exact(8)
         .map(|chunk| {
+            let front: [FrontSurface; 8] = core::array::from_fn(|i| chunk[i].1);
             (
                 core::array::from_fn(|i| chunk[i].0),
-                core::array::from_fn(|i| chunk[i].1),
+                FrontLanes::from_surfaces(&front),
             )
         })
         .collect();
     let (uv, f) = &groups[groups.len() / 2];
-    let lanes = two_interface_x8(&camera, uv, f, &back, &params);
-    for i in 0..8 {
-        let scalar = two_interface(&camera, uv[i], &f[i], &back, &params);
-        assert_eq!(format!("{:?}", lanes[i]), format!("{scalar:?}"));
+    let lanes = two_interface_lanes(&camera, uv, f, &back, &params);
+    for (i, &uv_px) in uv.iter().enumerate() {
+        let scalar = two_interface(&camera, uv_px, &f.surface(i), &back, &params);
+        assert_eq!(lanes.ok[i], scalar.is_ok());
+        assert_eq!(lanes.t2.lane(i), scalar.map_or(Vec3::ZERO, |p| p.t2));
     }
     group.throughput(Throughput::Elements(8 * groups.len() as u64));
-    group.bench_function("two_interface_x8", |b| {
+    group.bench_function("two_interface_lanes", |b| {
         b.iter(|| {
             groups
                 .par_iter()
                 .map(|(uv, f)| {
-                    two_interface_x8(&camera, uv, f, &back, &params)
-                        .iter()
-                        .map(|p| p.as_ref().map_or(0.0, |p| p.t2.x))
-                        .sum::<f32>()
+                    let lanes = two_interface_lanes(&camera, uv, f, &back, &params);
+                    lanes.t2.to_lanes().iter().map(|t2| t2.x).sum::<f32>()
                 })
                 .sum::<f32>()
         })
     });
-    group.bench_function("one_interface_x8", |b| {
+    group.bench_function("one_interface_lanes", |b| {
         b.iter(|| {
             groups
                 .par_iter()
                 .map(|(_, f)| {
-                    one_interface_x8(&camera, black_box(f), &params)
+                    one_interface_lanes(&camera, black_box(f), &params)
                         .iter()
                         .map(|p| p.as_ref().map_or(0.0, |p| p.t1.x))
                         .sum::<f32>()
