@@ -459,6 +459,116 @@ fn bench_quick_writes_table_one() {
     );
 }
 
+/// `refract bench --table all --quick`: every table, one Markdown and one JSON file that say
+/// where and when they were measured, and `--update` rewrites only the marked region of a
+/// document.
+#[test]
+fn bench_all_writes_every_table_with_its_provenance() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let begin = "<!-- refract bench --table all: begin -->";
+    let end = "<!-- refract bench --table all: end -->";
+    std::fs::write(
+        dir.path().join("perf.md"),
+        format!("# Perf\n\nbefore\n\n{begin}\nstale table\n{end}\n\n## Kept\n\nafter\n"),
+    )
+    .expect("doc");
+    std::fs::write(dir.path().join("plain.md"), "# no markers\n").expect("plain");
+    let bench = |extra: &[&str]| {
+        let mut args = vec!["bench", "--table", "all", "--quick", "--data", data];
+        args.extend_from_slice(&["--out", "b"]);
+        args.extend_from_slice(extra);
+        refract(&args, dir.path())
+    };
+    // A document without the markers is refused before anything is measured.
+    let refused = bench(&["--update", "plain.md"]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("plain.md"),
+        "{}",
+        stderr(&refused)
+    );
+    assert!(!dir.path().join("b/bench-all.md").exists());
+    // --update belongs to --table all.
+    let refused = refract(&["bench", "--quick", "--update", "perf.md"], dir.path());
+    assert!(!refused.status.success() && stderr(&refused).contains("--update"));
+
+    let output = bench(&["--update", "perf.md"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let all: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("b/bench-all.json")).expect("bench-all.json"),
+    )
+    .expect("json");
+    let provenance = &all["provenance"];
+    for field in ["date", "commit", "cpu", "command"] {
+        assert!(
+            provenance[field].as_str().is_some_and(|v| !v.is_empty()),
+            "{field}: {provenance}"
+        );
+    }
+    assert!(
+        provenance["date"]
+            .as_str()
+            .is_some_and(|d| d.starts_with("20") && d.ends_with('Z'))
+    );
+    let tables = all["tables"].as_object().expect("tables");
+    for name in [
+        "image-space",
+        "nearby",
+        "distance-map",
+        "pvrr",
+        "engine",
+        "reference",
+    ] {
+        let rows = tables[name].as_array().expect(name);
+        assert!(!rows.is_empty(), "{name} has rows");
+        assert!(
+            dir.path()
+                .join(format!(
+                    "b/bench{}.json",
+                    if name == "image-space" {
+                        String::new()
+                    } else {
+                        format!("-{name}")
+                    }
+                ))
+                .is_file(),
+            "{name}'s own file"
+        );
+    }
+    if std::env::var("REFRACT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+        assert!(provenance["gpu"].as_str().is_some(), "{provenance}");
+        assert!(
+            tables["engine"]
+                .as_array()
+                .expect("rows")
+                .iter()
+                .any(|r| r["backend"] == "gpu"),
+            "GPU rows"
+        );
+    }
+    let md = std::fs::read_to_string(dir.path().join("b/bench-all.md")).expect("bench-all.md");
+    let doc = std::fs::read_to_string(dir.path().join("perf.md")).expect("perf.md");
+    assert!(
+        doc.starts_with(&format!("# Perf\n\nbefore\n\n{begin}\n")),
+        "{doc}"
+    );
+    assert!(
+        doc.ends_with(&format!("{end}\n\n## Kept\n\nafter\n")),
+        "{doc}"
+    );
+    assert!(!doc.contains("stale table"));
+    for title in [
+        "## Wyman 2005a Table 1",
+        "## Wyman 2005b Table 1",
+        "## Kakimoto",
+        "## Umenhoffer",
+    ] {
+        assert!(doc.contains(title) && md.contains(title), "{title}");
+    }
+    assert!(doc.contains(provenance["commit"].as_str().expect("commit")));
+}
+
 /// `refract bench --table reference --quick`: the reference on the CPU tracer and the GPU, both
 /// modes, with rays per second; the GPU's full-mode rows say it does not trace them.
 #[test]
