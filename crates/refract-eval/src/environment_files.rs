@@ -15,7 +15,9 @@ pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), Scen
         .map(str::to_ascii_lowercase);
     // The declared size is checked before any texel is allocated.
     let declared = match extension.as_deref() {
-        Some("exr") => Some(exr_size(path)?),
+        Some("exr") => Some(exr_size(path, |err| {
+            format_error(path, format!("not a readable OpenEXR file: {err}"))
+        })?),
         Some("hdr") => Some(
             image::ImageReader::open(path)
                 .and_then(|r| r.with_guessed_format())
@@ -109,10 +111,14 @@ fn check_size(path: &Path, width: u32, height: u32) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// The size of the largest layer an EXR header declares, read without its pixels.
-fn exr_size(path: &Path) -> Result<(u32, u32), SceneError> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|err| format_error(path, format!("not a readable OpenEXR file: {err}")))?;
+/// The size of the largest layer an EXR header declares, read without its pixels; a read
+/// error becomes `on_error`'s [`SceneError`] (the frame loader keeps OS errors as
+/// [`SceneError::Io`]).
+pub(crate) fn exr_size(
+    path: &Path,
+    on_error: impl FnOnce(exr::error::Error) -> SceneError,
+) -> Result<(u32, u32), SceneError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(on_error)?;
     let (w, h) = meta
         .headers
         .iter()
@@ -188,21 +194,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let huge = dir.path().join("huge.exr");
         // A real tiny EXR whose declared data window is then patched to 100000 × 100000.
-        refract_scene::Frame::new(2, 2)
-            .write_exr(&huge)
-            .expect("write");
-        let mut bytes = std::fs::read(&huge).expect("read");
-        let key = b"dataWindow\0box2i\0";
-        let at = bytes
-            .windows(key.len())
-            .position(|w| w == key)
-            .expect("dataWindow attribute")
-            + key.len()
-            + 4;
-        for (k, v) in [0i32, 0, 99_999, 99_999].iter().enumerate() {
-            bytes[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
-        }
-        std::fs::write(&huge, &bytes).expect("patch");
+        crate::test_files::write_exr_declaring(&huge, 100_000);
         let err = load_latlong(&huge).expect_err("huge");
         let text = err.to_string();
         assert!(

@@ -19,6 +19,8 @@ pub mod images;
 pub mod mesh_files;
 pub mod metrics;
 pub mod scene_file;
+#[cfg(test)]
+mod test_files;
 
 pub use environment_files::load_latlong;
 pub use frame_files::FrameFiles;

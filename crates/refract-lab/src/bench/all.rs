@@ -260,20 +260,16 @@ mod tests {
             err.to_string().contains("docs/perf.md") && err.to_string().contains(BEGIN_MARKER),
             "{err}"
         );
-        let twice = format!("{BEGIN_MARKER}\n{BEGIN_MARKER}\n{END_MARKER}\n");
-        assert!(
-            splice(&twice, "x", path)
-                .expect_err("twice")
-                .to_string()
-                .contains("more than once")
-        );
-        let swapped = format!("{END_MARKER}\n{BEGIN_MARKER}\n");
-        assert!(
-            splice(&swapped, "x", path)
-                .expect_err("swapped")
-                .to_string()
-                .contains("comes before")
-        );
+        for (text, expected) in [
+            (
+                format!("{BEGIN_MARKER}\n{BEGIN_MARKER}\n{END_MARKER}\n"),
+                "more than once",
+            ),
+            (format!("{END_MARKER}\n{BEGIN_MARKER}\n"), "comes before"),
+        ] {
+            let err = splice(&text, "x", path).expect_err(expected).to_string();
+            assert!(err.contains(expected), "{err}");
+        }
         // A marker quoted inside a line is not a marker line.
         let quoted = format!("see `{BEGIN_MARKER}`\n{END_MARKER}\n");
         assert!(splice(&quoted, "x", path).is_err());
