@@ -113,6 +113,13 @@ fn crates_depend_only_downward() {
             links(renderer)
         );
     }
+    // The engines' own renderers export scenes through refract-eval and run outside the
+    // process: no backend, no experiments.
+    assert_eq!(
+        links("refract-engines"),
+        set(&["refract-core", "refract-scene", "refract-eval"]),
+        "refract-engines sits on the files and links no renderer (its tests compare with one)"
+    );
     // The experiments sit on the renderers and the files; nothing below them knows them.
     let lab = deps("refract-lab");
     for below in [
@@ -154,6 +161,7 @@ fn crates_depend_only_downward() {
         "refract-trace",
         "refract-cpu",
         "refract-gpu",
+        "refract-engines",
     ] {
         let d = deps(name);
         assert!(

@@ -1,8 +1,9 @@
 //! `refract export SCENE --out DIR`: the scene exactly as refract renders it (meshes after
-//! loading, normalisation and transforms, with refract's vertex normals), for other renderers:
-//! `refractor.obj`, `object-K.obj`, `environment.exr` (the lat-long map as sampled) and
-//! `scene.json` (camera, IOR, environment). The Mitsuba 3
-//! cross-check (`scripts/mitsuba-cross-check.py`) renders from these files.
+//! loading, normalisation and transforms, with refract's vertex normals), for other renderers.
+//! `--format obj` (the default): `refractor.obj`, `object-K.obj`, `environment.exr` (the
+//! lat-long map as sampled) and `scene.json` (camera, IOR, environment); the Mitsuba 3
+//! cross-check (`scripts/mitsuba-cross-check.py`) renders from these files. `--format gltf`:
+//! glTF 2.0 for the engines' own renderers (`refract_eval::gltf_export`).
 
 use refract_eval::FrameFiles;
 use std::fmt::Write as _;
@@ -23,6 +24,19 @@ pub struct ExportArgs {
     /// Output directory (created).
     #[arg(long)]
     pub out: PathBuf,
+    /// What to write.
+    #[arg(long, value_enum, default_value_t = ExportFormat::Obj)]
+    pub format: ExportFormat,
+}
+
+/// The file formats of `refract export`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExportFormat {
+    /// OBJ meshes, `environment.exr` and `scene.json` (what the Mitsuba 3 cross-check reads).
+    Obj,
+    /// glTF 2.0 with the Khronos glass extensions, `environment.hdr` and the position-coded
+    /// variant for lookup studies (what the engines' own renderers read).
+    Gltf,
 }
 
 #[derive(Serialize)]
@@ -86,6 +100,16 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let scene = loaded.scene;
     refract_lab::output_dirs::create_dir(&args.out)
         .with_context(|| format!("{}: cannot create the directory", args.out.display()))?;
+    if args.format == ExportFormat::Gltf {
+        let written = refract_eval::gltf_export::export_gltf(&scene)?.write(&args.out)?;
+        println!(
+            "{}: {} files -> {}",
+            scene.name,
+            written.len(),
+            args.out.join("scene.gltf").display()
+        );
+        return Ok(());
+    }
     write_text_atomically(
         &args.out.join("refractor.obj"),
         &obj(scene.refractor.mesh()),

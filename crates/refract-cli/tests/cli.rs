@@ -687,6 +687,48 @@ fn export_writes_meshes_and_scene_json() {
     assert!((json["ior"].as_f64().expect("ior") - 1.5).abs() < 1e-6);
 }
 
+/// `refract export --format gltf` writes the glTF files the engines' pages load: both glTF
+/// documents over one buffer, the environment, the direction code and the baked albedos
+/// (the chart scene has a colour chart and a wood floor).
+#[test]
+fn export_gltf_writes_the_files_the_engines_load() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let output = refract(
+        &["export", "chart", "--format", "gltf", "--out", "ex"],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let mut names: Vec<String> = std::fs::read_dir(dir.path().join("ex"))
+        .expect("ex")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "direction-coded.hdr",
+            "environment.hdr",
+            "object-0-albedo.png",
+            "object-1-albedo.png",
+            "position-coded.gltf",
+            "scene.bin",
+            "scene.gltf",
+        ]
+    );
+    let gltf: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("ex/scene.gltf")).expect("gltf"),
+    )
+    .expect("valid json");
+    assert_eq!(gltf["asset"]["version"], "2.0");
+    assert_eq!(gltf["buffers"][0]["uri"], "scene.bin");
+    let bad = refract(
+        &["export", "chart", "--format", "fbx", "--out", "ex2"],
+        dir.path(),
+    );
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("obj, gltf"), "{}", stderr(&bad));
+}
+
 /// `refract claims` measures the claims and writes them with verdicts, and a coverage table
 /// with a row for each of the 64 inventory claims and the 3 beyond the papers; with fewer
 /// timing rounds than a claim states, its verdict is inconclusive; against the GPU reference

@@ -6,6 +6,8 @@
 //! * [`mesh_files`]: meshes from OBJ (tobj) and glTF 2.0 (gltf) files, cleaned up.
 //! * [`scene_file`]: TOML scene files and the built-in scenes (`docs/scenes.md`).
 //! * [`environment_files`]: lat-long `.exr`/`.hdr` maps (negatives clamped and counted).
+//! * [`gltf_export`]: a scene as glTF 2.0 for the engines' own renderers, with a
+//!   position-coded variant for lookup studies.
 //! * [`frame_files`]: a [`refract_scene::Frame`] as an EXR (colour and every AOV layer) or a PNG.
 //! * [`images`]: tonemapped colour PNGs, false-colour error maps with a colour bar, TIR masks,
 //!   the report's RGBE images.
@@ -15,6 +17,7 @@
 pub mod atomic_write;
 pub mod environment_files;
 pub mod frame_files;
+pub mod gltf_export;
 pub mod images;
 pub mod mesh_files;
 pub mod metrics;

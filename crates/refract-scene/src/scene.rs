@@ -94,6 +94,12 @@ impl Refractor {
         self.volume_thickness = thickness.filter(|d| d.is_finite() && *d >= 0.0);
     }
 
+    /// The thickness the engine methods read by default (`thickness=auto`) and the glTF export
+    /// writes: [`Self::volume_thickness`], else [`Self::mean_d_n`].
+    pub fn auto_thickness(&self) -> f32 {
+        self.volume_thickness.unwrap_or_else(|| self.mean_d_n())
+    }
+
     /// The mean of `d_N` over the vertices (0 for no vertex): the scene-derived default
     /// thickness of the engine methods.
     pub fn mean_d_n(&self) -> f32 {

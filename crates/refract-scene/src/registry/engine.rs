@@ -101,9 +101,7 @@ impl EngineParams {
     /// The thickness `d` in scene units for `refractor`.
     pub fn thickness_for(&self, refractor: &Refractor) -> f32 {
         match self.thickness {
-            ThicknessSource::Auto => refractor
-                .volume_thickness()
-                .unwrap_or_else(|| refractor.mean_d_n()),
+            ThicknessSource::Auto => refractor.auto_thickness(),
             ThicknessSource::Engine => self.engine_thickness(),
             ThicknessSource::Custom => self.thickness_milli as f32 * 1e-3,
         }

@@ -1,0 +1,295 @@
+//! # refract-engines
+//!
+//! The engines' own renderers, so that their glass is measured as they ship it and not only as
+//! refract re-implements it (`docs/engines.md`). A scene is exported as glTF 2.0
+//! ([`refract_eval::gltf_export`]); `engines/render.mjs` (Node, puppeteer-core) opens the
+//! engine's page (`engines/<engine>/index.html`) in headless Chromium, which loads the glTF with
+//! the engine's own loader, renders it into a float render target with every setting that
+//! changes pixels pinned (pixel ratio 1, no tone mapping, no MSAA, linear output, clear alpha 1,
+//! transmission at full resolution) and hands the linear pixels back. The engines are the npm
+//! packages of `engines/package.json`, pinned by its lockfile (`npm ci --prefix engines`).
+//!
+//! What is needed and missing (Node, Chromium, `engines/node_modules`) is one
+//! [`EngineError::Unavailable`] line, which callers report as a skip, as a missing GPU is.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use glam::Vec3;
+use refract_eval::gltf_export::position_from_code;
+use refract_scene::Frame;
+
+/// An engine refract drives in the browser.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Engine {
+    /// three.js (`three` on npm): `MeshPhysicalMaterial` transmission from glTF's
+    /// `KHR_materials_transmission`, `_ior` and `_volume`.
+    Threejs,
+}
+
+impl Engine {
+    /// Every engine.
+    pub const ALL: [Engine; 1] = [Engine::Threejs];
+
+    /// The id on the command line and in `engines/<id>/`.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Engine::Threejs => "threejs",
+        }
+    }
+
+    /// The npm package whose version names the engine.
+    pub const fn npm_package(self) -> &'static str {
+        match self {
+            Engine::Threejs => "three",
+        }
+    }
+}
+
+/// Which file of the export a frame renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// `scene.gltf` under `environment.hdr`: the picture.
+    Color,
+    /// `position-coded.gltf`, no environment: each pixel's colour is the position code of the
+    /// world point it shows, black where it shows none ([`decode_positions`]).
+    Position,
+}
+
+impl Variant {
+    const fn id(self) -> &'static str {
+        match self {
+            Variant::Color => "color",
+            Variant::Position => "position",
+        }
+    }
+}
+
+/// One frame to render.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EngineRequest {
+    /// Which file.
+    pub variant: Variant,
+    /// Width in pixels, `1..=4096`.
+    pub width: u32,
+    /// Height in pixels, `1..=4096`.
+    pub height: u32,
+    /// Leave the refractor out (camera and background checks).
+    pub hide_refractor: bool,
+}
+
+/// The largest side [`EngineRequest`] takes (what `engines/render.mjs` accepts).
+pub const MAX_SIDE: u32 = 4096;
+
+/// A frame an engine rendered.
+#[derive(Clone, Debug)]
+pub struct EngineFrame {
+    /// The engine and its version, `threejs@0.187.0`.
+    pub label: String,
+    /// Linear RGB (alpha dropped), rows from the top.
+    pub frame: Frame,
+    /// The engine's second frame (the first compiles its programs), milliseconds between two
+    /// `gl.finish()` in the page (SwiftShader: a CPU rasteriser, not a GPU time).
+    pub ms: f64,
+    /// What the page reported: engine, version, every pinned setting.
+    pub metadata: serde_json::Value,
+}
+
+/// Why an engine frame could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum EngineError {
+    /// What the engines need is not installed (one line naming what and how to get it).
+    #[error("{0}")]
+    Unavailable(String),
+    /// A request out of range.
+    #[error("{0}")]
+    Request(String),
+    /// The driver or the page failed.
+    #[error("{engine}: {message}")]
+    Driver {
+        /// The engine.
+        engine: &'static str,
+        /// What `engines/render.mjs` said.
+        message: String,
+    },
+    /// A file of the frame could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// Where the engines are found: Node, Chromium and `engines/` with its `node_modules`.
+#[derive(Clone, Debug)]
+pub struct EngineDriver {
+    node: PathBuf,
+    browser: PathBuf,
+    engines_dir: PathBuf,
+}
+
+/// The first `name` on `PATH`.
+fn find_on_path(name: &str) -> Option<PathBuf> {
+    std::env::split_paths(&std::env::var_os("PATH")?)
+        .map(|dir| dir.join(name))
+        .find(|path| path.is_file())
+}
+
+impl EngineDriver {
+    /// Finds Node (`REFRACT_NODE`, else `node` on `PATH`), Chromium (`REFRACT_CHROMIUM`, else
+    /// `chromium` or `chromium-browser` on `PATH`) and `engines/` (`REFRACT_ENGINES_DIR`, else
+    /// the workspace's) with its npm packages installed.
+    pub fn locate() -> Result<Self, EngineError> {
+        let program = |variable: &str, names: &[&str], what: &str| {
+            std::env::var_os(variable)
+                .map(PathBuf::from)
+                .or_else(|| names.iter().find_map(|n| find_on_path(n)))
+                .ok_or_else(|| {
+                    EngineError::Unavailable(format!(
+                        "no {what} ({} on PATH, or {variable}): the engines' own renders are skipped",
+                        names.join(" or ")
+                    ))
+                })
+        };
+        let node = program("REFRACT_NODE", &["node"], "Node.js")?;
+        let browser = program(
+            "REFRACT_CHROMIUM",
+            &["chromium", "chromium-browser"],
+            "Chromium",
+        )?;
+        let engines_dir = std::env::var_os("REFRACT_ENGINES_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../engines"));
+        if !engines_dir.join("node_modules/puppeteer-core").is_dir() {
+            return Err(EngineError::Unavailable(format!(
+                "{}: the engines' npm packages are not installed (run `npm ci --prefix {}`): \
+                 the engines' own renders are skipped",
+                engines_dir.join("node_modules").display(),
+                engines_dir.display()
+            )));
+        }
+        Ok(Self {
+            node,
+            browser,
+            engines_dir,
+        })
+    }
+
+    /// The installed version of `engine`'s npm package.
+    pub fn version(&self, engine: Engine) -> Result<String, EngineError> {
+        let path = self
+            .engines_dir
+            .join("node_modules")
+            .join(engine.npm_package())
+            .join("package.json");
+        let text = std::fs::read_to_string(&path).map_err(|source| EngineError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|json| json["version"].as_str().map(str::to_owned))
+            .ok_or_else(|| EngineError::Driver {
+                engine: engine.id(),
+                message: format!("{}: no version field", path.display()),
+            })
+    }
+
+    /// Renders `request` of the export in `export_dir` (what [`refract_eval::gltf_export`]
+    /// wrote) with `engine`.
+    pub fn render(
+        &self,
+        engine: Engine,
+        export_dir: &Path,
+        request: &EngineRequest,
+    ) -> Result<EngineFrame, EngineError> {
+        for (side, value) in [("width", request.width), ("height", request.height)] {
+            if !(1..=MAX_SIDE).contains(&value) {
+                return Err(EngineError::Request(format!(
+                    "{side} {value}: expected 1..={MAX_SIDE} pixels for an engine frame"
+                )));
+            }
+        }
+        let driver_error = |message: String| EngineError::Driver {
+            engine: engine.id(),
+            message,
+        };
+        let scratch = tempfile::tempdir().map_err(|source| EngineError::Io {
+            path: std::env::temp_dir(),
+            source,
+        })?;
+        let out = scratch.path().join("frame.f32");
+        let mut command = Command::new(&self.node);
+        command
+            .arg(self.engines_dir.join("render.mjs"))
+            .args(["--engine", engine.id(), "--variant", request.variant.id()])
+            .arg("--scene")
+            .arg(export_dir)
+            .args(["--width", &request.width.to_string()])
+            .args(["--height", &request.height.to_string()])
+            .arg("--out")
+            .arg(&out)
+            .arg("--browser")
+            .arg(&self.browser);
+        if request.hide_refractor {
+            command.arg("--hide-refractor");
+        }
+        let output = command
+            .output()
+            .map_err(|err| driver_error(format!("cannot run {}: {err}", self.node.display())))?;
+        if !output.status.success() {
+            return Err(driver_error(format!(
+                "engines/render.mjs failed ({}): {}",
+                output.status,
+                String::from_utf8_lossy(&output.stderr).trim()
+            )));
+        }
+        let metadata: serde_json::Value =
+            serde_json::from_slice(&output.stdout).map_err(|err| {
+                driver_error(format!("unreadable reply from engines/render.mjs: {err}"))
+            })?;
+        let bytes = std::fs::read(&out).map_err(|source| EngineError::Io {
+            path: out.clone(),
+            source,
+        })?;
+        let pixels = (request.width * request.height) as usize;
+        if bytes.len() != pixels * 16 {
+            return Err(driver_error(format!(
+                "{} bytes of pixels, expected {}",
+                bytes.len(),
+                pixels * 16
+            )));
+        }
+        let mut frame = Frame::new(request.width, request.height);
+        for (color, rgba) in frame.color.iter_mut().zip(bytes.chunks_exact(16)) {
+            let channel = |k: usize| {
+                f32::from_le_bytes([
+                    rgba[4 * k],
+                    rgba[4 * k + 1],
+                    rgba[4 * k + 2],
+                    rgba[4 * k + 3],
+                ])
+            };
+            *color = Vec3::new(channel(0), channel(1), channel(2));
+        }
+        let version = metadata["version"].as_str().unwrap_or("?");
+        Ok(EngineFrame {
+            label: format!("{}@{version}", engine.id()),
+            frame,
+            ms: metadata["ms"].as_f64().unwrap_or(f64::NAN),
+            metadata,
+        })
+    }
+}
+
+/// The world point each pixel of a [`Variant::Position`] frame shows (`None` where black: the
+/// pixel shows no object), decoded with the export's position-code bounds.
+pub fn decode_positions(frame: &Frame, bounds: (Vec3, Vec3)) -> Vec<Option<Vec3>> {
+    frame
+        .color
+        .iter()
+        .map(|&code| (code.max_element() > 0.0).then(|| position_from_code(code, bounds)))
+        .collect()
+}
