@@ -2,10 +2,11 @@
 // Chromium driven over the DevTools protocol (puppeteer-core), and writes the frame as linear
 // float RGBA (little-endian f32, rows from the top) with its metadata as JSON.
 //
-//   node engines/render.mjs --engine threejs --scene DIR --variant color|position \
-//        --width W --height H --out FRAME.f32 [--hide-refractor] [--browser PATH]
+//   node engines/render.mjs --engine threejs --scene DIR --variants color,position \
+//        --width W --height H --out DIR [--hide-refractor] [--browser PATH]
 //
-// Prints one JSON line: { engine, version, width, height, settings, ms }.
+// Writes OUT/<variant>.f32 for each variant, all rendered in one browser session, and prints
+// one JSON line: an array of { engine, version, width, height, settings, ms }, one per variant.
 // The page of each engine is engines/<engine>/index.html; it defines
 // `window.refractRender(request)` (see engines/README.md for the request and the reply).
 // Every file the page loads is served from disk by request interception under one origin:
@@ -30,7 +31,7 @@ const { values: args } = parseArgs({
   options: {
     engine: { type: 'string' },
     scene: { type: 'string' },
-    variant: { type: 'string', default: 'color' },
+    variants: { type: 'string', default: 'color' },
     width: { type: 'string' },
     height: { type: 'string' },
     out: { type: 'string' },
@@ -39,13 +40,16 @@ const { values: args } = parseArgs({
   },
 });
 if (!ENGINES.includes(args.engine)) fail(`--engine: expected one of ${ENGINES.join(', ')}, got ${args.engine}`);
-if (!['color', 'position'].includes(args.variant)) fail(`--variant: expected color or position, got ${args.variant}`);
+const variants = args.variants.split(',');
+for (const variant of variants) {
+  if (!['color', 'position'].includes(variant)) fail(`--variants: expected color and/or position, got ${variant}`);
+}
 for (const side of ['width', 'height']) {
   const n = Number(args[side]);
   if (!Number.isInteger(n) || n < 1 || n > 4096) fail(`--${side}: expected an integer in 1..=4096, got ${args[side]}`);
 }
 if (!args.scene) fail('--scene: the directory refract export --format gltf wrote');
-if (!args.out) fail('--out: the frame file to write');
+if (!args.out) fail('--out: the directory to write the frames into');
 const width = Number(args.width);
 const height = Number(args.height);
 const sceneDir = path.resolve(args.scene);
@@ -95,19 +99,23 @@ try {
   await page.goto(`${ORIGIN}/engines/${args.engine}/index.html`, { waitUntil: 'load' });
   await page.waitForFunction('typeof window.refractRender === "function"', { timeout: 30000 })
     .catch(() => fail(`the ${args.engine} page did not load:\n${consoleLines.join('\n')}`));
-  const reply = await page.evaluate((request) => window.refractRender(request), {
-    scene: `/scene/${args.variant === 'position' ? 'position-coded.gltf' : 'scene.gltf'}`,
-    environment: args.variant === 'position' ? null : '/scene/environment.hdr',
-    variant: args.variant,
-    width,
-    height,
-    hideRefractor: args['hide-refractor'],
-  }).catch((err) => fail(`${args.engine} failed: ${err.message}\n${consoleLines.join('\n')}`));
-  const pixels = Buffer.from(reply.pixels, 'base64');
-  if (pixels.length !== width * height * 16) fail(`${args.engine} returned ${pixels.length} bytes, expected ${width * height * 16}`);
-  await writeFile(args.out, pixels);
-  delete reply.pixels;
-  process.stdout.write(`${JSON.stringify(reply)}\n`);
+  const replies = [];
+  for (const variant of variants) {
+    const reply = await page.evaluate((request) => window.refractRender(request), {
+      scene: `/scene/${variant === 'position' ? 'position-coded.gltf' : 'scene.gltf'}`,
+      environment: variant === 'position' ? null : '/scene/environment.hdr',
+      variant,
+      width,
+      height,
+      hideRefractor: args['hide-refractor'],
+    }).catch((err) => fail(`${args.engine} failed: ${err.message}\n${consoleLines.join('\n')}`));
+    const pixels = Buffer.from(reply.pixels, 'base64');
+    if (pixels.length !== width * height * 16) fail(`${args.engine} returned ${pixels.length} bytes, expected ${width * height * 16}`);
+    await writeFile(path.join(args.out, `${variant}.f32`), pixels);
+    delete reply.pixels;
+    replies.push(reply);
+  }
+  process.stdout.write(`${JSON.stringify(replies)}\n`);
 } finally {
   await browser.close();
 }

@@ -147,6 +147,8 @@ pub fn compare(
             spp,
             reference_backend,
             frames,
+            engines: vec![],
+            engine_policy: refract_lab::backends::GpuPolicy::IfAvailable,
             out,
         };
         refract_lab::compare::run(&options, progress)

@@ -135,6 +135,11 @@ struct CompareArgs {
     /// `refract methods` lists them).
     #[arg(long = "param", value_name = "NAME=VALUE")]
     params: Vec<String>,
+    /// Comma-separated engines whose own renderers run beside the methods, in headless
+    /// Chromium (docs/engines.md): threejs, or none. A listed engine that cannot run (no
+    /// Node, Chromium or `npm ci --prefix engines`) fails the command.
+    #[arg(long, value_delimiter = ',', default_value = "none")]
+    engines: Vec<String>,
     /// Output directory.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -180,6 +185,8 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<refract_lab::jobs::Compa
             ReferenceBackendArg::Gpu => BackendId::Gpu,
         },
         frames: args.frames,
+        engines: refract_lab::engines::parse_engines(&args.engines)?,
+        engine_policy: GpuPolicy::Required,
         out: args.out,
     })
 }

@@ -65,11 +65,11 @@ impl Variant {
     }
 }
 
-/// One frame to render.
+/// The frames to render of one export, in one browser session.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EngineRequest {
-    /// Which file.
-    pub variant: Variant,
+    /// Which files, one frame each.
+    pub variants: Vec<Variant>,
     /// Width in pixels, `1..=4096`.
     pub width: u32,
     /// Height in pixels, `1..=4096`.
@@ -197,14 +197,14 @@ impl EngineDriver {
             })
     }
 
-    /// Renders `request` of the export in `export_dir` (what [`refract_eval::gltf_export`]
-    /// wrote) with `engine`.
+    /// Renders the frames of `request` of the export in `export_dir` (what
+    /// [`refract_eval::gltf_export`] wrote) with `engine`, one per variant, in order.
     pub fn render(
         &self,
         engine: Engine,
         export_dir: &Path,
         request: &EngineRequest,
-    ) -> Result<EngineFrame, EngineError> {
+    ) -> Result<Vec<EngineFrame>, EngineError> {
         for (side, value) in [("width", request.width), ("height", request.height)] {
             if !(1..=MAX_SIDE).contains(&value) {
                 return Err(EngineError::Request(format!(
@@ -220,17 +220,17 @@ impl EngineDriver {
             path: std::env::temp_dir(),
             source,
         })?;
-        let out = scratch.path().join("frame.f32");
+        let variants: Vec<&str> = request.variants.iter().map(|v| v.id()).collect();
         let mut command = Command::new(&self.node);
         command
             .arg(self.engines_dir.join("render.mjs"))
-            .args(["--engine", engine.id(), "--variant", request.variant.id()])
+            .args(["--engine", engine.id(), "--variants", &variants.join(",")])
             .arg("--scene")
             .arg(export_dir)
             .args(["--width", &request.width.to_string()])
             .args(["--height", &request.height.to_string()])
             .arg("--out")
-            .arg(&out)
+            .arg(scratch.path())
             .arg("--browser")
             .arg(&self.browser);
         if request.hide_refractor {
@@ -246,42 +246,66 @@ impl EngineDriver {
                 String::from_utf8_lossy(&output.stderr).trim()
             )));
         }
-        let metadata: serde_json::Value =
+        let replies: Vec<serde_json::Value> =
             serde_json::from_slice(&output.stdout).map_err(|err| {
                 driver_error(format!("unreadable reply from engines/render.mjs: {err}"))
             })?;
-        let bytes = std::fs::read(&out).map_err(|source| EngineError::Io {
-            path: out.clone(),
-            source,
-        })?;
-        let pixels = (request.width * request.height) as usize;
-        if bytes.len() != pixels * 16 {
+        if replies.len() != request.variants.len() {
             return Err(driver_error(format!(
-                "{} bytes of pixels, expected {}",
-                bytes.len(),
-                pixels * 16
+                "{} frames for {} variants",
+                replies.len(),
+                request.variants.len()
             )));
         }
-        let mut frame = Frame::new(request.width, request.height);
-        for (color, rgba) in frame.color.iter_mut().zip(bytes.chunks_exact(16)) {
-            let channel = |k: usize| {
-                f32::from_le_bytes([
-                    rgba[4 * k],
-                    rgba[4 * k + 1],
-                    rgba[4 * k + 2],
-                    rgba[4 * k + 3],
-                ])
-            };
-            *color = Vec3::new(channel(0), channel(1), channel(2));
-        }
-        let version = metadata["version"].as_str().unwrap_or("?");
-        Ok(EngineFrame {
-            label: format!("{}@{version}", engine.id()),
-            frame,
-            ms: metadata["ms"].as_f64().unwrap_or(f64::NAN),
-            metadata,
-        })
+        request
+            .variants
+            .iter()
+            .zip(replies)
+            .map(|(variant, metadata)| {
+                let path = scratch.path().join(format!("{}.f32", variant.id()));
+                let bytes = std::fs::read(&path).map_err(|source| EngineError::Io {
+                    path: path.clone(),
+                    source,
+                })?;
+                let frame = frame_of(&bytes, request.width, request.height).ok_or_else(|| {
+                    driver_error(format!(
+                        "{}: {} bytes of pixels",
+                        path.display(),
+                        bytes.len()
+                    ))
+                })?;
+                let version = metadata["version"].as_str().unwrap_or("?");
+                Ok(EngineFrame {
+                    label: format!("{}@{version}", engine.id()),
+                    frame,
+                    ms: metadata["ms"].as_f64().unwrap_or(f64::NAN),
+                    metadata,
+                })
+            })
+            .collect()
     }
+}
+
+/// A frame of little-endian `f32` RGBA pixels, rows from the top (alpha dropped); `None` when
+/// `bytes` is not `width × height` pixels.
+fn frame_of(bytes: &[u8], width: u32, height: u32) -> Option<Frame> {
+    let pixels = (width as usize) * (height as usize);
+    if bytes.len() != pixels * 16 {
+        return None;
+    }
+    let mut frame = Frame::new(width, height);
+    for (color, rgba) in frame.color.iter_mut().zip(bytes.chunks_exact(16)) {
+        let channel = |k: usize| {
+            f32::from_le_bytes([
+                rgba[4 * k],
+                rgba[4 * k + 1],
+                rgba[4 * k + 2],
+                rgba[4 * k + 3],
+            ])
+        };
+        *color = Vec3::new(channel(0), channel(1), channel(2));
+    }
+    Some(frame)
 }
 
 /// The world point each pixel of a [`Variant::Position`] frame shows (`None` where black: the

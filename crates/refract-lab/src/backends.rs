@@ -8,12 +8,13 @@ use refract_trace::ReferenceRenderer;
 
 use crate::progress::{Note, Progress};
 
-/// What to do when no GPU adapter exists.
+/// What to do when a renderer a command would run is missing: no GPU adapter, or no engine
+/// (`crate::engines`: Node, Chromium or the npm packages).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GpuPolicy {
-    /// The user asked for the GPU: no adapter is an error.
+    /// The user asked for it: missing is an error.
     Required,
-    /// A default list: run on the CPU with a one-line notice.
+    /// A default list: run without it, with a one-line notice.
     IfAvailable,
 }
 

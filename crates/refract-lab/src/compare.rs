@@ -8,7 +8,9 @@ use std::sync::Arc;
 
 use crate::error::Context;
 use refract_core::TirPolicy;
-use refract_eval::metrics::{MetricsRecord, evaluate_method, reference_record};
+use refract_eval::metrics::{
+    ErrorMaps, MetricsRecord, evaluate, evaluate_method, evaluate_nearby, reference_record,
+};
 use refract_eval::{BUILTIN_SCENES, load_scene};
 use refract_scene::{
     Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
@@ -16,6 +18,7 @@ use refract_scene::{
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
+use crate::engines::{ENGINE_BACKEND, EngineRenderers};
 use crate::jobs::CompareOptions;
 use crate::progress::{Note, Progress};
 use crate::report::{MethodImages, SceneImages, write_reports};
@@ -54,8 +57,9 @@ pub fn method_params(
 }
 
 /// The default job (`cargo run --release`, `refract` without a command): every method but the
-/// reference on both backends (the CPU only without an adapter) on every built-in scene at
-/// 512², 1 reference sample per pixel, 5 timed frames, into `out/`.
+/// reference on both backends (the CPU only without an adapter) and every engine's own
+/// renderer (skipped with a note where Node, Chromium or the npm packages are missing) on
+/// every built-in scene at 512², 1 reference sample per pixel, 5 timed frames, into `out/`.
 pub fn default_options() -> crate::Result<CompareOptions> {
     let ids: Vec<MethodId> = MethodId::approximations().collect();
     Ok(CompareOptions {
@@ -67,6 +71,8 @@ pub fn default_options() -> crate::Result<CompareOptions> {
         spp: 1,
         reference_backend: BackendId::Trace,
         frames: 5,
+        engines: refract_engines::Engine::ALL.to_vec(),
+        engine_policy: GpuPolicy::IfAvailable,
         out: PathBuf::from("out"),
     })
 }
@@ -113,6 +119,8 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     }
     let mut renderers = backends::open(&options.backends, options.gpu_policy, progress)?;
     backends::check_supported(&renderers, &options.methods)?;
+    let engines = EngineRenderers::open(&options.engines, options.engine_policy, progress)?;
+    let engine_count = engines.as_ref().map_or(0, EngineRenderers::len);
     let mut reference: Box<dyn Renderer> = match options.reference_backend {
         BackendId::Gpu => Box::new(refract_gpu::GpuRenderer::new()?),
         _ => Box::new(ReferenceRenderer::new()),
@@ -127,7 +135,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     }
     progress.start(
         STAGE_COMPARE,
-        (scenes.len() * (1 + options.methods.len() * renderers.len())) as u64,
+        (scenes.len() * (1 + options.methods.len() * renderers.len() + engine_count)) as u64,
     );
     let mut records = Vec::new();
     let mut scene_images = Vec::new();
@@ -189,66 +197,45 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 })?;
                 let (mut record, maps) = evaluate_method(&truth, &frame, &camera, scene, method);
                 let (id, backend) = (method.id(), renderer.backend());
-                let stem = format!("{id}-{backend}");
-                // Methods that look up nearby geometry get a map of where they missed it.
-                let has_miss = id.info().aovs.contains(&Aov::NgTexel);
-                if has_miss {
-                    write_mask(
-                        &dir.join(format!("miss-{stem}.png")),
-                        w,
-                        h,
-                        &refract_eval::metrics::missed_geometry(&truth, &frame),
-                        &frame.color,
-                    )?;
-                }
                 record.scene.clone_from(&scene.name);
                 record.method = id.name().to_owned();
                 record.backend = backend.id().to_owned();
                 record.params = method.describe();
                 record.ms_per_frame = Some(times.median);
                 records.push(record);
-
-                write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
-                let key = format!("{}/{stem}.hdr.js", scene.name);
-                write_hdr_script(
-                    &dir.join(format!("{stem}.hdr.js")),
-                    &key,
-                    w,
-                    h,
-                    &frame.color,
-                )?;
-                write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
-                write_error_map(
-                    &dir.join(format!("t2err-{stem}.png")),
-                    w,
-                    h,
-                    &maps.t2_deg,
-                    T2_SCALE_DEG,
-                )?;
-                let has_p2 = id.info().aovs.contains(&Aov::P2);
-                if has_p2 {
-                    write_error_map(
-                        &dir.join(format!("p2err-{stem}.png")),
-                        w,
-                        h,
-                        &maps.p2_rel,
-                        P2_SCALE,
-                    )?;
-                }
-                write_mask(
-                    &dir.join(format!("tir-{stem}.png")),
-                    w,
-                    h,
-                    &tir_mask(&frame),
-                    &frame.color,
-                )?;
-                images.push(MethodImages {
-                    stem,
-                    has_p2,
-                    has_miss,
-                });
+                // Methods that look up nearby geometry get a map of where they missed it.
+                images.push(write_images(
+                    &dir,
+                    format!("{id}-{backend}"),
+                    (&truth, &frame),
+                    &maps,
+                    id.info().aovs.contains(&Aov::P2),
+                    id.info().aovs.contains(&Aov::NgTexel),
+                )?);
                 progress.advance(STAGE_COMPARE, 1);
             }
+        }
+        if let Some(engines) = &engines {
+            if scene.refractor.is_dielectric() {
+                for engine in engines.render(scene, &truth, w, h)? {
+                    let (mut record, maps) =
+                        evaluate(&truth, &engine.frame, &camera, scene.refractor.diameter());
+                    evaluate_nearby(&truth, &engine.frame, scene, &camera, None, &mut record);
+                    record.scene.clone_from(&scene.name);
+                    record.method.clone_from(&engine.label);
+                    record.backend = ENGINE_BACKEND.to_owned();
+                    records.push(record);
+                    images.push(write_images(
+                        &dir,
+                        format!("{}-{ENGINE_BACKEND}", engine.label),
+                        (&truth, &engine.frame),
+                        &maps,
+                        false,
+                        true,
+                    )?);
+                }
+            }
+            progress.advance(STAGE_COMPARE, engines.len() as u64);
         }
         scene_images.push(SceneImages {
             scene: scene.name.clone(),
@@ -261,6 +248,71 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
 }
 
 /// The frame's TIR flags (all false when it has no `tir` layer).
+/// Writes a frame's images into `dir` as `<stem>.png` (and its HDR script), its FLIP and T2
+/// error maps, its exit-point error map (`has_p2`), its TIR mask and, for lookups of nearby
+/// geometry (`has_miss`), the map of where it missed the objects the reference's path meets.
+fn write_images(
+    dir: &Path,
+    stem: String,
+    (truth, frame): (&Frame, &Frame),
+    maps: &ErrorMaps,
+    has_p2: bool,
+    has_miss: bool,
+) -> crate::Result<MethodImages> {
+    let (w, h) = (frame.width, frame.height);
+    if has_miss {
+        write_mask(
+            &dir.join(format!("miss-{stem}.png")),
+            w,
+            h,
+            &refract_eval::metrics::missed_geometry(truth, frame),
+            &frame.color,
+        )?;
+    }
+    write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
+    let scene = dir
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
+    let key = format!("{scene}/{stem}.hdr.js");
+    write_hdr_script(
+        &dir.join(format!("{stem}.hdr.js")),
+        &key,
+        w,
+        h,
+        &frame.color,
+    )?;
+    write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
+    write_error_map(
+        &dir.join(format!("t2err-{stem}.png")),
+        w,
+        h,
+        &maps.t2_deg,
+        T2_SCALE_DEG,
+    )?;
+    if has_p2 {
+        write_error_map(
+            &dir.join(format!("p2err-{stem}.png")),
+            w,
+            h,
+            &maps.p2_rel,
+            P2_SCALE,
+        )?;
+    }
+    write_mask(
+        &dir.join(format!("tir-{stem}.png")),
+        w,
+        h,
+        &tir_mask(frame),
+        &frame.color,
+    )?;
+    Ok(MethodImages {
+        stem,
+        has_p2,
+        has_miss,
+    })
+}
+
 fn tir_mask(frame: &Frame) -> Vec<bool> {
     frame
         .flag(Aov::Tir)

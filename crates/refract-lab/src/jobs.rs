@@ -30,6 +30,11 @@ pub struct CompareOptions {
     pub reference_backend: BackendId,
     /// Timed frames per method (after 2 warm-up frames).
     pub frames: u32,
+    /// The engines whose own renderers run beside the methods (`crate::engines`): their
+    /// colour and `P_geom` against the same reference.
+    pub engines: Vec<refract_engines::Engine>,
+    /// What a missing engine means.
+    pub engine_policy: GpuPolicy,
     /// Output directory.
     pub out: PathBuf,
 }

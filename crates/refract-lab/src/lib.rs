@@ -10,6 +10,7 @@
 //! * [`claims`]: the papers' testable claims, measured, with computed verdicts
 //!   (`docs/claims.md`).
 //! * [`bench`](mod@bench): the papers' timing tables on this machine.
+//! * [`engines`]: the engines' own renderers (three.js, ...) beside the methods.
 //! * [`render`](mod@render): one frame of one method, as `refract render` and Python render it.
 //! * [`backends`], [`memory`], [`timing`], [`data_scenes`], [`output_dirs`]: what they share.
 //!
@@ -22,6 +23,7 @@ pub mod bench;
 pub mod claims;
 pub mod compare;
 pub mod data_scenes;
+pub mod engines;
 #[macro_use]
 pub mod error;
 pub mod html;

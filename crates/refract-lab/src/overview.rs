@@ -61,6 +61,32 @@ pub fn matrix_html(results: &[JobResult], thumb: impl Fn(&JobResult, &str) -> St
     });
     let mut backends = distinct(&with_images, |r| r.job.backend.as_str());
     backends.sort_unstable();
+    // A row rendered by one backend only (an engine's own renderer: `webgl`) shows whichever
+    // backend is selected; the switch lists the backends the other rows share.
+    let backends_of = |method: &str| {
+        distinct(&with_images, |r| r.job.backend.as_str())
+            .into_iter()
+            .filter(|b| {
+                with_images
+                    .iter()
+                    .any(|r| r.job.method == method && r.job.backend == *b)
+            })
+            .count()
+    };
+    let switched: Vec<&str> = backends
+        .iter()
+        .copied()
+        .filter(|b| {
+            with_images
+                .iter()
+                .any(|r| r.job.backend == *b && backends_of(&r.job.method) > 1)
+        })
+        .collect();
+    let switched = if switched.is_empty() {
+        backends.clone()
+    } else {
+        switched
+    };
 
     let mut h = String::new();
     h.push_str("<section id=\"overview\"><div id=\"controls\"><label>error <select id=\"metric\">");
@@ -73,7 +99,7 @@ pub fn matrix_html(results: &[JobResult], thumb: impl Fn(&JobResult, &str) -> St
         let _ = write!(h, "<option value=\"{key}\">{label}{unit}</option>");
     }
     h.push_str("</select></label>");
-    for (i, backend) in backends.iter().enumerate() {
+    for (i, backend) in switched.iter().enumerate() {
         let checked = if i == 0 { " checked" } else { "" };
         let _ = write!(
             h,
@@ -89,13 +115,18 @@ pub fn matrix_html(results: &[JobResult], thumb: impl Fn(&JobResult, &str) -> St
     let _ = write!(
         h,
         "<table id=\"matrix\" data-backend=\"{}\"><thead><tr><th></th>",
-        escape(backends.first().copied().unwrap_or("cpu"))
+        escape(switched.first().copied().unwrap_or("cpu"))
     );
     for scene in &scenes {
         let _ = write!(h, "<th>{}</th>", escape(scene));
     }
     h.push_str("</tr></thead><tbody>");
     for method in &methods {
+        let only = if backends_of(method) == 1 {
+            " only"
+        } else {
+            ""
+        };
         let _ = write!(h, "<tr><th>{}</th>", escape(method));
         for scene in &scenes {
             h.push_str("<td>");
@@ -111,7 +142,7 @@ pub fn matrix_html(results: &[JobResult], thumb: impl Fn(&JobResult, &str) -> St
                 let Some(first) = jobs.first() else { continue };
                 let _ = write!(
                     h,
-                    "<div class=\"cell\" data-backend=\"{}\"",
+                    "<div class=\"cell{only}\" data-backend=\"{}\"",
                     escape(backend)
                 );
                 for (key, _, _) in METRICS {
@@ -168,6 +199,7 @@ mod tests {
             result("torus", "wyman", "gpu", 0.2),
             result("torus", "single", "cpu", 0.5),
             result("sphere", "wyman", "cpu", 0.1),
+            result("torus", "threejs@0.187.0", "webgl", 0.4),
         ];
         let h = matrix_html(&results, |r, class| format!("<fig {class} {}>", r.job.id));
         let header = h
@@ -181,13 +213,26 @@ mod tests {
             "{h}"
         );
         assert!(h.contains("<fig cell-thumb sphere-wyman-cpu>"), "{h}");
-        // single on sphere did not run: an empty cell.
-        assert!(h.contains("<tr><th>single</th><td><div class=\"cell\" data-backend=\"cpu\" data-flip=\"0.500000\""), "{h}");
+        // single ran on the CPU only: its cells show whichever backend is selected; on
+        // sphere it did not run: an empty cell.
+        assert!(h.contains("<tr><th>single</th><td><div class=\"cell only\" data-backend=\"cpu\" data-flip=\"0.500000\""), "{h}");
         assert!(h.contains("</td><td></td></tr>"), "{h}");
+        assert!(
+            h.contains("<div class=\"cell\" data-backend=\"gpu\""),
+            "{h}"
+        );
+        // The engine's row shows under either switch position, which lists cpu and gpu only.
+        assert!(
+            h.contains(
+                "<tr><th>threejs@0.187.0</th><td><div class=\"cell only\" data-backend=\"webgl\""
+            ),
+            "{h}"
+        );
         assert!(
             h.contains("value=\"cpu\" checked") && h.contains("value=\"gpu\">"),
             "{h}"
         );
+        assert!(!h.contains("value=\"webgl\""), "{h}");
         assert_eq!(matrix_html(&[], |_, _| String::new()), "");
     }
 }

@@ -342,7 +342,7 @@ h1{{margin:0 0 4px;font-size:22px}}body>p:first-of-type{{margin:0 0 6px;font-siz
 #matrix{{margin:4px 0}}#matrix th,#matrix td{{padding:1px 3px;border:0;font-size:12px}}#matrix thead th{{background:none;cursor:default;text-align:center}}\
 #matrix tbody th{{background:none;text-align:right;white-space:nowrap;cursor:default}}\
 #matrix .cell{{display:none;align-items:center;gap:3px;border-radius:3px;padding:1px 3px 1px 1px}}\
-#matrix[data-backend=cpu] .cell[data-backend=cpu],#matrix[data-backend=gpu] .cell[data-backend=gpu]{{display:flex}}\
+#matrix[data-backend=cpu] .cell[data-backend=cpu],#matrix[data-backend=gpu] .cell[data-backend=gpu],#matrix .cell.only{{display:flex}}\
 #matrix figure{{margin:0;cursor:pointer}}#matrix figure img{{width:36px;height:36px;display:block;border:0}}#matrix figcaption{{display:none}}\
 #matrix .v{{font-variant-numeric:tabular-nums;min-width:42px;text-align:right}}\
 #filters{{display:flex;gap:14px;font-size:13px}}</style></head><body>\

@@ -29,6 +29,8 @@ fn a_comparison_runs_as_a_library_call() {
         spp: 1,
         reference_backend: BackendId::Trace,
         frames: 1,
+        engines: vec![],
+        engine_policy: GpuPolicy::IfAvailable,
         out: dir.path().join("out"),
     };
     let notes = Notes::default();
@@ -78,4 +80,57 @@ fn a_comparison_runs_as_a_library_call() {
     )
     .expect_err("single has no seeds");
     assert!(err.to_string().contains("seeds"), "{err}");
+}
+
+/// An engine's own renderer is a row like a method's: three.js on the chart beside
+/// `volume-thickness`, with FLIP and the nearby-geometry metrics from its position-coded frame,
+/// and its images. Without Node, Chromium or the npm packages: skipped with a line, except
+/// under `REFRACT_REQUIRE_ENGINES=1`.
+#[test]
+fn a_comparison_runs_the_engines_own_renderers() {
+    let required = std::env::var("REFRACT_REQUIRE_ENGINES").is_ok_and(|v| v == "1");
+    if let Err(why) = refract_engines::EngineDriver::locate() {
+        assert!(!required, "REFRACT_REQUIRE_ENGINES=1: {why}");
+        println!("skipped: {why}");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let options = CompareOptions {
+        backends: vec![BackendId::Cpu],
+        gpu_policy: GpuPolicy::IfAvailable,
+        scenes: vec!["chart".into()],
+        methods: method_params(
+            &[MethodId::VolumeThickness],
+            TirPolicy::ClampToCritical,
+            &[],
+            "test",
+        )
+        .expect("methods"),
+        res: 48,
+        spp: 1,
+        reference_backend: BackendId::Trace,
+        frames: 1,
+        engines: vec![refract_engines::Engine::Threejs],
+        engine_policy: GpuPolicy::Required,
+        out: dir.path().join("out"),
+    };
+    let records = compare::run(&options, &refract_lab::progress::Quiet).expect("compare");
+    let engine = records
+        .iter()
+        .find(|r| r.method.starts_with("threejs@"))
+        .expect("a three.js row");
+    assert_eq!(engine.backend, "webgl");
+    assert!(
+        engine.flip_mean.is_some_and(|f| f > 0.0 && f < 1.0),
+        "{engine:?}"
+    );
+    let [both, ..] = engine.nearby_confusion.expect("P_geom metrics");
+    assert!(both > 50, "{engine:?}");
+    let stem = format!("{}-webgl", engine.method);
+    for file in [
+        format!("chart/{stem}.png"),
+        format!("chart/flip-{stem}.png"),
+    ] {
+        assert!(options.out.join(&file).is_file(), "{file}");
+    }
 }

@@ -1,0 +1,153 @@
+//! The engines' own renderers in a comparison (`refract_engines`, `docs/engines.md`): each
+//! scene exported as glTF once, then each engine renders its colour and its position-coded
+//! frame in one browser session; the frame the metrics read is the colour with two layers:
+//! `Covered` (the reference's refractor pixels: the engines rasterise the same triangles with
+//! the same pixel-centre rule) and `P_geom` (the world point the position-coded frame shows
+//! there, NaN where it shows none).
+
+use glam::Vec3;
+use refract_engines::{
+    Engine, EngineDriver, EngineError, EngineRequest, Variant, decode_positions,
+};
+use refract_eval::gltf_export::{export_gltf, position_code_bounds};
+use refract_scene::{Aov, Frame, Layer, Scene};
+
+use crate::backends::GpuPolicy;
+use crate::progress::{Note, Progress};
+
+/// The backend column of an engine's rows: where it ran (Chromium's WebGL2 on SwiftShader).
+pub const ENGINE_BACKEND: &str = "webgl";
+
+/// Parses an `--engines` list (`threejs`; `none` for no engine).
+pub fn parse_engines(names: &[String]) -> crate::Result<Vec<Engine>> {
+    let mut engines = Vec::new();
+    for name in names {
+        if name == "none" {
+            continue;
+        }
+        match Engine::ALL.iter().find(|e| e.id() == name) {
+            Some(&engine) => engines.push(engine),
+            None => crate::bail!(
+                "--engines: unknown engine `{name}`; expected {} or none",
+                Engine::ALL.map(Engine::id).join(", ")
+            ),
+        }
+    }
+    Ok(engines)
+}
+
+/// The engines a command runs and the driver that runs them.
+pub struct EngineRenderers {
+    driver: EngineDriver,
+    engines: Vec<Engine>,
+}
+
+/// One engine's frame of a scene, ready for the metrics.
+pub struct EngineFrame {
+    /// `threejs@0.187.0`.
+    pub label: String,
+    /// Colour, `Covered` and `P_geom`.
+    pub frame: Frame,
+}
+
+impl EngineRenderers {
+    /// The driver of `engines` (`None` for no engine); what is missing is an error with
+    /// [`GpuPolicy::Required`], a skip note with [`GpuPolicy::IfAvailable`].
+    pub fn open(
+        engines: &[Engine],
+        policy: GpuPolicy,
+        progress: &dyn Progress,
+    ) -> crate::Result<Option<Self>> {
+        if engines.is_empty() {
+            return Ok(None);
+        }
+        match EngineDriver::locate() {
+            Ok(driver) => Ok(Some(Self {
+                driver,
+                engines: engines.to_vec(),
+            })),
+            Err(EngineError::Unavailable(why)) if policy == GpuPolicy::IfAvailable => {
+                progress.note(Note::Skipped(why));
+                Ok(None)
+            }
+            Err(err) => crate::bail!("{err}"),
+        }
+    }
+
+    /// How many engines run.
+    pub fn len(&self) -> usize {
+        self.engines.len()
+    }
+
+    /// Whether no engine runs.
+    pub fn is_empty(&self) -> bool {
+        self.engines.is_empty()
+    }
+
+    /// Every engine's frame of `scene` at `width × height`, `truth` being the reference's
+    /// frame (its `Covered` layer).
+    pub fn render(
+        &self,
+        scene: &Scene,
+        truth: &Frame,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<Vec<EngineFrame>> {
+        let export = tempfile::tempdir().map_err(crate::LabError::Os)?;
+        export_gltf(scene)?.write(export.path())?;
+        let bounds = position_code_bounds(scene);
+        let request = EngineRequest {
+            variants: vec![Variant::Color, Variant::Position],
+            width,
+            height,
+            hide_refractor: false,
+        };
+        let covered = truth
+            .flag(Aov::Covered)
+            .map(<[bool]>::to_vec)
+            .unwrap_or_else(|| vec![false; truth.pixel_count()]);
+        let mut frames = Vec::new();
+        for &engine in &self.engines {
+            let mut rendered = self
+                .driver
+                .render(engine, export.path(), &request)
+                .map_err(|err| crate::LabError::invalid(err.to_string()))?;
+            let position = rendered.pop().expect("two variants requested");
+            let color = rendered.pop().expect("two variants requested");
+            let mut frame = color.frame;
+            let p_geom: Vec<Vec3> = decode_positions(&position.frame, bounds)
+                .into_iter()
+                .zip(&covered)
+                .map(|(p, &glass)| p.filter(|_| glass).unwrap_or(Vec3::NAN))
+                .collect();
+            frame.insert_layer(Aov::Covered, Layer::Flag(covered.clone()));
+            frame.insert_layer(Aov::PGeom, Layer::Vec3(p_geom));
+            frames.push(EngineFrame {
+                label: color.label,
+                frame,
+            });
+        }
+        Ok(frames)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn engines_are_parsed_by_id_and_a_wrong_one_names_the_choices() {
+        let names = |list: &[&str]| list.iter().map(|s| (*s).to_owned()).collect::<Vec<_>>();
+        assert_eq!(
+            parse_engines(&names(&["threejs"])).expect("threejs"),
+            [Engine::Threejs]
+        );
+        assert!(parse_engines(&names(&["none"])).expect("none").is_empty());
+        let err = parse_engines(&names(&["unity"])).expect_err("unknown");
+        assert!(
+            err.to_string()
+                .contains("`unity`; expected threejs or none"),
+            "{err}"
+        );
+    }
+}
