@@ -140,6 +140,7 @@ def compare(
     params: Optional[Mapping[str, Union[str, int]]] = None,
     out: PathLike = "out",
     reference_backend: str = "cpu",
+    engines: Sequence[str] = (),
 ) -> List[Dict[str, Any]]:
     """Every method (default: all but the reference) against the exact reference on each
     scene, as ``refract compare`` runs it: images, ``metrics.json``, ``report.md`` and
@@ -147,7 +148,9 @@ def compare(
     reference's own row first per scene: the fields of ``metrics.json``, ready for
     ``pandas.DataFrame(records)``. ``params`` apply to every method that has them.
     ``reference_backend`` traces the reference on ``"cpu"`` (the CPU tracer) or ``"gpu"``
-    (the WGSL tracer, ``docs/reference.md``). Ctrl-C stops the run between frames."""
+    (the WGSL tracer, ``docs/reference.md``). ``engines`` (``"threejs"``) also render each
+    scene with the engines themselves, a row ``threejs@VERSION`` on backend ``webgl``
+    (``docs/engines.md``); one that cannot run raises. Ctrl-C stops the run between frames."""
     if isinstance(scenes, str):
         scenes = [scenes]
     text = _compare(
@@ -160,6 +163,7 @@ def compare(
         None if params is None else dict(params),
         os.fspath(out),
         reference_backend,
+        list(engines),
     )
     return json.loads(text)
 

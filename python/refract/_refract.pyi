@@ -101,6 +101,8 @@ def compare(
     frames: int,
     params: Optional[Dict[str, Union[str, int]]],
     out: str,
+    reference_backend: str,
+    engines: List[str],
 ) -> str: ...
 def sweep(
     path: str,

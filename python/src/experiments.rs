@@ -76,8 +76,10 @@ fn run_experiment<T: Send>(
 /// `refract compare` runs it: writes images, `metrics.json`, `report.md` and `index.html` into
 /// `out`; returns the records (JSON text of a list of `metrics.json` rows). The reference is
 /// traced by `reference_backend`: `"cpu"` (the CPU tracer) or `"gpu"` (the WGSL tracer).
+/// `engines` (`"threejs"`) render each scene with the engines themselves beside the methods
+/// (`docs/engines.md`); one that cannot run is an error.
 #[pyfunction]
-#[pyo3(signature = (scenes, methods=None, backends=vec!["cpu".to_owned()], res=256, spp=1, frames=3, params=None, out=PathBuf::from("out"), reference_backend="cpu"))]
+#[pyo3(signature = (scenes, methods=None, backends=vec!["cpu".to_owned()], res=256, spp=1, frames=3, params=None, out=PathBuf::from("out"), reference_backend="cpu", engines=vec![]))]
 #[allow(clippy::too_many_arguments)]
 pub fn compare(
     py: Python<'_>,
@@ -90,8 +92,11 @@ pub fn compare(
     params: Option<&Bound<'_, pyo3::types::PyDict>>,
     out: PathBuf,
     reference_backend: &str,
+    engines: Vec<String>,
 ) -> PyResult<String> {
     let params = crate::scene::param_pairs(params)?;
+    let engines = refract_lab::engines::parse_engines(&engines)
+        .map_err(|err| value_error(err.to_string().replace("--engines", "engines")))?;
     let reference_backend = match reference_backend {
         "cpu" => BackendId::Trace,
         "gpu" => BackendId::Gpu,
@@ -147,8 +152,8 @@ pub fn compare(
             spp,
             reference_backend,
             frames,
-            engines: vec![],
-            engine_policy: refract_lab::backends::GpuPolicy::IfAvailable,
+            engines,
+            engine_policy: GpuPolicy::Required,
             out,
         };
         refract_lab::compare::run(&options, progress)

@@ -133,3 +133,26 @@ def test_ctrl_c_stops_a_sweep_between_jobs(tmp_path):
     assert "interrupted" in stdout
     finished = len(list(jobs.iterdir()))
     assert 1 <= finished < 6, finished
+
+
+def test_compare_with_an_engine_itself(tmp_path):
+    """three.js itself as a row beside the methods (docs/engines.md); without Node, Chromium or
+    the npm packages the test is skipped, failed under REFRACT_REQUIRE_ENGINES=1."""
+    try:
+        records = refract.compare(
+            "chart",
+            methods=["volume-thickness"],
+            res=32,
+            frames=1,
+            out=tmp_path / "e",
+            engines=["threejs"],
+        )
+    except Exception as err:  # the driver's one line naming what is missing
+        if os.environ.get("REFRACT_REQUIRE_ENGINES") == "1":
+            raise
+        pytest.skip(str(err))
+    engine = [r for r in records if r["method"].startswith("threejs@")]
+    assert len(engine) == 1 and engine[0]["backend"] == "webgl"
+    assert 0 < engine[0]["flip_mean"] < 1
+    with pytest.raises(ValueError, match="unknown engine `unity`"):
+        refract.compare("sphere", engines=["unity"], out=tmp_path / "u")

@@ -148,7 +148,7 @@ impl EngineDriver {
                 .or_else(|| names.iter().find_map(|n| find_on_path(n)))
                 .ok_or_else(|| {
                     EngineError::Unavailable(format!(
-                        "no {what} ({} on PATH, or {variable}): the engines' own renders are skipped",
+                        "no {what} ({} on PATH, or {variable}) for the engines' own renders",
                         names.join(" or ")
                     ))
                 })
@@ -164,8 +164,7 @@ impl EngineDriver {
             .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../engines"));
         if !engines_dir.join("node_modules/puppeteer-core").is_dir() {
             return Err(EngineError::Unavailable(format!(
-                "{}: the engines' npm packages are not installed (run `npm ci --prefix {}`): \
-                 the engines' own renders are skipped",
+                "{}: the engines' npm packages are not installed (run `npm ci --prefix {}`)",
                 engines_dir.join("node_modules").display(),
                 engines_dir.display()
             )));

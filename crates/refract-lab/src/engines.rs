@@ -67,7 +67,9 @@ impl EngineRenderers {
                 engines: engines.to_vec(),
             })),
             Err(EngineError::Unavailable(why)) if policy == GpuPolicy::IfAvailable => {
-                progress.note(Note::Skipped(why));
+                progress.note(Note::Skipped(format!(
+                    "{why}: the engines' own renders are skipped"
+                )));
                 Ok(None)
             }
             Err(err) => crate::bail!("{err}"),
