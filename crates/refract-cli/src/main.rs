@@ -112,9 +112,10 @@ struct CompareArgs {
     /// Comma-separated method ids (`refract methods`); default: every method but the reference.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<MethodId>>,
-    /// Comma-separated backends: cpu, gpu. With gpu and no adapter, the command fails.
-    #[arg(long, value_delimiter = ',', default_value = "cpu,gpu")]
-    backends: Vec<String>,
+    /// Comma-separated backends: cpu, gpu. Default: both, the GPU left out with a notice
+    /// where no adapter opens; a list given here with gpu and no adapter fails the command.
+    #[arg(long, value_delimiter = ',')]
+    backends: Option<Vec<String>>,
     /// Square resolution in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=i64::from(refract_scene::MAX_FRAME_SIZE)))]
     res: u32,
@@ -154,9 +155,14 @@ pub fn parse_param(assignment: &str) -> anyhow::Result<(&str, &str)> {
 }
 
 fn compare_options(args: CompareArgs) -> anyhow::Result<refract_lab::jobs::CompareOptions> {
-    let backends = backends::parse_backends(&args.backends)?;
-    // The default list tolerates a missing adapter (with a notice); an explicit list does not.
-    let explicit = args.backends != ["cpu", "gpu"];
+    // The default list tolerates a missing adapter (with a notice); a list given does not, even
+    // when it is the default's.
+    let explicit = args.backends.is_some();
+    let backends = backends::parse_backends(
+        &args
+            .backends
+            .unwrap_or_else(|| vec!["cpu".to_owned(), "gpu".to_owned()]),
+    )?;
     let ids = args
         .methods
         .unwrap_or_else(|| MethodId::approximations().collect());
@@ -249,10 +255,22 @@ fn main() -> ExitCode {
     run()
 }
 
+/// The parsed command line. Every command takes negative numbers as values, so that `--res
+/// -16` is refused by the option's range ("-16 is not in 1..=16384") rather than read as an
+/// unknown option `-1`.
+fn parse_command_line() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let command = Cli::command()
+        .allow_negative_numbers(true)
+        .mut_subcommands(|sub| sub.allow_negative_numbers(true));
+    let matches = command.get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|err| err.exit())
+}
+
 /// The command line's command.
 #[inline(never)]
 fn run() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse_command_line();
     if let Some(policy) = cli.ray_query {
         refract_gpu::RayQueryPolicy::choose(match policy {
             RayQueryArg::Auto => refract_gpu::RayQueryPolicy::Auto,

@@ -248,7 +248,7 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 14] = [
+    let cases: [(&[&str], &str); 17] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
         (
             &[
@@ -328,6 +328,17 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
             ],
             "ior",
         ),
+        // Issue 54 #23: negative numbers reach the option's range check, not clap's "unexpected
+        // argument '-1' found".
+        (&["compare", "sphere", "--res", "-16"], "-16 is not in 1..="),
+        (
+            &["compare", "sphere", "--res", "8", "--frames", "-1"],
+            "-1 is not in 1..=10000",
+        ),
+        (
+            &["claims", "--timing-rounds", "-1", "--out", "c"],
+            "-1 is not in",
+        ),
         (
             &[
                 "compare",
@@ -351,6 +362,46 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
     assert!(
         !dir.path().join("x.png").exists(),
         "no partial output on failure"
+    );
+}
+
+/// Issue 54 #20: `--backends cpu,gpu` given explicitly needs the GPU, although it is the
+/// default list: without an adapter (here none matches `WGPU_ADAPTER_NAME`) the command fails
+/// naming why; without `--backends` it runs on the CPU with a notice.
+#[test]
+fn explicit_backends_require_the_gpu_even_when_they_are_the_defaults() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_refract"))
+            .args([
+                "compare",
+                "sphere",
+                "--methods",
+                "single",
+                "--res",
+                "8",
+                "--frames",
+                "1",
+            ])
+            .args(extra)
+            .env("WGPU_ADAPTER_NAME", "no-such-adapter-anywhere")
+            .current_dir(dir.path())
+            .output()
+            .expect("run refract")
+    };
+    let explicit = run(&["--backends", "cpu,gpu", "--out", "a"]);
+    assert!(!explicit.status.success(), "{}", stderr(&explicit));
+    assert!(
+        stderr(&explicit).contains("WGPU_ADAPTER_NAME"),
+        "{}",
+        stderr(&explicit)
+    );
+    let default = run(&["--out", "b"]);
+    assert!(default.status.success(), "{}", stderr(&default));
+    assert!(
+        stderr(&default).contains("running on the CPU only"),
+        "{}",
+        stderr(&default)
     );
 }
 

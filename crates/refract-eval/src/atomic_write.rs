@@ -54,6 +54,21 @@ impl Drop for LiveTemporary {
     }
 }
 
+/// The longest file name most file systems take (`NAME_MAX`), in bytes.
+const MAX_NAME_BYTES: usize = 255;
+/// What the temporary's name adds to the final one: `.`, `.`, six random characters and
+/// `.partial`.
+const TEMPORARY_NAME_EXTRA: usize = 16;
+
+/// The longest prefix of `text` of at most `max` bytes that ends on a character boundary.
+fn truncate_at_char(text: &str, max: usize) -> &str {
+    let mut end = text.len().min(max);
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    &text[..end]
+}
+
 /// Writes `path` through `write`, atomically: `write` gets a buffered writer on a temporary
 /// file in the same directory; the buffer is flushed (a failed flush is an error, e.g. a full
 /// disk), then the file is renamed to `path`. `what` names the content in error messages.
@@ -69,6 +84,9 @@ pub fn write_atomically<E: Display>(
     let stem = path
         .file_name()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    // `.{stem}.XXXXXX.partial` is the name plus 16 bytes: a name near the 255-byte limit of
+    // a file name keeps only its first bytes in the temporary's.
+    let stem = truncate_at_char(&stem, MAX_NAME_BYTES - TEMPORARY_NAME_EXTRA);
     let prefix = format!(".{stem}.");
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".partial");
@@ -141,6 +159,20 @@ pub fn write_png_rgb8(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 54 #7: a name of up to 255 bytes is written (its temporary's name is cut to fit),
+    /// multi-byte characters included, and nothing is left beside it.
+    #[test]
+    fn names_up_to_the_file_name_limit_are_written() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        for name in ["a".repeat(255), format!("{}.txt", "é".repeat(125))] {
+            assert!(name.len() <= 255);
+            let path = dir.path().join(&name);
+            write_text_atomically(&path, "x").unwrap_or_else(|e| panic!("{}: {e}", name.len()));
+            assert_eq!(std::fs::read_to_string(&path).expect("read"), "x");
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 2);
+    }
 
     #[test]
     fn a_failed_write_leaves_no_file() {
