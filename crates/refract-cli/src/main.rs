@@ -220,6 +220,14 @@ fn run_sweep(args: &sweep::SweepArgs) -> anyhow::Result<()> {
         done.jobs_dir.display(),
         done.skipped
     );
+    // A shard with nothing to show for it (every job it ran failed, none finished before)
+    // fails, so that `sweep && report` stops; jobs that failed beside finished ones do not.
+    anyhow::ensure!(
+        done.failed == 0 || done.finished + done.skipped > 0,
+        "none of the {} jobs run finished: every one failed (their errors are in {})",
+        done.failed,
+        done.jobs_dir.display()
+    );
     Ok(())
 }
 

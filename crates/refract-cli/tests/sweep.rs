@@ -14,6 +14,10 @@ fn refract(args: &[&str], dir: &Path) -> Output {
         .expect("run refract")
 }
 
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
 fn ok(output: &Output) -> String {
     let err = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{err}");
@@ -195,6 +199,25 @@ fn reruns_skip_finished_jobs_and_failures_are_recorded() {
     ok(&refract(&["report", "out", "--out", "rep"], dir.path()));
     let md = std::fs::read_to_string(dir.path().join("rep/report.md")).expect("report");
     assert!(md.contains("Failed: `missing-16-cpu-wyman`"), "{md}");
+    // Issue 54 #21: a shard where every job fails, with nothing finished before, fails (so
+    // that `sweep && report` stops), its failures still recorded.
+    std::fs::write(
+        dir.path().join("broken.toml"),
+        "scenes = [\"missing.toml\"]\nmethods = [\"single\"]\nres = [16]\nframes = 1\n",
+    )
+    .expect("write");
+    let broken = refract(&["sweep", "broken.toml", "--out", "broken"], dir.path());
+    assert!(!broken.status.success(), "{}", stderr(&broken));
+    assert!(
+        stderr(&broken).contains("none of the 1 jobs run finished"),
+        "{}",
+        stderr(&broken)
+    );
+    assert!(
+        dir.path()
+            .join("broken/jobs/missing-16-cpu-single.json")
+            .is_file()
+    );
     // Bad shard arguments are errors naming them.
     let bad = refract(&["sweep", "sweep.toml", "--shard", "3/3"], dir.path());
     assert!(!bad.status.success());
