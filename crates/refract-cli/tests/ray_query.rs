@@ -162,7 +162,8 @@ fn ray_queries_and_the_wgsl_traversal_trace_the_same_reference() {
 }
 
 /// `REFRACT_RAY_QUERY=on` (or `--ray-query on`) on an adapter without ray queries is an error
-/// naming the adapter, not a silent fallback; a value other than auto, on or off is an error
+/// naming the adapter when the reference renders, not a silent fallback (the other methods
+/// trace no rays and render); a value other than auto, on or off is an error
 /// naming the variable; `--ray-query` takes precedence over the variable.
 #[test]
 fn forcing_ray_queries_without_them_is_an_error() {
@@ -203,6 +204,11 @@ fn forcing_ray_queries_without_them_is_an_error() {
             "{}",
             stderr(&forced)
         );
+        // Issue 54 #15: only the reference traces rays; a method that does not renders.
+        let mut method = args;
+        method[3] = "wyman";
+        let other = refract(&method, &env("on"), dir.path());
+        assert!(other.status.success(), "{}", stderr(&other));
     }
     // And off (the WGSL traversal) runs everywhere; `--ray-query` overrides the variable.
     let off = refract(&args, &env("off"), dir.path());

@@ -111,6 +111,9 @@ pub struct GpuContext {
     /// Whether the device has hardware ray queries enabled (`EXPERIMENTAL_RAY_QUERY`, by
     /// [`RayQueryPolicy`]): the reference then traverses its scene with them.
     pub ray_queries: bool,
+    /// Why the reference cannot run here: [`RayQueryPolicy::On`] on an adapter without ray
+    /// queries. Only the reference traces rays, so only it refuses; every other method runs.
+    pub ray_query_refusal: Option<String>,
     /// The first error no scope caught (wgpu's default handler panics; ours keeps it for the
     /// next [`GpuContext::checked`] or [`GpuContext::wait`] to return).
     uncaught: Arc<Mutex<Option<String>>>,
@@ -194,16 +197,17 @@ impl GpuContext {
         let has_ray_queries = adapter
             .features()
             .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
-        let ray_queries = match RayQueryPolicy::current()? {
-            RayQueryPolicy::Auto => has_ray_queries,
-            RayQueryPolicy::Off => false,
-            RayQueryPolicy::On if has_ray_queries => true,
-            RayQueryPolicy::On => {
-                return Err(GpuError::RayQuery(format!(
-                    "forced on (--ray-query on or REFRACT_RAY_QUERY=on), but {} ({}) has no ray queries (lavapipe has them from Mesa 24.1; docs/reference.md)",
+        let (ray_queries, ray_query_refusal) = match RayQueryPolicy::current()? {
+            RayQueryPolicy::Auto => (has_ray_queries, None),
+            RayQueryPolicy::Off => (false, None),
+            RayQueryPolicy::On if has_ray_queries => (true, None),
+            RayQueryPolicy::On => (
+                false,
+                Some(format!(
+                    "ray queries forced on (--ray-query on or REFRACT_RAY_QUERY=on), but {} ({}) has no ray queries (lavapipe has them from Mesa 24.1; docs/reference.md)",
                     info.name, info.driver_info
-                )));
-            }
+                )),
+            ),
         };
         let mut required_features = wgpu::Features::empty();
         if timestamps {
@@ -242,6 +246,7 @@ impl GpuContext {
             info,
             timestamps,
             ray_queries,
+            ray_query_refusal,
             uncaught,
         })
     }

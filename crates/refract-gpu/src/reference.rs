@@ -152,6 +152,9 @@ impl ReferencePipeline {
     /// Compiles `src/reference.wgsl` on `context`'s device, over its ray queries when the
     /// device has them enabled, else over the WGSL BVH traversal.
     pub fn new(context: &GpuContext) -> Result<Self, GpuError> {
+        if let Some(refusal) = &context.ray_query_refusal {
+            return Err(GpuError::RayQuery(refusal.clone()));
+        }
         let device = &context.device;
         let traversal = if context.ray_queries {
             Traversal::RayQuery
