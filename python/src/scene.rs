@@ -69,11 +69,15 @@ pub fn param_pairs(params: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, 
 /// A method's parameters: its defaults with `params` applied.
 fn method_params(id: MethodId, params: Option<&Bound<'_, PyDict>>) -> PyResult<MethodParams> {
     let mut method = MethodParams::defaults(id);
-    for (name, text) in param_pairs(params)? {
-        method
-            .set(&name, &text, "params")
-            .map_err(|err| to_py(err.into()))?;
-    }
+    let pairs = param_pairs(params)?;
+    method
+        .set_all(
+            pairs
+                .iter()
+                .map(|(name, text)| (name.as_str(), text.as_str())),
+            "params",
+        )
+        .map_err(|err| to_py(err.into()))?;
     Ok(method)
 }
 

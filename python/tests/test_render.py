@@ -77,6 +77,16 @@ def test_parameters_change_the_frame(sphere):
     assert dict(full.params)["spp"] == "2"
 
 
+def test_a_parameter_left_unread_is_refused(sphere):
+    # Issue 54 #22: thickness-milli is read only with thickness=custom.
+    with pytest.raises(ValueError, match="it is read only with thickness=custom"):
+        sphere.render("volume-thickness", res=(8, 8), params={"thickness-milli": 500})
+    custom = {"thickness": "custom", "thickness-milli": 500}
+    assert dict(sphere.render("volume-thickness", res=(8, 8), params=custom).params)[
+        "thickness-milli"
+    ] == "500"
+
+
 def test_save_and_load_round_trip(sphere, tmp_path):
     frame = sphere.render("wyman", res=(24, 16), aovs=True)
     frame.save(tmp_path / "f.exr")

@@ -93,10 +93,12 @@ fn method_params(args: &RenderArgs) -> anyhow::Result<MethodParams> {
         settings.max_depth = args.depth;
         settings.spp = args.spp;
     }
-    for assignment in &args.params {
-        let (name, value) = crate::parse_param(assignment)?;
-        params.set(name, value, "--param")?;
-    }
+    let assignments = args
+        .params
+        .iter()
+        .map(|a| crate::parse_param(a))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    params.set_all(assignments.iter().copied(), "--param")?;
     Ok(params)
 }
 

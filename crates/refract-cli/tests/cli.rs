@@ -248,7 +248,7 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
         "[refractor]\nmesh = \"builtin:sphere\"\ncolour = 1\n",
     )
     .expect("write");
-    let cases: [(&[&str], &str); 17] = [
+    let cases: [(&[&str], &str); 21] = [
         (&["info", "builtin:sphere", "--weld", "nan"], "--weld"),
         (
             &[
@@ -351,6 +351,60 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
                 "/proc/refract-cannot-write",
             ],
             "refract-cannot-write",
+        ),
+        // Issue 54 #9: a bad `--out` of `refract claims` is found before the measurement.
+        (
+            &[
+                "claims",
+                "--res",
+                "16",
+                "--timing-rounds",
+                "1",
+                "--out",
+                ".",
+            ],
+            "is a directory; expected the name of a file to write",
+        ),
+        (
+            &[
+                "claims",
+                "--res",
+                "16",
+                "--timing-rounds",
+                "1",
+                "--out",
+                "/proc/refract-cannot-write.md",
+            ],
+            "cannot create a file beside it",
+        ),
+        // Issue 54 #22: a parameter the others leave unread is refused, not ignored.
+        (
+            &[
+                "render",
+                "sphere",
+                "--method",
+                "volume-thickness",
+                "--param",
+                "thickness-milli=500",
+                "--res",
+                "8",
+                "--out",
+                "x.png",
+            ],
+            "thickness-milli = 500: it is read only with thickness=custom",
+        ),
+        (
+            &[
+                "compare",
+                "sphere",
+                "--methods",
+                "volume-thickness,proxy-box",
+                "--param",
+                "thickness-milli=500",
+                "--res",
+                "8",
+            ],
+            "thickness-milli = 500: it is read only with thickness=custom",
         ),
     ];
     for (args, expected) in cases {

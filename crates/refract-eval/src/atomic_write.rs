@@ -133,6 +133,34 @@ pub fn write_atomically<E: Display>(
     Ok(())
 }
 
+/// Checks, before a long computation, that [`write_atomically`] will be able to write `path`:
+/// `path` is not a directory, and a temporary file can be created beside it (then removed).
+/// The directory must exist.
+pub fn check_writable(path: &Path) -> Result<(), SceneError> {
+    if path.is_dir() {
+        return Err(SceneError::Format {
+            path: path.to_owned(),
+            message: "is a directory; expected the name of a file to write".to_owned(),
+        });
+    }
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let probe = tempfile::Builder::new()
+        .prefix(".refract-probe.")
+        .suffix(".partial")
+        .tempfile_in(dir)
+        .map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            action: "cannot create a file beside it",
+            source,
+        })?;
+    let _live = LiveTemporary::new(probe.path());
+    drop(probe);
+    Ok(())
+}
+
 /// [`write_atomically`] of a text.
 pub fn write_text_atomically(path: &Path, text: &str) -> Result<(), SceneError> {
     write_atomically(path, "the text", |w| w.write_all(text.as_bytes()))

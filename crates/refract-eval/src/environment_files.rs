@@ -85,10 +85,10 @@ pub fn load_latlong(path: &Path) -> Result<(LatLongMap, EnvironmentReport), Scen
 /// 10¹⁸ below `f32::MAX`; a real sky's sun is below 10¹⁰.
 pub const MAX_ENVIRONMENT_RADIANCE: f32 = 1e20;
 
-/// The largest width or height of an environment map.
-pub const MAX_ENVIRONMENT_DIMENSION: u32 = 16384;
-/// The most texels of an environment map (16384 × 8192, 1.5 GiB as linear RGB `f32`).
-pub const MAX_ENVIRONMENT_TEXELS: u64 = 16384 * 8192;
+/// The largest width of an environment map (a lat-long map is twice as wide as high).
+pub const MAX_ENVIRONMENT_WIDTH: u32 = 16384;
+/// The largest height of an environment map.
+pub const MAX_ENVIRONMENT_HEIGHT: u32 = 8192;
 
 fn check_size(path: &Path, width: u32, height: u32) -> Result<(), SceneError> {
     if width == 0 || height == 0 {
@@ -97,14 +97,12 @@ fn check_size(path: &Path, width: u32, height: u32) -> Result<(), SceneError> {
             format!("the map is {width}x{height}; expected at least 1x1 texels"),
         ));
     }
-    if width > MAX_ENVIRONMENT_DIMENSION
-        || height > MAX_ENVIRONMENT_DIMENSION
-        || u64::from(width) * u64::from(height) > MAX_ENVIRONMENT_TEXELS
-    {
+    if width > MAX_ENVIRONMENT_WIDTH || height > MAX_ENVIRONMENT_HEIGHT {
         return Err(format_error(
             path,
             format!(
-                "the map declares {width}x{height} texels; expected at most {MAX_ENVIRONMENT_DIMENSION} a side and {MAX_ENVIRONMENT_TEXELS} in all"
+                "the map declares {width}x{height} texels; expected at most \
+                 {MAX_ENVIRONMENT_WIDTH}x{MAX_ENVIRONMENT_HEIGHT} (width x height)"
             ),
         ));
     }
@@ -200,6 +198,20 @@ mod tests {
         assert!(
             text.contains("huge.exr") && text.contains("100000x100000"),
             "{text}"
+        );
+
+        // Issue 54 #19: 16384 texels high (docs/scenes.md: 16384 x 8192 is the largest).
+        let tall = dir.path().join("tall.hdr");
+        std::fs::write(
+            &tall,
+            b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 8192\n",
+        )
+        .expect("write");
+        let err = load_latlong(&tall).expect_err("tall").to_string();
+        assert!(
+            err.contains("tall.hdr")
+                && err.contains("8192x16384 texels; expected at most 16384x8192"),
+            "{err}"
         );
 
         let empty = dir.path().join("empty.hdr");

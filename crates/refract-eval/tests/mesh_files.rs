@@ -139,6 +139,22 @@ fn broken_obj_files_give_errors_naming_the_file() {
 
 /// A GLB holding a tetrahedron under a translated and scaled node, with a glass material.
 fn tetrahedron_glb(index_override: Option<u16>) -> Vec<u8> {
+    tetrahedron_glb_with(index_override, &[], "")
+}
+
+/// [`tetrahedron_glb`] with `required` as its `extensionsRequired`.
+fn tetrahedron_glb_requiring(index_override: Option<u16>, required: &[&str]) -> Vec<u8> {
+    tetrahedron_glb_with(index_override, required, "")
+}
+
+/// [`tetrahedron_glb`] with `required` as its `extensionsRequired` and `material` (JSON
+/// members ending in a comma) at the start of its material.
+fn tetrahedron_glb_with(index_override: Option<u16>, required: &[&str], material: &str) -> Vec<u8> {
+    let required = if required.is_empty() {
+        String::new()
+    } else {
+        format!("\"extensionsRequired\":[\"{}\"],", required.join("\",\""))
+    };
     let positions: [[f32; 3]; 4] = [
         [1.0, 1.0, 1.0],
         [1.0, -1.0, -1.0],
@@ -156,12 +172,12 @@ fn tetrahedron_glb(index_override: Option<u16>) -> Vec<u8> {
         .collect();
     bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
     let json = format!(
-        r#"{{"asset":{{"version":"2.0"}},
+        r#"{{"asset":{{"version":"2.0"}},{required}
 "extensionsUsed":["KHR_materials_ior","KHR_materials_transmission","KHR_materials_volume"],
 "scene":0,"scenes":[{{"nodes":[0]}}],
 "nodes":[{{"mesh":0,"translation":[2,0,0],"scale":[0.5,0.5,0.5]}}],
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
-"materials":[{{"extensions":{{"KHR_materials_ior":{{"ior":1.45}},
+"materials":[{{{material}"extensions":{{"KHR_materials_ior":{{"ior":1.45}},
   "KHR_materials_transmission":{{"transmissionFactor":1.0}},
   "KHR_materials_volume":{{"thicknessFactor":0.2}}}}}}],
 "buffers":[{{"byteLength":{len}}}],
@@ -450,4 +466,58 @@ fn gltf_volume_thickness_follows_the_object_into_the_scene() {
         params.thickness_for(&sphere.refractor),
         sphere.refractor.mean_d_n()
     );
+}
+
+/// A file that requires `KHR_materials_volume` loads with its thickness (issue 54 #8: gltf's
+/// validation refused it as unsupported although the loader reads it); one that requires an
+/// extension refract cannot read is refused, naming the extension.
+#[test]
+fn gltf_required_extensions_that_are_read_are_accepted() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let required = ["KHR_materials_volume", "KHR_materials_ior"];
+    let path = write(
+        dir.path(),
+        "required.glb",
+        &tetrahedron_glb_requiring(None, &required),
+    );
+    let loaded = load_mesh(&path, &raw()).expect("KHR_materials_volume is read");
+    let glass = loaded.material.expect("a glass material");
+    assert!(glass.thickness.is_some(), "{glass:?}");
+    let draco = write(
+        dir.path(),
+        "draco.glb",
+        &tetrahedron_glb_requiring(None, &["KHR_draco_mesh_compression"]),
+    );
+    let err = load_mesh(&draco, &raw()).expect_err("draco").to_string();
+    assert!(
+        err.contains("draco.glb")
+            && err.contains("extensionsRequired lists KHR_draco_mesh_compression")
+            && err.contains("KHR_materials_volume"),
+        "{err}"
+    );
+}
+
+/// Glass properties refract reads but does not model are warned about, naming the material and
+/// the value (issue 54 #16: dropped without a word). The tetrahedron's material gives no
+/// roughness (glTF's default is 1); with `"roughnessFactor": 0` there is nothing to say, and
+/// absorption is named.
+#[test]
+fn gltf_glass_properties_that_are_not_modelled_are_warned_about() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let warnings = |name: &str, material: &str| {
+        let path = write(dir.path(), name, &tetrahedron_glb_with(None, &[], material));
+        load_mesh(&path, &raw()).expect("load").report.warnings
+    };
+    let rough = warnings("rough.glb", "");
+    assert!(
+        rough
+            .iter()
+            .any(|w| w.contains("glass material 0: roughnessFactor 1")),
+        "{rough:?}"
+    );
+    let smooth = warnings(
+        "smooth.glb",
+        r#""pbrMetallicRoughness":{"roughnessFactor":0},"#,
+    );
+    assert!(smooth.iter().all(|w| !w.contains("glass")), "{smooth:?}");
 }

@@ -52,6 +52,8 @@ impl GpuBvh {
             }];
             triangles = vec![FlatTriangle::default()];
         }
+        context.check_storage::<FlatNode>("BVH nodes", nodes.len())?;
+        context.check_storage::<FlatTriangle>("triangles", triangles.len())?;
         context.checked(|| Self {
             nodes: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("bvh nodes"),

@@ -31,6 +31,25 @@ pub enum GpuError {
         /// Which limit.
         limit: String,
     },
+    /// A scene whose buffer is larger than the adapter binds (issue 54 #5: a raw wgpu
+    /// validation error above about 1.68M triangles on lavapipe).
+    #[error(
+        "the scene's {count} {what} need {bytes} bytes in one GPU buffer; {adapter} binds at most {limit} bytes in a storage buffer (about {max} {what}): trace it on the CPU (`--reference-backend cpu`, the default)"
+    )]
+    SceneTooLarge {
+        /// What the buffer holds (`triangles`, `BVH nodes`).
+        what: &'static str,
+        /// How many.
+        count: usize,
+        /// Their bytes.
+        bytes: u64,
+        /// The adapter's limit in bytes.
+        limit: u64,
+        /// How many fit.
+        max: u64,
+        /// Adapter name.
+        adapter: String,
+    },
     /// The device could not allocate a resource.
     #[error("the GPU is out of memory")]
     OutOfMemory,
@@ -47,6 +66,31 @@ pub enum GpuError {
     /// without them.
     #[error("ray queries: {0}")]
     RayQuery(String),
+}
+
+impl GpuContext {
+    /// Refuses a storage buffer of `count` elements of `T` that the device cannot bind
+    /// (`max_storage_buffer_binding_size`, `max_buffer_size`), with a clear error naming the
+    /// count and the limit.
+    pub fn check_storage<T>(&self, what: &'static str, count: usize) -> Result<(), GpuError> {
+        let element = std::mem::size_of::<T>().max(1) as u64;
+        let limits = self.device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let bytes = count as u64 * element;
+        if bytes <= limit {
+            return Ok(());
+        }
+        Err(GpuError::SceneTooLarge {
+            what,
+            count,
+            bytes,
+            limit,
+            max: limit / element,
+            adapter: self.info.name.clone(),
+        })
+    }
 }
 
 /// Whether the reference traverses its scene with the adapter's hardware ray queries
@@ -333,4 +377,36 @@ fn experimental_ray_queries() -> wgpu::ExperimentalFeatures {
     // `rayQueryProceed` over opaque geometry), the results are held to the WGSL traversal's by
     // crates/refract-cli/tests/ray_query.rs, and `REFRACT_RAY_QUERY=off` turns it off.
     unsafe { wgpu::ExperimentalFeatures::enabled() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GpuContext;
+
+    /// A buffer beyond what the adapter binds is refused naming the count, the limit and what
+    /// to do (issue 54 #5: the GPU reference above about 1.68M triangles failed with wgpu's
+    /// raw validation error); one within it passes.
+    #[test]
+    fn storage_beyond_the_binding_limit_is_refused_by_name() {
+        let Some(context) = GpuContext::for_tests() else {
+            return;
+        };
+        type Triangle = [u32; 16];
+        assert!(context.check_storage::<Triangle>("triangles", 1000).is_ok());
+        let limits = context.device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let count = (limit / 64 + 1) as usize;
+        let err = context
+            .check_storage::<Triangle>("triangles", count)
+            .expect_err("beyond the limit")
+            .to_string();
+        assert!(
+            err.contains(&format!("{count} triangles need"))
+                && err.contains(&format!("at most {limit} bytes"))
+                && err.contains("--reference-backend cpu"),
+            "{err}"
+        );
+    }
 }

@@ -425,6 +425,7 @@ impl GpuReference {
         uploaded: &GpuScene,
     ) -> Result<Self, RenderError> {
         let (combined, attributes) = combined_mesh(scene);
+        context.check_storage::<TraceTriangle>("triangles", attributes.len())?;
         let device = &context.device;
         // The triangles' attributes in the order the traversal reports hits: the BVH's leaf
         // order, or the mesh's own for ray queries.

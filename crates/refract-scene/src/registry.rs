@@ -361,6 +361,13 @@ pub trait FamilyParams {
     fn apply(&mut self, name: &str, value: ParamValue) -> bool;
     /// The value of parameter `name`, `None` for a name the method does not have.
     fn get(&self, name: &str) -> Option<ParamValue>;
+    /// What another parameter must be for `name` to be read (`"thickness=custom"`), `None`
+    /// where `name` is read as the parameters stand: a value set for a parameter that is not
+    /// read is refused by [`MethodParams::set_all`] rather than ignored.
+    fn unread_unless(&self, name: &str) -> Option<&'static str> {
+        let _ = name;
+        None
+    }
 }
 
 /// The names of a choice table, in its order (`const`, so that a [`ParamKind::Choice`] and the
@@ -539,6 +546,30 @@ impl MethodParams {
         }
     }
 
+    /// Sets every `(name, value)` of `assignments` as [`Self::set`] does, then refuses a
+    /// parameter that the others leave unread (`thickness-milli` without `thickness=custom`),
+    /// naming it and what it needs.
+    pub fn set_all<'a>(
+        &mut self,
+        assignments: impl IntoIterator<Item = (&'a str, &'a str)> + Clone,
+        origin: &str,
+    ) -> Result<(), SceneError> {
+        for (name, value) in assignments.clone() {
+            self.set(name, value, origin)?;
+        }
+        for (name, value) in assignments {
+            if let Some(needs) = self.family().unread_unless(name) {
+                return Err(SceneError::field(
+                    origin,
+                    format!("{} parameter {name}", self.id()),
+                    value,
+                    format!("it is read only with {needs}; set that too"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The value of parameter `name` as text, `None` for a name the method does not have.
     pub fn get(&self, name: &str) -> Option<String> {
         self.family().get(name).map(|v| v.to_string())
@@ -620,6 +651,29 @@ mod tests {
             }
             assert!(params.set("no-such-parameter", "1", "test").is_err());
             assert_eq!(params.id(), row.id, "setting parameters keeps the method");
+        }
+    }
+
+    /// Issue 54 #22: `thickness-milli` without `thickness=custom` is refused by `set_all`
+    /// (before, it was set and never read); with it, in either order, it is read.
+    #[test]
+    fn a_parameter_left_unread_is_refused() {
+        let mut params = MethodParams::defaults(MethodId::VolumeThickness);
+        let err = params
+            .set_all([("thickness-milli", "500")], "--param")
+            .expect_err("unread");
+        assert!(
+            err.to_string()
+                .contains("thickness-milli = 500: it is read only with thickness=custom"),
+            "{err}"
+        );
+        for order in [
+            [("thickness-milli", "500"), ("thickness", "custom")],
+            [("thickness", "custom"), ("thickness-milli", "500")],
+        ] {
+            let mut params = MethodParams::defaults(MethodId::VolumeThickness);
+            params.set_all(order, "--param").expect("read");
+            assert_eq!(params.get("thickness-milli").as_deref(), Some("500"));
         }
     }
 }

@@ -41,7 +41,7 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
     // checked here, then the document is validated.
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|err| error(err.to_string()))?;
-    let json = document.into_json();
+    let mut json = document.into_json();
     // glTF 1.0 is another format (materials as techniques, no accessor-based meshes as 2.0
     // reads them): refused by name rather than read as if it were 2.0.
     if !json.asset.version.starts_with("2.") {
@@ -51,6 +51,7 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
         )));
     }
     check_accessor_indices(&json).map_err(error)?;
+    check_required_extensions(&mut json).map_err(error)?;
     let document = gltf::Document::from_json(json).map_err(|err| error(err.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|err| error(format!("cannot load its buffers: {err}")))?;
@@ -82,7 +83,17 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
         all_have_normals,
         all_have_uvs,
         material,
+        material_index: _,
+        other_glass,
+        mut dropped,
     } = collector;
+    if !other_glass.is_empty() {
+        dropped.push(format!(
+            "glass: {} also transmissive; refract reads the first glass material for the whole \
+             mesh",
+            other_glass.into_iter().collect::<Vec<_>>().join(", ")
+        ));
+    }
     let non_unit_normals = if all_have_normals {
         super::count_non_unit(&normals)
     } else {
@@ -100,6 +111,7 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
             mesh,
             has_file_normals: all_have_normals,
             non_unit_normals,
+            notes: dropped,
         },
         material,
     ))
@@ -113,6 +125,12 @@ struct Collector {
     all_have_normals: bool,
     all_have_uvs: bool,
     material: Option<GlassMaterial>,
+    /// The index of the glass material read (`None` inside: the default material).
+    material_index: Option<Option<usize>>,
+    /// Other glass materials, by name or index, which are not read.
+    other_glass: std::collections::BTreeSet<String>,
+    /// What of the glass material read is not modelled, one line each.
+    dropped: Vec<String>,
 }
 
 impl Default for Collector {
@@ -125,11 +143,91 @@ impl Default for Collector {
             all_have_normals: true,
             all_have_uvs: true,
             material: None,
+            material_index: None,
+            other_glass: Default::default(),
+            dropped: vec![],
         }
     }
 }
 
+/// The extensions a file may require: those the gltf crate reads with refract's features,
+/// and `KHR_materials_volume`, which it reads (feature `KHR_materials_volume`) but leaves off
+/// the list its validation accepts in `extensionsRequired` (gltf-json 1.4).
+fn readable_extensions() -> impl Iterator<Item = &'static str> {
+    gltf::json::extensions::ENABLED_EXTENSIONS
+        .iter()
+        .copied()
+        .chain(["KHR_materials_volume"])
+}
+
+/// Refuses a file that requires an extension refract cannot read, naming it; the accepted ones
+/// are taken off `extensionsRequired` so that gltf's validation, which does not know
+/// `KHR_materials_volume` there, accepts the document.
+fn check_required_extensions(json: &mut gltf::json::Root) -> Result<(), String> {
+    if let Some(unread) = json
+        .extensions_required
+        .iter()
+        .find(|name| !readable_extensions().any(|known| known == name.as_str()))
+    {
+        return Err(format!(
+            "extensionsRequired lists {unread}, which refract cannot read (it reads {})",
+            readable_extensions().collect::<Vec<_>>().join(", ")
+        ));
+    }
+    json.extensions_required.clear();
+    Ok(())
+}
+
 /// Every accessor a mesh primitive names (attributes, indices, morph targets) exists.
+/// A material as messages name it: `` `name` (material 3) ``.
+fn material_label(material: &gltf::Material<'_>) -> String {
+    match (material.name(), material.index()) {
+        (Some(name), Some(index)) => format!("`{name}` (material {index})"),
+        (None, Some(index)) => format!("material {index}"),
+        (_, None) => "the default material".to_owned(),
+    }
+}
+
+/// What refract does not model of a glass material (issue 54 #16: dropped without a word):
+/// textures of the transmission and the thickness, absorption, roughness, partial transmission.
+fn unmodelled(material: &gltf::Material<'_>) -> Vec<String> {
+    let label = material_label(material);
+    let mut dropped = Vec::new();
+    if let Some(transmission) = material.transmission() {
+        if transmission.transmission_texture().is_some() {
+            dropped.push("its transmissionTexture (the factor alone is read)".to_owned());
+        }
+        let factor = transmission.transmission_factor();
+        if factor < 1.0 {
+            dropped.push(format!(
+                "transmissionFactor {factor} (refract's glass transmits fully)"
+            ));
+        }
+    }
+    if let Some(volume) = material.volume() {
+        if volume.thickness_texture().is_some() {
+            dropped.push("its thicknessTexture (thicknessFactor alone is read)".to_owned());
+        }
+        if volume.attenuation_distance().is_finite() {
+            dropped.push(format!(
+                "attenuationDistance {} and attenuationColor {:?} (no absorption is modelled)",
+                volume.attenuation_distance(),
+                volume.attenuation_color()
+            ));
+        }
+    }
+    let roughness = material.pbr_metallic_roughness().roughness_factor();
+    if roughness > 0.0 {
+        dropped.push(format!(
+            "roughnessFactor {roughness} (glTF's default is 1; refract's glass is smooth)"
+        ));
+    }
+    dropped
+        .into_iter()
+        .map(|what| format!("glass {label}: {what} is not modelled"))
+        .collect()
+}
+
 fn check_accessor_indices(json: &gltf::json::Root) -> Result<(), String> {
     let count = json.accessors.len();
     for (m, mesh) in json.meshes.iter().enumerate() {
@@ -301,11 +399,15 @@ impl Collector {
                 }
             }));
             let material = primitive.material();
-            if self.material.is_none()
-                && (material.ior().is_some()
-                    || material.transmission().is_some()
-                    || material.volume().is_some())
-            {
+            let glass = material.ior().is_some()
+                || material.transmission().is_some()
+                || material.volume().is_some();
+            if glass && self.material.is_some() && self.material_index != Some(material.index()) {
+                self.other_glass.insert(material_label(&material));
+            }
+            if self.material.is_none() && glass {
+                self.material_index = Some(material.index());
+                self.dropped = unmodelled(&material);
                 self.material = Some(GlassMaterial {
                     ior: material.ior(),
                     transmission: material.transmission().map(|t| t.transmission_factor()),

@@ -118,6 +118,9 @@ pub(crate) struct RawMesh {
     pub has_file_normals: bool,
     /// File normals that were not unit length (before `Mesh::new` normalised them).
     pub non_unit_normals: usize,
+    /// What the reader read but does not use (glTF glass properties refract does not model),
+    /// one warning each.
+    pub notes: Vec<String>,
 }
 
 /// Normals whose length differs from 1 by more than 1e-3.
@@ -139,8 +142,9 @@ pub(crate) fn prepare(
         mut mesh,
         has_file_normals,
         non_unit_normals,
+        notes,
     } = raw;
-    let mut warnings = Vec::new();
+    let mut warnings = notes;
     let source_vertices = mesh.positions.len();
     let source_triangles = mesh.triangles.len();
     let degenerate_removed = mesh.remove_degenerate_triangles()?;

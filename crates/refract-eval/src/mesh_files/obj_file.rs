@@ -96,6 +96,7 @@ pub(super) fn read(path: &Path) -> Result<RawMesh, GeometryError> {
         mesh,
         has_file_normals,
         non_unit_normals,
+        notes: vec![],
     })
 }
 

@@ -353,4 +353,9 @@ impl FamilyParams for EngineParams {
             _ => return None,
         })
     }
+
+    fn unread_unless(&self, name: &str) -> Option<&'static str> {
+        (name == "thickness-milli" && self.thickness != ThicknessSource::Custom)
+            .then_some("thickness=custom")
+    }
 }
