@@ -18,7 +18,7 @@ import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 import puppeteer from 'puppeteer-core';
 
-const ENGINES = ['threejs'];
+const ENGINES = ['threejs', 'babylon'];
 const ORIGIN = 'http://refract.invalid';
 const here = path.dirname(fileURLToPath(import.meta.url));
 

@@ -453,6 +453,79 @@ fn the_report_names_missing_images() {
     );
 }
 
+/// A cached reference of the wrong size (here another resolution's, copied over it) is not
+/// used: the job warns, traces the reference again and replaces the entry (issue 54 #6: it
+/// panicked inside the job, and the bad entry stayed).
+#[test]
+fn a_cached_reference_of_the_wrong_size_is_replaced() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cached = |dir: &Path| -> Vec<std::path::PathBuf> {
+        let mut files: Vec<_> = std::fs::read_dir(dir.join("cache"))
+            .expect("cache")
+            .map(|e| e.expect("entry").path())
+            .collect();
+        files.sort();
+        files
+    };
+    for res in [16, 24] {
+        std::fs::write(
+            dir.path().join(format!("r{res}.toml")),
+            format!("scenes = [\"sphere\"]\nmethods = [\"single\"]\nres = [{res}]\nframes = 1\nimages = false\n"),
+        )
+        .expect("write");
+    }
+    let run = |file: &str, out: &str| {
+        refract(
+            &["sweep", file, "--cache", "cache", "--out", out],
+            dir.path(),
+        )
+    };
+    ok(&run("r16.toml", "a"));
+    let small = cached(dir.path()).remove(0);
+    ok(&run("r24.toml", "b"));
+    let large = cached(dir.path())
+        .into_iter()
+        .find(|p| *p != small)
+        .expect("the 24x24 reference");
+    let size = std::fs::metadata(&large).expect("size").len();
+    std::fs::copy(&small, &large).expect("copy over");
+    let out = run("r24.toml", "c");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("the cached reference is unusable (16x16 pixels, expected 24x24)"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::metadata(&large).expect("size").len(),
+        size,
+        "the entry is replaced by a 24x24 reference"
+    );
+}
+
+/// A report that fails on a write leaves no `images/` behind in its output directory
+/// (issue 54 #14): here `results.json` is a directory, so its write fails after the images are
+/// copied.
+#[test]
+fn a_failed_report_leaves_no_images_behind() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("small.toml"),
+        "scenes = [\"sphere\"]\nmethods = [\"single\"]\nres = [16]\nframes = 1\n",
+    )
+    .expect("write");
+    ok(&refract(&["sweep", "small.toml", "--out", "s"], dir.path()));
+    std::fs::create_dir_all(dir.path().join("r/results.json")).expect("a directory in the way");
+    let out = refract(&["report", "s", "--out", "r"], dir.path());
+    assert!(!out.status.success(), "the report wrote over a directory");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("results.json"), "{err}");
+    assert!(
+        !dir.path().join("r/images").exists(),
+        "left behind: r/images/"
+    );
+}
+
 /// `reference_backend = "gpu"` in a sweep file: the references are traced on the GPU, cached
 /// apart from the CPU tracer's, and give the same metrics within the two references' f32
 /// differences (at 2 samples per pixel: the GPU supersamples too); bad values are refused
@@ -512,4 +585,46 @@ fn sweeps_trace_their_references_on_the_gpu_when_asked() {
         })
         .count();
     assert_eq!(cached, 2, "one reference per backend in the cache");
+}
+
+/// `engines = [...]` in a sweep file: each engine renders each scene itself (backend `webgl`,
+/// labelled with its version) beside the methods, with the methods' metrics and images
+/// (issue 50, item 3). Without Node, Chromium or `npm ci --prefix engines` the engine job fails
+/// naming what is missing; this test then prints `skipped:` unless REFRACT_REQUIRE_ENGINES=1.
+#[test]
+fn sweeps_run_the_engines_themselves() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("engines.toml"),
+        "scenes = [\"chart\"]\nmethods = [\"volume-thickness\"]\nengines = [\"threejs\"]\nres = [32]\nframes = 1\n",
+    )
+    .expect("write");
+    let out = refract(&["sweep", "engines.toml", "--out", "s"], dir.path());
+    let job = std::fs::read_to_string(dir.path().join("s/jobs/chart-32-webgl-threejs.json"))
+        .expect("the engine's job");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: serde_json::Value = serde_json::from_str(&job).expect("json");
+    let required = std::env::var("REFRACT_REQUIRE_ENGINES").is_ok_and(|v| v == "1");
+    if result["status"] == "error" && !required {
+        println!("skipped: {}", result["error"]);
+        return;
+    }
+    assert_eq!(result["status"], "ok", "{job}");
+    assert!(
+        result["metrics"]["method"]
+            .as_str()
+            .is_some_and(|m| m.starts_with("threejs@")),
+        "{job}"
+    );
+    assert_eq!(result["metrics"]["backend"], "webgl");
+    assert!(result["metrics"]["flip_mean"].as_f64().is_some(), "{job}");
+    assert!(
+        dir.path()
+            .join("s/images/chart-32-webgl-threejs.png")
+            .is_file()
+    );
 }

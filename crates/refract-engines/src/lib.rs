@@ -25,16 +25,20 @@ pub enum Engine {
     /// three.js (`three` on npm): `MeshPhysicalMaterial` transmission from glTF's
     /// `KHR_materials_transmission`, `_ior` and `_volume`.
     Threejs,
+    /// Babylon.js (`babylonjs` and `babylonjs-loaders` on npm): `PBRMaterial` sub-surface
+    /// refraction from the same extensions, through the glTF loader's transmission helper.
+    Babylon,
 }
 
 impl Engine {
     /// Every engine.
-    pub const ALL: [Engine; 1] = [Engine::Threejs];
+    pub const ALL: [Engine; 2] = [Engine::Threejs, Engine::Babylon];
 
     /// The id on the command line and in `engines/<id>/`.
     pub const fn id(self) -> &'static str {
         match self {
             Engine::Threejs => "threejs",
+            Engine::Babylon => "babylon",
         }
     }
 
@@ -42,6 +46,7 @@ impl Engine {
     pub const fn npm_package(self) -> &'static str {
         match self {
             Engine::Threejs => "three",
+            Engine::Babylon => "babylonjs",
         }
     }
 }

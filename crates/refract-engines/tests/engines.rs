@@ -1,6 +1,6 @@
-//! three.js itself, in headless Chromium, on scenes refract exports as glTF: its camera sees
-//! what refract's sees, its background is refract's environment, and its glass looks up the
-//! point refract's `volume-thickness` re-implementation looks up.
+//! The engines themselves, in headless Chromium, on scenes refract exports as glTF: each
+//! engine's camera sees what refract's sees, its background is refract's environment, and its
+//! glass looks up the point its re-implementation looks up.
 //!
 //! Needs Node, Chromium and `npm ci --prefix engines`; without them each test prints
 //! `skipped: ...` and passes, except under `REFRACT_REQUIRE_ENGINES=1` (CI sets it).
@@ -49,12 +49,11 @@ fn percentile(mut values: Vec<f32>, q: f32) -> f32 {
     values[((values.len() - 1) as f32 * q).round() as usize]
 }
 
-/// Every object pixel three.js draws shows the world point refract's camera projects to that
+/// Every object pixel `engine` draws shows the world point refract's camera projects to that
 /// pixel's centre: the position-coded chart and floor without the glass, decoded, projected
 /// with refract's camera, land within 0.05 px of the pixel centre (a half-pixel offset, a
 /// wrong aspect or field of view, or a flipped image would be off by 0.5 px or more).
-#[test]
-fn threejs_camera_matches_refracts() {
+fn camera_matches_refracts(engine: Engine) {
     let Some(driver) = driver() else { return };
     let scene = builtin("chart");
     let dir = tempfile::tempdir().expect("tempdir");
@@ -62,7 +61,7 @@ fn threejs_camera_matches_refracts() {
     let (width, height) = (96, 64);
     let frame = driver
         .render(
-            Engine::Threejs,
+            engine,
             dir.path(),
             &EngineRequest {
                 variants: vec![Variant::Position],
@@ -71,7 +70,7 @@ fn threejs_camera_matches_refracts() {
                 hide_refractor: true,
             },
         )
-        .expect("three.js frame")
+        .expect("engine frame")
         .remove(0);
     let camera = scene.camera(width, height).expect("camera");
     let positions = decode_positions(&frame.frame, position_code_bounds(&scene));
@@ -105,12 +104,22 @@ fn threejs_camera_matches_refracts() {
     );
 }
 
-/// three.js's background is refract's environment in refract's orientation: under a
+#[test]
+fn threejs_camera_matches_refracts() {
+    camera_matches_refracts(Engine::Threejs);
+}
+
+#[test]
+fn babylon_camera_matches_refracts() {
+    camera_matches_refracts(Engine::Babylon);
+}
+
+/// `engine`'s background is refract's environment in refract's orientation: under a
 /// direction-coded lat-long map (`0.5 + 0.4 d`, asymmetric in every axis), each pixel's
 /// background decodes to the direction of refract's pixel ray: median within 0.01 and 99 %
-/// within 0.03 (three.js resamples the map into a cube map; a quarter turn off is 0.5 or more).
-#[test]
-fn threejs_background_is_refracts_environment() {
+/// within 0.03 (the engines resample the map into a cube map; a quarter turn off is 0.5 or
+/// more, a mirrored map as much).
+fn background_is_refracts_environment(engine: Engine) {
     let Some(driver) = driver() else { return };
     let (map_width, map_height) = (1024, 512);
     let texels = (0..map_height)
@@ -143,7 +152,7 @@ fn threejs_background_is_refracts_environment() {
     let (width, height) = (64, 48);
     let frame = driver
         .render(
-            Engine::Threejs,
+            engine,
             dir.path(),
             &EngineRequest {
                 variants: vec![Variant::Color],
@@ -152,7 +161,7 @@ fn threejs_background_is_refracts_environment() {
                 hide_refractor: true,
             },
         )
-        .expect("three.js frame")
+        .expect("engine frame")
         .remove(0);
     let camera = scene.camera(width, height).expect("camera");
     let errors: Vec<f32> = frame
@@ -179,6 +188,123 @@ fn threejs_background_is_refracts_environment() {
     );
 }
 
+#[test]
+fn threejs_background_is_refracts_environment() {
+    background_is_refracts_environment(Engine::Threejs);
+}
+
+#[test]
+fn babylon_background_is_refracts_environment() {
+    background_is_refracts_environment(Engine::Babylon);
+}
+
+/// What `engine` looks up and shows through the glass of the chart, against the
+/// re-implementation `method` (refract's CPU backend): per glass pixel where both show an
+/// object, the distance in pixels between the projections of the two lookup points; and the
+/// colour comparison, printed.
+struct Lookups {
+    label: String,
+    errors: Vec<f32>,
+}
+
+fn lookups(engine: Engine, method: &str) -> Option<Lookups> {
+    use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
+    let driver = driver()?;
+    let scene = Arc::new(builtin("chart"));
+    let dir = tempfile::tempdir().expect("tempdir");
+    export(&scene, dir.path());
+    let (width, height) = (128, 128);
+    let mut theirs = driver
+        .render(
+            engine,
+            dir.path(),
+            &EngineRequest {
+                variants: vec![Variant::Position, Variant::Color],
+                width,
+                height,
+                hide_refractor: false,
+            },
+        )
+        .expect("engine frames");
+    let their_color = theirs.pop().expect("colour");
+    let theirs = theirs.pop().expect("position");
+    let camera = scene.camera(width, height).expect("camera");
+    let mut cpu = refract_cpu::CpuRenderer::new();
+    cpu.prepare(&scene).expect("prepare");
+    let mut ours = Frame::new(width, height);
+    let method: MethodId = method.parse().expect("method");
+    cpu.render(
+        &camera,
+        &MethodParams::defaults(method),
+        FrameOutputs::ColorAndAovs,
+        &mut ours,
+    )
+    .expect("re-implementation");
+    let decoded = decode_positions(&theirs.frame, position_code_bounds(&scene));
+    let covered = ours.flag(Aov::Covered).expect("Covered");
+    let p2 = ours.vec3(Aov::P2).expect("P2");
+    let p_geom = ours.vec3(Aov::PGeom).expect("Pgeom");
+    let pixel = |p_ws: Vec3| camera.world_to_pixel(p_ws).map(|p| Vec2::new(p.x, p.y));
+    let mut errors = Vec::new();
+    for i in 0..decoded.len() {
+        let (Some(looked_up), true, true) = (decoded[i], covered[i], p_geom[i].is_finite()) else {
+            continue;
+        };
+        if let (Some(a), Some(b)) = (pixel(p2[i]), pixel(looked_up)) {
+            errors.push((a - b).length());
+        }
+    }
+    assert!(
+        errors.len() > 1000,
+        "{}: {} glass pixels looking up an object in both",
+        theirs.label,
+        errors.len()
+    );
+    let within_one = errors.iter().filter(|&&e| e < 1.0).count() as f32 / errors.len() as f32;
+    println!(
+        "{} against {method}: {} glass pixels, lookup distance median {} px, 90 % {} px, \
+         {:.1} % within 1 px",
+        theirs.label,
+        errors.len(),
+        percentile(errors.clone(), 0.5),
+        percentile(errors.clone(), 0.9),
+        100.0 * within_one
+    );
+
+    // Colour over the glass pixels.
+    let luminance = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let glass: Vec<usize> = (0..covered.len()).filter(|&i| covered[i]).collect();
+    let ratios: Vec<f32> = glass
+        .iter()
+        .map(|&i| luminance(their_color.frame.color[i]) / luminance(ours.color[i]).max(1e-4))
+        .collect();
+    let within = |tolerance: f32| {
+        glass
+            .iter()
+            .filter(|&&i| {
+                let (a, b) = (their_color.frame.color[i], ours.color[i]);
+                ((a - b).abs() / b.max(Vec3::splat(1e-2))).max_element() <= tolerance
+            })
+            .count() as f32
+            / glass.len() as f32
+    };
+    println!(
+        "{} against {method}: colour on {} glass pixels: {:.1} % within 1 %, {:.1} % within \
+         10 %; luminance ratio median {}, 10 % {}, 90 % {}",
+        theirs.label,
+        glass.len(),
+        100.0 * within(0.01),
+        100.0 * within(0.10),
+        percentile(ratios.clone(), 0.5),
+        percentile(ratios.clone(), 0.1),
+        percentile(ratios, 0.9)
+    );
+    Some(Lookups {
+        label: theirs.label,
+        errors,
+    })
+}
+
 /// three.js's glass reads its transmission target where refract's `volume-thickness` looks up,
 /// `proj(P + T d)` (three.js `transmission_pars_fragment`): on the position-coded chart, each
 /// glass pixel where both show an object decodes to a point whose projection lies within
@@ -192,98 +318,18 @@ fn threejs_background_is_refracts_environment() {
 /// reflection, which `volume-thickness` does not model.
 #[test]
 fn threejs_looks_up_where_volume_thickness_does() {
-    use refract_scene::{Aov, Frame, FrameOutputs, MethodId, MethodParams, Renderer};
-    let Some(driver) = driver() else { return };
-    let scene = Arc::new(builtin("chart"));
-    let dir = tempfile::tempdir().expect("tempdir");
-    export(&scene, dir.path());
-    let (width, height) = (128, 128);
-    let mut three = driver
-        .render(
-            Engine::Threejs,
-            dir.path(),
-            &EngineRequest {
-                variants: vec![Variant::Position, Variant::Color],
-                width,
-                height,
-                hide_refractor: false,
-            },
-        )
-        .expect("three.js frames");
-    let three_color = three.pop().expect("colour");
-    let three = three.pop().expect("position");
-    let camera = scene.camera(width, height).expect("camera");
-    let mut cpu = refract_cpu::CpuRenderer::new();
-    cpu.prepare(&scene).expect("prepare");
-    let mut ours = Frame::new(width, height);
-    let method: MethodId = "volume-thickness".parse().expect("method");
-    cpu.render(
-        &camera,
-        &MethodParams::defaults(method),
-        FrameOutputs::ColorAndAovs,
-        &mut ours,
-    )
-    .expect("volume-thickness");
-    let decoded = decode_positions(&three.frame, position_code_bounds(&scene));
-    let covered = ours.flag(Aov::Covered).expect("Covered");
-    let p2 = ours.vec3(Aov::P2).expect("P2");
-    let p_geom = ours.vec3(Aov::PGeom).expect("Pgeom");
-    let pixel = |p_ws: Vec3| camera.world_to_pixel(p_ws).map(|p| Vec2::new(p.x, p.y));
-    let mut errors = Vec::new();
-    for i in 0..decoded.len() {
-        let (Some(theirs), true, true) = (decoded[i], covered[i], p_geom[i].is_finite()) else {
-            continue;
-        };
-        if let (Some(a), Some(b)) = (pixel(p2[i]), pixel(theirs)) {
-            errors.push((a - b).length());
-        }
-    }
-    assert!(
-        errors.len() > 1000,
-        "{} glass pixels looking up an object in both",
-        errors.len()
-    );
-    let median = percentile(errors.clone(), 0.5);
-    let within_one = errors.iter().filter(|&&e| e < 1.0).count() as f32 / errors.len() as f32;
-    println!(
-        "{}: {} glass pixels, lookup distance median {median} px, 90 % {} px, {:.1} % within 1 px",
-        three.label,
-        errors.len(),
-        percentile(errors.clone(), 0.9),
-        100.0 * within_one
-    );
-    assert!(
-        median < 0.05,
-        "{}: median lookup distance {median} px",
-        three.label
-    );
-
-    // Colour: three.js against volume-thickness over the glass pixels.
-    let luminance = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
-    let glass: Vec<usize> = (0..covered.len()).filter(|&i| covered[i]).collect();
-    let ratios: Vec<f32> = glass
-        .iter()
-        .map(|&i| luminance(three_color.frame.color[i]) / luminance(ours.color[i]).max(1e-4))
-        .collect();
-    let within = |tolerance: f32| {
-        glass
-            .iter()
-            .filter(|&&i| {
-                let (a, b) = (three_color.frame.color[i], ours.color[i]);
-                ((a - b).abs() / b.max(Vec3::splat(1e-2))).max_element() <= tolerance
-            })
-            .count() as f32
-            / glass.len() as f32
+    let Some(Lookups { label, errors }) = lookups(Engine::Threejs, "volume-thickness") else {
+        return;
     };
-    println!(
-        "{}: colour on {} glass pixels: {:.1} % within 1 %, {:.1} % within 10 % of \
-         volume-thickness; luminance ratio median {}, 10 % {}, 90 % {}",
-        three.label,
-        glass.len(),
-        100.0 * within(0.01),
-        100.0 * within(0.10),
-        percentile(ratios.clone(), 0.5),
-        percentile(ratios.clone(), 0.1),
-        percentile(ratios, 0.9)
-    );
+    let median = percentile(errors, 0.5);
+    assert!(median < 0.05, "{label}: median lookup distance {median} px");
+}
+
+#[test]
+fn babylon_looks_up_where_volume_thickness_does() {
+    let Some(Lookups { label, errors }) = lookups(Engine::Babylon, "volume-thickness") else {
+        return;
+    };
+    let median = percentile(errors, 0.5);
+    assert!(median < 0.05, "{label}: median lookup distance {median} px");
 }

@@ -155,6 +155,36 @@ pub fn percentile(values: &mut [f64], p: f64) -> Option<f64> {
     Some(values[rank.clamp(1, values.len()) - 1])
 }
 
+/// pixelmatch's largest YIQ colour delta (`MAX_COLOR_DISTANCE`), which Render Fidelity divides by.
+pub const RENDER_FIDELITY_MAX_DELTA: f64 = 35215.0;
+
+/// The glTF Render Fidelity distance between two images, in decibels, as model-viewer's
+/// render-fidelity tools compute it (`ImageComparator.analyze`, pixelmatch's `colorDelta`):
+/// both images displayed as 8-bit sRGB ([`to_srgb8`], refract's display transform), per pixel
+/// the YIQ delta `δ = 0.5053 ΔY² + 0.299 ΔI² + 0.1957 ΔQ²` (0 to 35215 for 8-bit values),
+/// `ratio = √(Σ δ² / n) / 35215` over the `n` pixels of `mask`, and `10 log₁₀(ratio)` dB:
+/// more negative is closer (model-viewer fails a scenario above −22 dB); `−∞` for identical
+/// pixels, `None` for an empty mask.
+pub fn render_fidelity_db(a: &[Vec3], b: &[Vec3], mask: &[bool]) -> Option<f64> {
+    let yiq = |c: Vec3| {
+        let [r, g, b] = to_srgb8(c).map(f64::from);
+        (
+            r * 0.298_895_31 + g * 0.586_622_47 + b * 0.114_482_23,
+            r * 0.595_977_99 - g * 0.274_176_10 - b * 0.321_801_89,
+            r * 0.211_470_17 - g * 0.522_617_11 + b * 0.311_146_94,
+        )
+    };
+    let (mut square_sum, mut n) = (0.0, 0usize);
+    for ((&x, &y), _) in a.iter().zip(b).zip(mask).filter(|(_, m)| **m) {
+        let ((y1, i1, q1), (y2, i2, q2)) = (yiq(x), yiq(y));
+        let delta =
+            0.5053 * (y1 - y2).powi(2) + 0.299 * (i1 - i2).powi(2) + 0.1957 * (q1 - q2).powi(2);
+        square_sum += delta * delta;
+        n += 1;
+    }
+    (n > 0).then(|| 10.0 * ((square_sum / n as f64).sqrt() / RENDER_FIDELITY_MAX_DELTA).log10())
+}
+
 /// FLIP error map of `test` against `reference`, both tonemapped to 8-bit sRGB.
 pub fn flip_map(reference: &[Vec3], test: &[Vec3], width: u32, height: u32) -> Vec<f32> {
     let ldr = |img: &[Vec3]| -> Vec<u8> { img.iter().flat_map(|&c| to_srgb8(c)).collect() };
@@ -532,6 +562,31 @@ mod tests {
     use refract_core::CameraDesc;
 
     use super::*;
+
+    /// Render Fidelity's dB: identical images are −∞; black against white is pixelmatch's
+    /// `δ = 0.5053 · 255²` (Y only), `10 log₁₀(32857.4 / 35215) = −0.301` dB; a masked-out
+    /// pixel does not count; an empty mask is `None`.
+    #[test]
+    fn render_fidelity_decibels_follow_pixelmatch() {
+        let black = [Vec3::ZERO; 3];
+        let white = [Vec3::splat(1e6); 3];
+        assert_eq!(
+            render_fidelity_db(&black, &black, &[true; 3]),
+            Some(f64::NEG_INFINITY)
+        );
+        let db = render_fidelity_db(&black, &white, &[true, true, false]).expect("pixels");
+        let expected = 10.0 * (0.5053 * 255.0f64.powi(2) / RENDER_FIDELITY_MAX_DELTA).log10();
+        assert!(
+            (db - expected).abs() < 0.01 && (db + 0.301).abs() < 0.005,
+            "{db}"
+        );
+        let mut half = black;
+        half[0] = white[0];
+        let one_of_two = render_fidelity_db(&black, &half, &[true, true, false]).expect("pixels");
+        // One differing pixel of two: the RMS falls by √2, 10 log₁₀(√2) = 1.505 dB lower.
+        assert!((db - one_of_two - 1.505).abs() < 0.01, "{one_of_two}");
+        assert_eq!(render_fidelity_db(&black, &white, &[false; 3]), None);
+    }
 
     /// A 4 × 1 reference: pixels 0–2 see the refractor (pixel 2 with TIR at the first exit and
     /// a path that leaves and re-enters), pixel 3 is background.

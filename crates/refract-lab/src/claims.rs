@@ -138,6 +138,12 @@ fn fallback_share(frame: &Frame) -> Option<f64> {
 /// Measures every claim, writes `args.out` (docs/claims.md) and returns its text; scenes left
 /// out for want of `args.data` go to `progress`.
 pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
+    // A bad `--out` is found before the measurement, not after it (issue 54 #9).
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        crate::output_dirs::create_dir(dir)
+            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
+    }
+    refract_eval::atomic_write::check_writable(&args.out)?;
     let inventory = Inventory::builtin()?;
     let mut ledger = Ledger::default();
     let (scenes, notes) = scenes(&args.data)?;
@@ -214,10 +220,6 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     md.push_str(&pvrr::section(args, &inventory, &mut ledger)?);
     md.push_str(&engine::section(args, &inventory, &mut ledger, progress)?);
     md.push_str(&ledger.coverage(&inventory));
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        crate::output_dirs::create_dir(dir)
-            .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
-    }
     write_text_atomically(&args.out, &md)?;
     Ok(md)
 }

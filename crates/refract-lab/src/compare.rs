@@ -8,9 +8,7 @@ use std::sync::Arc;
 
 use crate::error::Context;
 use refract_core::TirPolicy;
-use refract_eval::metrics::{
-    ErrorMaps, MetricsRecord, evaluate, evaluate_method, evaluate_nearby, reference_record,
-};
+use refract_eval::metrics::{ErrorMaps, MetricsRecord, evaluate_method, reference_record};
 use refract_eval::{BUILTIN_SCENES, load_scene};
 use refract_scene::{
     Aov, BackendId, Frame, FrameOutputs, MethodId, MethodParams, Renderer, Scene, TraceSettings,
@@ -18,7 +16,7 @@ use refract_scene::{
 use refract_trace::ReferenceRenderer;
 
 use crate::backends::{self, GpuPolicy};
-use crate::engines::{ENGINE_BACKEND, EngineRenderers};
+use crate::engines::{ENGINE_BACKEND, EngineRenderers, engine_record};
 use crate::jobs::CompareOptions;
 use crate::progress::{Note, Progress};
 use crate::report::{MethodImages, SceneImages, write_reports};
@@ -41,17 +39,18 @@ pub fn method_params(
         .map(|&id| MethodParams::defaults(id).with_tir_policy(tir))
         .collect();
     for &(name, value) in assignments {
-        let mut used = false;
-        for method in &mut methods {
-            if method.get(name).is_some() {
-                method.set(name, value, origin)?;
-                used = true;
-            }
-        }
         crate::ensure!(
-            used,
+            methods.iter().any(|method| method.get(name).is_some()),
             "{origin} {name}={value}: none of the selected methods has a parameter `{name}` (see `refract methods`)"
         );
+    }
+    for method in &mut methods {
+        let own: Vec<(&str, &str)> = assignments
+            .iter()
+            .copied()
+            .filter(|&(name, _)| method.get(name).is_some())
+            .collect();
+        method.set_all(own.iter().copied(), origin)?;
     }
     Ok(methods)
 }
@@ -218,9 +217,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         if let Some(engines) = &engines {
             if scene.refractor.is_dielectric() {
                 for engine in engines.render(scene, &truth, w, h)? {
-                    let (mut record, maps) =
-                        evaluate(&truth, &engine.frame, &camera, scene.refractor.diameter());
-                    evaluate_nearby(&truth, &engine.frame, scene, &camera, None, &mut record);
+                    let (mut record, maps) = engine_record(&truth, &engine.frame, scene, &camera);
                     record.scene.clone_from(&scene.name);
                     record.method.clone_from(&engine.label);
                     record.backend = ENGINE_BACKEND.to_owned();

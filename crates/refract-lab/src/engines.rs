@@ -10,6 +10,7 @@ use refract_engines::{
     Engine, EngineDriver, EngineError, EngineRequest, Variant, decode_positions,
 };
 use refract_eval::gltf_export::{export_gltf, position_code_bounds};
+use refract_eval::metrics::MetricsRecord;
 use refract_scene::{Aov, Frame, Layer, Scene};
 
 use crate::backends::GpuPolicy;
@@ -18,7 +19,7 @@ use crate::progress::{Note, Progress};
 /// The backend column of an engine's rows: where it ran (Chromium's WebGL2 on SwiftShader).
 pub const ENGINE_BACKEND: &str = "webgl";
 
-/// Parses an `--engines` list (`threejs`; `none` for no engine).
+/// Parses an `--engines` list (`threejs`, `babylon`; `none` for no engine).
 pub fn parse_engines(names: &[String]) -> crate::Result<Vec<Engine>> {
     let mut engines = Vec::new();
     for name in names {
@@ -95,6 +96,21 @@ impl EngineRenderers {
         width: u32,
         height: u32,
     ) -> crate::Result<Vec<EngineFrame>> {
+        self.render_engines(&self.engines, scene, truth, width, height)
+    }
+
+    /// [`Self::render`] with `engines` only (each must be one this driver was opened for).
+    pub fn render_engines(
+        &self,
+        engines: &[Engine],
+        scene: &Scene,
+        truth: &Frame,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<Vec<EngineFrame>> {
+        if let Some(other) = engines.iter().find(|e| !self.engines.contains(e)) {
+            crate::bail!("the engine driver was not opened for {}", other.id());
+        }
         let export = tempfile::tempdir().map_err(crate::LabError::Os)?;
         export_gltf(scene)?.write(export.path())?;
         let bounds = position_code_bounds(scene);
@@ -109,7 +125,7 @@ impl EngineRenderers {
             .map(<[bool]>::to_vec)
             .unwrap_or_else(|| vec![false; truth.pixel_count()]);
         let mut frames = Vec::new();
-        for &engine in &self.engines {
+        for &engine in engines {
             let mut rendered = self
                 .driver
                 .render(engine, export.path(), &request)
@@ -133,6 +149,21 @@ impl EngineRenderers {
     }
 }
 
+/// The metrics of an engine's frame (colour, `Covered`, `P_geom`, as [`EngineRenderers::render`]
+/// makes it) against the reference `truth`: the methods' colour metrics and the nearby-geometry
+/// metrics from its `P_geom`; with the error maps.
+pub fn engine_record(
+    truth: &Frame,
+    frame: &Frame,
+    scene: &Scene,
+    camera: &refract_core::Camera,
+) -> (MetricsRecord, refract_eval::metrics::ErrorMaps) {
+    let (mut record, maps) =
+        refract_eval::metrics::evaluate(truth, frame, camera, scene.refractor.diameter());
+    refract_eval::metrics::evaluate_nearby(truth, frame, scene, camera, None, &mut record);
+    (record, maps)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -148,7 +179,7 @@ mod tests {
         let err = parse_engines(&names(&["unity"])).expect_err("unknown");
         assert!(
             err.to_string()
-                .contains("`unity`; expected threejs or none"),
+                .contains("`unity`; expected threejs, babylon or none"),
             "{err}"
         );
     }

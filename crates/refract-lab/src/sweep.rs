@@ -23,10 +23,13 @@ use refract_trace::ReferenceRenderer;
 use serde::Deserialize;
 
 use crate::backends::{self, GpuPolicy};
+use crate::engines::{EngineRenderers, engine_record};
 use crate::jobs::{Job, JobImages, JobResult};
 use crate::progress::{Note, Progress};
 use crate::timing::time_frames;
+use refract_engines::Engine;
 use refract_eval::images::{write_color, write_error_map, write_hdr_script, write_mask};
+use refract_eval::metrics::ErrorMaps;
 
 /// Arguments of `refract sweep`.
 #[derive(Clone, Debug)]
@@ -80,14 +83,19 @@ struct SweepFile {
     /// Scene names or files (relative to the sweep file).
     scenes: Vec<String>,
     /// Method ids.
+    #[serde(default)]
     methods: Vec<String>,
+    /// Engines rendered by themselves in headless Chromium (`threejs`, `babylon`), a job each
+    /// per scene, IOR and resolution on backend `webgl` (docs/engines.md).
+    #[serde(default)]
+    engines: Vec<String>,
     #[serde(default = "default_backends")]
     backends: Vec<String>,
     #[serde(default = "default_res")]
     res: Vec<u32>,
-    /// Indices of refraction replacing each scene's; empty: the scene's own.
+    /// Indices of refraction replacing each scene's; absent: the scene's own.
     #[serde(default)]
-    ior: Vec<f32>,
+    ior: Option<Vec<f32>>,
     #[serde(default = "one")]
     spp: u32,
     /// Where the references are traced: `cpu` (the CPU tracer) or `gpu`
@@ -176,7 +184,12 @@ impl Sweep {
         let origin = path.display().to_string();
         let base = path.parent().map(Path::to_owned).unwrap_or_default();
         crate::ensure!(!file.scenes.is_empty(), "{origin}: `scenes` is empty");
-        crate::ensure!(!file.methods.is_empty(), "{origin}: `methods` is empty");
+        crate::ensure!(
+            !file.methods.is_empty() || !file.engines.is_empty(),
+            "{origin}: `methods` and `engines` are empty; list at least one method or engine"
+        );
+        let engines = crate::engines::parse_engines(&file.engines)
+            .with_context(|| format!("{origin}: engines"))?;
         for &res in &file.res {
             crate::ensure!(
                 (1..=refract_scene::MAX_FRAME_SIZE).contains(&res),
@@ -184,12 +197,24 @@ impl Sweep {
                 refract_scene::MAX_FRAME_SIZE
             );
         }
-        for &ior in &file.ior {
+        if let Some(iors) = &file.ior {
             crate::ensure!(
-                refract_scene::scene::ior_in_range(ior),
-                "{origin}: ior = {ior}: expected {}",
-                refract_scene::scene::IOR_EXPECTED
+                !iors.is_empty(),
+                "{origin}: `ior` is empty; list at least one IOR, or leave `ior` out for each scene's own"
             );
+            for (k, &ior) in iors.iter().enumerate() {
+                crate::ensure!(
+                    refract_scene::scene::ior_in_range(ior),
+                    "{origin}: ior = {ior}: expected {}",
+                    refract_scene::scene::IOR_EXPECTED
+                );
+                // TOML's numbers are read as f32: two that round to one f32 would be one job.
+                if let Some(same) = iors[..k].iter().find(|i| i.to_bits() == ior.to_bits()) {
+                    crate::bail!(
+                        "{origin}: ior lists {same} twice (as 32-bit numbers, which the sweep uses, two of its values are {same}); list each IOR once"
+                    );
+                }
+            }
         }
         crate::ensure!(
             (1..=refract_scene::MAX_SPP).contains(&file.spp),
@@ -230,11 +255,12 @@ impl Sweep {
                 "{origin}: [params] {name}: none of the sweep's methods has this parameter (see `refract methods`)"
             );
         }
-        let iors: Vec<Option<f32>> = if file.ior.is_empty() {
-            vec![None]
-        } else {
-            file.ior.iter().copied().map(Some).collect()
+        let iors: Vec<Option<f32>> = match &file.ior {
+            None => vec![None],
+            Some(iors) => iors.iter().copied().map(Some).collect(),
         };
+        check_exclusions(&origin, &file.exclude, &methods)?;
+        let mut exclusion_used = vec![false; file.exclude.len()];
         // The product of the axes, counted before any job is built (exclusions only remove).
         let per_method: u128 = methods
             .iter()
@@ -247,14 +273,12 @@ impl Sweep {
                     })
             })
             .fold(0u128, u128::saturating_add);
-        let count = [
-            file.scenes.len(),
-            iors.len(),
-            file.res.len(),
-            file.backends.len(),
-        ]
-        .iter()
-        .fold(per_method, |n, &axis| n.saturating_mul(axis as u128));
+        let count = [file.scenes.len(), iors.len(), file.res.len()].iter().fold(
+            per_method
+                .saturating_mul(file.backends.len() as u128)
+                .saturating_add(engines.len() as u128),
+            |n, &axis| n.saturating_mul(axis as u128),
+        );
         crate::ensure!(
             count <= MAX_JOBS as u128,
             "{origin}: the axes make {count} jobs (before exclusions); at most {MAX_JOBS} are run from one sweep file: split it, or sweep fewer values"
@@ -274,10 +298,6 @@ impl Sweep {
                                 })
                                 .collect();
                             for combination in product(&axes) {
-                                let mut params = MethodParams::defaults(method);
-                                for (name, value) in &combination {
-                                    params.set(name, value, &format!("{origin}: [params]"))?;
-                                }
                                 let job = Job {
                                     index: jobs.len(),
                                     id: String::new(),
@@ -288,14 +308,56 @@ impl Sweep {
                                     method: method.name().to_owned(),
                                     params: combination.into_iter().collect(),
                                 };
-                                if !file.exclude.iter().any(|rule| excluded(&job, rule)) {
+                                let mut keep = true;
+                                for (rule, used) in file.exclude.iter().zip(&mut exclusion_used) {
+                                    if excluded(&job, rule) {
+                                        *used = true;
+                                        keep = false;
+                                    }
+                                }
+                                if keep {
+                                    // Checked only for the jobs that run: a combination
+                                    // excluded is no error.
+                                    MethodParams::defaults(method).set_all(
+                                        job.params.iter().map(|(n, v)| (n.as_str(), v.as_str())),
+                                        &format!("{origin}: [params]"),
+                                    )?;
                                     jobs.push(job);
                                 }
                             }
                         }
                     }
+                    for engine in &engines {
+                        let job = Job {
+                            index: jobs.len(),
+                            id: String::new(),
+                            scene: scene.clone(),
+                            ior,
+                            res,
+                            backend: crate::engines::ENGINE_BACKEND.to_owned(),
+                            method: engine.id().to_owned(),
+                            params: BTreeMap::new(),
+                        };
+                        let mut keep = true;
+                        for (rule, used) in file.exclude.iter().zip(&mut exclusion_used) {
+                            if excluded(&job, rule) {
+                                *used = true;
+                                keep = false;
+                            }
+                        }
+                        if keep {
+                            jobs.push(job);
+                        }
+                    }
                 }
             }
+        }
+        if let Some(k) = exclusion_used.iter().position(|used| !used) {
+            crate::bail!(
+                "{origin}: [[exclude]] number {} ({}) matches no job of the sweep; check its values",
+                k + 1,
+                rule_text(&file.exclude[k])
+            );
         }
         for (index, job) in jobs.iter_mut().enumerate() {
             job.index = index;
@@ -311,6 +373,13 @@ impl Sweep {
                 id.push_str(&format!("-{k}{v}"));
             }
             job.id = safe(&id);
+        }
+        let mut ids = std::collections::BTreeSet::new();
+        if let Some(twice) = jobs.iter().find(|job| !ids.insert(job.id.as_str())) {
+            crate::bail!(
+                "{origin}: two jobs would have the id {}: an axis lists one value twice",
+                twice.id
+            );
         }
         Ok(Self {
             jobs,
@@ -347,6 +416,46 @@ fn product(axes: &[(&String, &Vec<toml::Value>)]) -> Vec<Vec<(String, String)>> 
             .collect();
     }
     combos
+}
+
+/// The keys an `[[exclude]]` rule may have besides the methods' parameter names.
+const EXCLUDE_AXES: [&str; 5] = ["scene", "method", "backend", "res", "ior"];
+
+/// Refuses an empty `[[exclude]]` (it would exclude every job) and a key that is neither an
+/// axis nor a parameter of one of `methods` (a misspelt key would exclude nothing).
+fn check_exclusions(
+    origin: &str,
+    rules: &[BTreeMap<String, toml::Value>],
+    methods: &[MethodId],
+) -> crate::Result<()> {
+    for (k, rule) in rules.iter().enumerate() {
+        crate::ensure!(
+            !rule.is_empty(),
+            "{origin}: [[exclude]] number {} is empty; it would exclude every job (give the keys it must match)",
+            k + 1
+        );
+        for key in rule.keys() {
+            let known = EXCLUDE_AXES.contains(&key.as_str())
+                || methods
+                    .iter()
+                    .any(|m| m.info().params.iter().any(|p| p.name == key));
+            crate::ensure!(
+                known,
+                "{origin}: [[exclude]] number {} has the key `{key}`: expected {} or a parameter of the sweep's methods",
+                k + 1,
+                EXCLUDE_AXES.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A rule as `key = value, ...`, for messages.
+fn rule_text(rule: &BTreeMap<String, toml::Value>) -> String {
+    rule.iter()
+        .map(|(key, value)| format!("{key} = {value}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn excluded(job: &Job, rule: &BTreeMap<String, toml::Value>) -> bool {
@@ -443,6 +552,7 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
     let mut prepared: HashMap<(String, Option<u32>, u32), Prepared> = HashMap::new();
     let mut renderers: HashMap<String, Box<dyn Renderer>> = HashMap::new();
     let mut prepared_for: HashMap<String, (String, Option<u32>, u32)> = HashMap::new();
+    let mut engines: Option<EngineRenderers> = None;
     let (mut ok, mut failed) = (0usize, 0usize);
     for job in todo {
         if progress.cancelled() {
@@ -456,6 +566,7 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
                 &mut prepared,
                 &mut renderers,
                 &mut prepared_for,
+                &mut engines,
                 progress,
             )
         }));
@@ -573,6 +684,34 @@ fn reference_key(sweep: &Sweep, job: &Job, settings: &MethodParams) -> crate::Re
     ))
 }
 
+/// The cached reference at `path` if it is one of `res × res` pixels with every layer the
+/// reference renders; otherwise (unreadable, another size, layers missing: a damaged or foreign
+/// file) `None` with a warning, and the caller traces the reference again and replaces the
+/// entry (issue 54 #6: a wrong size panicked in the job, and the entry was never replaced).
+fn usable_cached_reference(path: &Path, res: u32, progress: &dyn Progress) -> Option<Frame> {
+    let problem = match Frame::read_exr(path) {
+        Ok(frame) if frame.width != res || frame.height != res => format!(
+            "{}x{} pixels, expected {res}x{res}",
+            frame.width, frame.height
+        ),
+        Ok(frame) => match MethodId::Reference
+            .info()
+            .aovs
+            .iter()
+            .find(|&&aov| !frame.has(aov))
+        {
+            Some(aov) => format!("no {aov:?} layer"),
+            None => return Some(frame),
+        },
+        Err(err) => err.to_string(),
+    };
+    progress.note(Note::Warning(format!(
+        "{}: the cached reference is unusable ({problem}); traced again and replaced",
+        path.display()
+    )));
+    None
+}
+
 /// The jobs' renderer of `backend` (keyed by its id), opened on first use.
 fn renderer_of<'a>(
     renderers: &'a mut HashMap<String, Box<dyn Renderer>>,
@@ -591,7 +730,84 @@ fn renderer_of<'a>(
     })
 }
 
-#[allow(clippy::type_complexity)]
+/// A method's job: its frame on its backend, timed, and its metrics.
+fn method_job(
+    sweep: &Sweep,
+    job: &Job,
+    p: &Prepared,
+    key: &(String, Option<u32>, u32),
+    renderers: &mut HashMap<String, Box<dyn Renderer>>,
+    prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
+    progress: &dyn Progress,
+) -> crate::Result<(MetricsRecord, ErrorMaps, Frame)> {
+    let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
+    let renderer = renderer_of(renderers, backend, progress)?;
+    if prepared_for.get(&job.backend) != Some(key) {
+        renderer.prepare(&p.scene)?;
+        prepared_for.insert(job.backend.clone(), key.clone());
+    }
+    let id: MethodId = job.method.parse()?;
+    let mut method = MethodParams::defaults(id);
+    for (name, value) in &job.params {
+        method.set(name, value, "sweep job")?;
+    }
+    crate::ensure!(
+        renderer.supports(id),
+        "the {backend} backend does not support {id}"
+    );
+    let mut frame = Frame::default();
+    renderer.render(&p.camera, &method, FrameOutputs::ColorAndAovs, &mut frame)?;
+    let mut scratch = Frame::default();
+    let times = time_frames(1, sweep.frames, || {
+        Ok(renderer
+            .render(&p.camera, &method, FrameOutputs::Color, &mut scratch)?
+            .ms)
+    })?;
+    let (mut record, maps) = evaluate_method(&p.truth, &frame, &p.camera, &p.scene, &method);
+    record.method = id.name().to_owned();
+    record.backend = backend.id().to_owned();
+    record.params = method.describe();
+    record.ms_per_frame = Some(times.median);
+    Ok((record, maps, frame))
+}
+
+/// An engine's job: the engine's own frame (headless Chromium, opened on the first such job)
+/// and its metrics; untimed (SwiftShader's times are not a GPU's).
+fn engine_job(
+    job: &Job,
+    p: &Prepared,
+    engines: &mut Option<EngineRenderers>,
+    progress: &dyn Progress,
+) -> crate::Result<(MetricsRecord, ErrorMaps, Frame)> {
+    let engine = crate::engines::parse_engines(std::slice::from_ref(&job.method))?
+        .into_iter()
+        .next()
+        .ok_or_else(|| crate::LabError::invalid(format_args!("no engine `{}`", job.method)))?;
+    crate::ensure!(
+        p.scene.refractor.is_dielectric(),
+        "{}: the engines render dielectric glass; this refractor is a conductor",
+        job.scene
+    );
+    if engines.is_none() {
+        *engines = EngineRenderers::open(&Engine::ALL, GpuPolicy::Required, progress)?;
+    }
+    let renderers = engines
+        .as_ref()
+        .ok_or_else(|| crate::LabError::invalid("the engines could not be opened"))?;
+    let rendered = renderers
+        .render_engines(&[engine], &p.scene, &p.truth, job.res, job.res)?
+        .into_iter()
+        .next()
+        .ok_or_else(|| {
+            crate::LabError::invalid(format_args!("{} returned no frame", engine.id()))
+        })?;
+    let (mut record, maps) = engine_record(&p.truth, &rendered.frame, &p.scene, &p.camera);
+    record.method = rendered.label;
+    record.backend = crate::engines::ENGINE_BACKEND.to_owned();
+    Ok((record, maps, rendered.frame))
+}
+
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn run_job(
     sweep: &Sweep,
     job: &Job,
@@ -599,6 +815,7 @@ fn run_job(
     prepared: &mut HashMap<(String, Option<u32>, u32), Prepared>,
     renderers: &mut HashMap<String, Box<dyn Renderer>>,
     prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
+    engines: &mut Option<EngineRenderers>,
     progress: &dyn Progress,
 ) -> crate::Result<(MetricsRecord, Option<JobImages>)> {
     let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
@@ -622,8 +839,12 @@ fn run_job(
                 fnv1a(&text)
             );
             let cached = args.cache.as_ref().map(|c| c.join(format!("{stem}.exr")));
-            let truth = match cached.as_ref().filter(|p| p.is_file()) {
-                Some(path) => Frame::read_exr(path)?,
+            let from_cache = cached
+                .as_ref()
+                .filter(|p| p.is_file())
+                .and_then(|path| usable_cached_reference(path, job.res, progress));
+            let truth = match from_cache {
+                Some(truth) => truth,
                 None => {
                     let mut truth = Frame::default();
                     match sweep.reference_backend {
@@ -684,35 +905,12 @@ fn run_job(
         }
     };
 
-    let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
-    let renderer = renderer_of(renderers, backend, progress)?;
-    if prepared_for.get(&job.backend) != Some(&key) {
-        renderer.prepare(&p.scene)?;
-        prepared_for.insert(job.backend.clone(), key.clone());
-    }
-    let id: MethodId = job.method.parse()?;
-    let mut method = MethodParams::defaults(id);
-    for (name, value) in &job.params {
-        method.set(name, value, "sweep job")?;
-    }
-    crate::ensure!(
-        renderer.supports(id),
-        "the {backend} backend does not support {id}"
-    );
-    let mut frame = Frame::default();
-    renderer.render(&p.camera, &method, FrameOutputs::ColorAndAovs, &mut frame)?;
-    let mut scratch = Frame::default();
-    let times = time_frames(1, sweep.frames, || {
-        Ok(renderer
-            .render(&p.camera, &method, FrameOutputs::Color, &mut scratch)?
-            .ms)
-    })?;
-    let (mut record, maps) = evaluate_method(&p.truth, &frame, &p.camera, &p.scene, &method);
+    let (mut record, maps, frame) = if job.backend == crate::engines::ENGINE_BACKEND {
+        engine_job(job, p, engines, progress)?
+    } else {
+        method_job(sweep, job, p, &key, renderers, prepared_for, progress)?
+    };
     record.scene = scene_label(&job.scene);
-    record.method = id.name().to_owned();
-    record.backend = backend.id().to_owned();
-    record.params = method.describe();
-    record.ms_per_frame = Some(times.median);
     if !sweep.images {
         return Ok((record, None));
     }
@@ -843,6 +1041,31 @@ mod tests {
             (
                 "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nframe = 3\n",
                 "frame",
+            ),
+            // Issue 54 #13: mistakes that used to pass without a word.
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"single\", \"wyman\"]\n[[exclude]]\nmethd = \"single\"\n",
+                "[[exclude]] number 1 has the key `methd`: expected scene, method, backend, res, ior",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\n[[exclude]]\n",
+                "[[exclude]] number 1 is empty; it would exclude every job",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\n[[exclude]]\nmethod = \"single\"\n",
+                "[[exclude]] number 1 (method = \"single\") matches no job",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nior = [1.2, 1.2000001]\n",
+                "ior lists 1.2 twice",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nres = [16, 16]\n",
+                "two jobs would have the id sphere-16-cpu-wyman",
+            ),
+            (
+                "scenes = [\"sphere\"]\nmethods = [\"wyman\"]\nior = []\n",
+                "`ior` is empty",
             ),
         ] {
             let err = refract_scene::full_message(&sweep(text).err().expect(expected));

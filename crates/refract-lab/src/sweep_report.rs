@@ -92,7 +92,8 @@ pub fn run(args: &ReportArgs) -> crate::Result<ReportSummary> {
             .join(", ")
     );
     let images_dir = args.out.join("images");
-    std::fs::create_dir_all(&images_dir)
+    // Remembered, so that a report that fails later removes it (issue 54 #14).
+    crate::output_dirs::create_dir(&images_dir)
         .with_context(|| format!("{}: cannot create the directory", images_dir.display()))?;
     for (result, dir) in &results {
         let files = result

@@ -10,9 +10,13 @@ use refract_eval::load_scene;
 use refract_eval::metrics::MetricsRecord;
 use refract_scene::{Aov, Frame, MethodId, MethodParams, Scene};
 
+use refract_engines::Engine;
+
 use super::inventory::{Inventory, Ledger};
 use super::{Bench, ClaimsArgs, Truth, value};
+use crate::backends::GpuPolicy;
 use crate::data_scenes;
+use crate::engines::{EngineRenderers, engine_record};
 use crate::progress::Progress;
 
 fn with(id: MethodId, settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
@@ -95,14 +99,15 @@ struct Failures {
     leak: f64,
     tir: f64,
     glass_behind_glass: f64,
-    off_screen: f64,
+    /// `None` for an engine itself, which does not say where its lookup went.
+    off_screen: Option<f64>,
 }
 
 fn failures(truth: &Truth, frame: &Frame) -> Option<Failures> {
     let (covered, p_geom, off) = (
         frame.flag(Aov::Covered)?,
         frame.vec3(Aov::PGeom)?,
-        frame.flag(Aov::OffScreen)?,
+        frame.flag(Aov::OffScreen),
     );
     let (truth_covered, p1, tir, interfaces) = (
         truth.frame.flag(Aov::Covered)?,
@@ -126,8 +131,62 @@ fn failures(truth: &Truth, frame: &Frame) -> Option<Failures> {
         }),
         tir: share(&|i| tir[i]),
         glass_behind_glass: share(&|i| interfaces[i] > 2),
-        off_screen: share(&|i| off[i]),
+        off_screen: off.map(|off| share(&|i| off[i])),
     })
+}
+
+/// The rows of the Render Fidelity table of one scene: `volume-thickness` and each engine
+/// itself, against the reference, `volume-thickness` and each engine (`–` where the engine did
+/// not run or for an image against itself).
+fn fidelity(
+    name: &str,
+    truth: &Truth,
+    records: &[(&str, MetricsRecord, Frame)],
+    engines: &[(String, MetricsRecord, Frame)],
+) -> String {
+    let Some(mask) = truth.frame.flag(Aov::Covered) else {
+        return String::new();
+    };
+    let Some((_, _, reimplementation)) = records.iter().find(|r| r.0 == THREE_JS) else {
+        return String::new();
+    };
+    let db = |a: &Frame, b: &Frame| {
+        refract_eval::metrics::render_fidelity_db(&a.color, &b.color, mask)
+            .map_or_else(|| "–".to_owned(), |d| format!("{d:.1}"))
+    };
+    let engine_frame = |engine: Engine| {
+        engines
+            .iter()
+            .find(|(label, _, _)| label.starts_with(&format!("`{}@", engine.id())))
+            .map(|(_, _, frame)| frame)
+    };
+    let mut rows = String::new();
+    let images = std::iter::once(("`volume-thickness`".to_owned(), reimplementation, None)).chain(
+        Engine::ALL
+            .into_iter()
+            .filter_map(|e| engine_frame(e).map(|f| (format!("{} itself", e.id()), f, Some(e)))),
+    );
+    for (label, frame, own) in images {
+        let against_engines: Vec<String> = Engine::ALL
+            .into_iter()
+            .map(|e| match engine_frame(e) {
+                Some(other) if own != Some(e) => db(frame, other),
+                _ => "–".to_owned(),
+            })
+            .collect();
+        let _ = writeln!(
+            rows,
+            "| {name} | {label} | {} | {} | {} |",
+            db(frame, &truth.frame),
+            if own.is_none() {
+                "–".to_owned()
+            } else {
+                db(frame, reimplementation)
+            },
+            against_engines.join(" | ")
+        );
+    }
+    rows
 }
 
 /// The scenes: `sphere`, `torus`, `chart`, `engine-failures`, and `igea-bunny` with the data.
@@ -164,6 +223,16 @@ pub fn section(
     let mut comparison = String::new();
     let mut sweep = String::new();
     let mut failure_rows = String::new();
+    let mut fidelity_rows = String::new();
+    let engines = EngineRenderers::open(&Engine::ALL, GpuPolicy::IfAvailable, progress)?;
+    match &engines {
+        Some(_) => {}
+        None => notes.push(
+            "the engines themselves did not run (Node, Chromium or `npm ci --prefix engines` is \
+             missing: see the run's notes); their rows are absent."
+                .to_owned(),
+        ),
+    }
     for scene in scenes(args, &mut notes, progress)? {
         let truth = bench.truth(scene, args.res)?;
         let name = truth.scene.name.clone();
@@ -172,6 +241,32 @@ pub fn section(
             let (frame, record) = bench.measure(&truth, params)?;
             records.push((label, record, frame));
         }
+        // The engines themselves, beside their re-implementations.
+        let mut engine_frames = Vec::new();
+        if let Some(engines) = engines
+            .as_ref()
+            .filter(|_| truth.scene.refractor.is_dielectric())
+        {
+            for engine in engines.render(&truth.scene, &truth.frame, args.res, args.res)? {
+                let (record, _) =
+                    engine_record(&truth.frame, &engine.frame, &truth.scene, &truth.camera);
+                engine_frames.push((
+                    format!("`{}` (the engine itself)", engine.label),
+                    record,
+                    engine.frame,
+                ));
+            }
+        }
+        let fidelity_row = fidelity(&name, &truth, &records, &engine_frames);
+        fidelity_rows.push_str(&fidelity_row);
+        let records: Vec<(&str, MetricsRecord, Frame)> = records
+            .into_iter()
+            .chain(
+                engine_frames
+                    .iter()
+                    .map(|(l, r, f)| (l.as_str(), r.clone(), f.clone())),
+            )
+            .collect();
         for (label, r, _) in &records {
             let _ = writeln!(
                 comparison,
@@ -192,7 +287,7 @@ pub fn section(
                     pct(f.leak),
                     pct(f.tir),
                     pct(f.glass_behind_glass),
-                    pct(f.off_screen)
+                    f.off_screen.map_or_else(|| "–".to_owned(), pct)
                 );
                 leaks.push((*label, f.leak));
             }
@@ -323,6 +418,23 @@ pub fn section(
          | scene | method | leak | TIR shown as refraction | glass behind glass | off screen |\n|---|---|---|---|---|---|"
     );
     md.push_str(&failure_rows);
+    let _ = writeln!(
+        md,
+        "\n### The engines and their re-implementation, in Render Fidelity's decibels\n\n\
+         The distance of each pair of images over the reference's refractor pixels, as glTF \
+         Render Fidelity (model-viewer's render-fidelity tools) reports renderers' distances \
+         from each other: pixelmatch's YIQ colour delta of the 8-bit displayed images, \
+         `10 log₁₀(RMS / 35215)` dB (`refract_eval::metrics::render_fidelity_db`; more negative \
+         is closer, model-viewer's own regression bar is −22 dB). The engines' distance from \
+         the exact reference beside their distance from each other and from \
+         `volume-thickness`, the formula both use.\n\n\
+         | scene | image | vs reference (dB) | vs `volume-thickness` (dB) | {} |\n|---|---|---|---|{}",
+        Engine::ALL
+            .map(|e| format!("vs {} (dB)", e.id()))
+            .join(" | "),
+        "---|".repeat(Engine::ALL.len())
+    );
+    md.push_str(&fidelity_rows);
     let _ = writeln!(
         md,
         "\n### Claims stated before measuring\n\n| claim | scene | measured | verdict |\n|---|---|---|---|"

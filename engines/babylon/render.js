@@ -1,0 +1,123 @@
+// Babylon.js renders a scene of `refract export --format gltf` into a float render target and
+// hands the pixels back (engines/README.md). Every setting that changes pixels is pinned here
+// and returned in `settings`.
+// `BABYLON` is the global of the UMD builds index.html loads (with the glTF loader).
+const { BABYLON } = window;
+
+// Babylon's lat-long lookup of an HDR in a right-handed scene is a half turn about +y from
+// refract's `u = atan2(x, -z) / 2 pi`: rotating the environment by pi turns one into the other
+// (held by the background test, crates/refract-engines/tests/engines.rs; a quarter turn either
+// way or none is off by 1.4 to 1.9 in the decoded direction).
+const ENVIRONMENT_ROTATION_Y = Math.PI;
+// The cube faces Babylon resamples the lat-long map into (HDRCubeTexture).
+const CUBE_SIZE = 512;
+
+function base64(bytes) {
+  let text = '';
+  const chunk = 0x8000;
+  for (let i = 0; i < bytes.length; i += chunk) {
+    text += String.fromCharCode.apply(null, bytes.subarray(i, i + chunk));
+  }
+  return btoa(text);
+}
+
+window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
+  const canvas = document.createElement('canvas');
+  canvas.width = width;
+  canvas.height = height;
+  const engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, adaptToDeviceRatio: false });
+  engine.setHardwareScalingLevel(1);
+  const scene = new BABYLON.Scene(engine);
+  // glTF is right-handed; so is refract. A right-handed scene keeps the loader from mirroring
+  // the asset under a `__root__` node.
+  scene.useRightHandedSystem = true;
+  scene.clearColor = new BABYLON.Color4(0, 0, 0, 1);
+  // Linear output, no tone mapping, no clamp: image processing "by post-process" with no
+  // post-process attached leaves the materials' linear colour as it is.
+  scene.imageProcessingConfiguration.applyByPostProcess = true;
+  scene.imageProcessingConfiguration.toneMappingEnabled = false;
+  scene.imageProcessingConfiguration.skipFinalColorClamp = true;
+
+  await BABYLON.AppendSceneAsync(sceneUrl, scene);
+  const camera = scene.cameras[0];
+  if (!camera) throw new Error(`${sceneUrl} has no camera`);
+  scene.activeCamera = camera;
+  if (hideRefractor) {
+    const refractor = scene.getMeshByName('refractor') ?? scene.getNodeByName('refractor');
+    if (!refractor) throw new Error(`${sceneUrl} has no node named refractor`);
+    for (const mesh of [refractor, ...refractor.getChildMeshes?.() ?? []]) mesh.setEnabled(false);
+  }
+  let environmentTexture = null;
+  if (environment) {
+    environmentTexture = new BABYLON.HDRCubeTexture(environment, scene, CUBE_SIZE, false, true, false, true);
+    environmentTexture.rotationY = ENVIRONMENT_ROTATION_Y;
+    await new Promise((resolve, reject) => {
+      environmentTexture.onLoadObservable.addOnce(resolve);
+      setTimeout(() => reject(new Error(`${environment}: not loaded in 60 s`)), 60000);
+    });
+    scene.environmentTexture = environmentTexture;
+    // The skybox samples a clone of the texture, which does not keep the rotation.
+    const skybox = scene.createDefaultSkybox(environmentTexture, true, 1e4, 0, false);
+    skybox.material.reflectionTexture.rotationY = ENVIRONMENT_ROTATION_Y;
+  }
+
+  // The glTF loader's transmission helper renders the opaque objects into its own target,
+  // 1024 x 1024, 4x MSAA, half float by default; pinned to the frame's size, one sample, float.
+  const helper = scene._transmissionHelper;
+  if (helper) {
+    helper.updateOptions({
+      renderSize: { width, height },
+      samples: 1,
+      renderTargetTextureType: BABYLON.Constants.TEXTURETYPE_FLOAT,
+    });
+  }
+
+  const target = new BABYLON.RenderTargetTexture('refract-frame', { width, height }, scene, {
+    generateMipMaps: false,
+    type: BABYLON.Constants.TEXTURETYPE_FLOAT,
+    samplingMode: BABYLON.Constants.TEXTURE_NEAREST_SAMPLINGMODE,
+    samples: 1,
+  });
+  camera.outputRenderTarget = target;
+  await scene.whenReadyAsync();
+  // The first frame compiles the programs; the second is the one read back and timed.
+  scene.render();
+  const gl = engine._gl;
+  gl.finish();
+  const start = performance.now();
+  scene.render();
+  gl.finish();
+  const ms = performance.now() - start;
+  const rows = await target.readPixels(0, 0, null, true, false);
+  if (!(rows instanceof Float32Array) || rows.length !== width * height * 4) {
+    throw new Error(`read back ${rows?.length} values, expected ${width * height * 4} floats`);
+  }
+  // WebGL reads rows from the bottom; refract's frames start at the top.
+  const pixels = new Float32Array(width * height * 4);
+  for (let y = 0; y < height; y++) {
+    pixels.set(rows.subarray((height - 1 - y) * width * 4, (height - y) * width * 4), y * width * 4);
+  }
+  const webgl = gl.getParameter(gl.VERSION);
+  engine.dispose();
+  return {
+    engine: 'babylon',
+    version: BABYLON.Engine.Version,
+    width,
+    height,
+    ms,
+    settings: {
+      variant,
+      hardwareScalingLevel: 1,
+      antialias: false,
+      imageProcessing: 'applyByPostProcess, no post-process: linear, no tone mapping, no clamp',
+      renderTarget: 'TEXTURETYPE_FLOAT RGBA, no MSAA',
+      transmissionTarget: helper ? `${width}x${height}, 1 sample, float, mipmapped` : null,
+      useRightHandedSystem: true,
+      clearColor: [0, 0, 0, 1],
+      environment: environment ? `HDRCubeTexture ${CUBE_SIZE}, default skybox, rotationY ${ENVIRONMENT_ROTATION_Y}` : null,
+      hideRefractor: Boolean(hideRefractor),
+      webgl,
+    },
+    pixels: base64(new Uint8Array(pixels.buffer)),
+  };
+};
