@@ -3,7 +3,8 @@
 //! records as JSON text the Python layer parses.
 
 use std::path::PathBuf;
-use std::sync::{Mutex, PoisonError};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use pyo3::prelude::*;
 use refract_core::TirPolicy;
@@ -12,13 +13,15 @@ use refract_lab::jobs::CompareOptions;
 use refract_lab::{Note, Progress};
 use refract_scene::{BackendId, MethodId};
 
-use crate::errors::{detached, value_error};
+use crate::errors::{OnSignal, interruptible, value_error};
 
-/// The progress of an experiment run from Python: Ctrl-C (a pending Python signal) stops it
-/// between frames or jobs; warnings and skip notes are kept for `warnings.warn`.
+/// The progress of an experiment run from Python: Ctrl-C (seen by the calling thread, which
+/// sets `cancel`) stops it between frames or jobs; warnings and skip notes are kept for
+/// `warnings.warn`.
 #[derive(Default)]
 struct PythonProgress {
     notes: Mutex<Vec<String>>,
+    cancel: Arc<AtomicBool>,
 }
 
 impl Progress for PythonProgress {
@@ -32,8 +35,7 @@ impl Progress for PythonProgress {
     }
 
     fn cancelled(&self) -> bool {
-        // A pending KeyboardInterrupt is consumed here and raised as `Cancelled`'s exception.
-        Python::attach(|py| py.check_signals().is_err())
+        self.cancel.load(Ordering::SeqCst)
     }
 }
 
@@ -56,17 +58,21 @@ impl PythonProgress {
     }
 }
 
-/// Runs an experiment without the GIL; directories it created stay on success and go on
-/// failure (as in the CLI); its notes become warnings.
-fn run_experiment<T: Send>(
+/// Runs an experiment that writes under `roots` without the GIL; directories it created stay
+/// on success and go on failure (as in the CLI), and only its own: an experiment in another
+/// thread keeps its directories and its files being written. Its notes become warnings.
+fn run_experiment<T: Send + 'static>(
     py: Python<'_>,
-    work: impl FnOnce(&PythonProgress) -> refract_lab::Result<T> + Send,
+    roots: &[&std::path::Path],
+    work: impl FnOnce(&PythonProgress) -> refract_lab::Result<T> + Send + 'static,
 ) -> PyResult<T> {
-    let progress = PythonProgress::default();
-    let result = detached(py, || work(&progress));
+    let progress = Arc::new(PythonProgress::default());
+    let on_signal = OnSignal::Cancel(progress.cancel.clone());
+    let worker = progress.clone();
+    let result = interruptible(py, on_signal, move || work(&worker));
     match &result {
-        Ok(_) => refract_lab::output_dirs::keep_created(),
-        Err(_) => refract_lab::output_dirs::remove_created(),
+        Ok(_) => refract_lab::output_dirs::keep_created_under(roots),
+        Err(_) => refract_lab::output_dirs::remove_created_under(roots),
     }
     progress.warn(py)?;
     result
@@ -133,7 +139,8 @@ pub fn compare(
             "methods: the reference is always rendered; list the methods to compare with it",
         ));
     }
-    let records = run_experiment(py, move |progress| {
+    let root = out.clone();
+    let records = run_experiment(py, &[&root], move |progress| {
         let assignments: Vec<(&str, &str)> = params
             .iter()
             .map(|(n, v)| (n.as_str(), v.as_str()))
@@ -186,7 +193,9 @@ pub fn sweep(
         cache,
         list: false,
     };
-    let results = run_experiment(py, move |progress| {
+    let roots = [Some(args.out.clone()), args.cache.clone()];
+    let roots: Vec<&std::path::Path> = roots.iter().flatten().map(PathBuf::as_path).collect();
+    let results = run_experiment(py, &roots, move |progress| {
         refract_lab::sweep::run(&args, progress)?;
         refract_lab::sweep::shard_results(&args)
     })?;

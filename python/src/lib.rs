@@ -15,6 +15,7 @@ mod experiments;
 mod frame;
 mod registry;
 mod scene;
+mod workers;
 
 use pyo3::prelude::*;
 

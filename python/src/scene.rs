@@ -9,8 +9,9 @@ use refract_core::CameraDesc;
 use refract_lab::render::{FrameRequest, MAX_SIZE, Renders};
 use refract_scene::{BackendId, FrameOutputs, MethodId, MethodParams};
 
-use crate::errors::{detached, to_py, value_error};
+use crate::errors::{OnSignal, detached, interruptible, to_py, value_error};
 use crate::frame::{Frame, Origin};
+use crate::workers::ForkLocal;
 
 /// A scene: a built-in one or a `.toml` scene file, with its own camera.
 ///
@@ -19,7 +20,8 @@ use crate::frame::{Frame, Origin};
 #[pyclass(module = "refract._refract", name = "Scene", frozen)]
 pub struct Scene {
     scene: Arc<refract_scene::Scene>,
-    renders: Mutex<Renders>,
+    /// Prepared renderers; a forked child prepares its own.
+    renders: Arc<Mutex<ForkLocal<Renders>>>,
     camera: Mutex<CameraDesc>,
     warnings: Vec<String>,
 }
@@ -122,7 +124,7 @@ impl Scene {
         let scene = Arc::new(loaded.scene);
         Ok(Self {
             camera: Mutex::new(scene.camera),
-            renders: Mutex::new(Renders::new(scene.clone())),
+            renders: Arc::new(Mutex::new(ForkLocal::new(Renders::new(scene.clone())))),
             scene,
             warnings: loaded.warnings,
         })
@@ -258,11 +260,14 @@ impl Scene {
         } else {
             FrameOutputs::Color
         };
-        let (frame, timing) = detached(py, || {
-            let mut renders = self.renders.lock().unwrap_or_else(PoisonError::into_inner);
+        let (renders, scene) = (self.renders.clone(), self.scene.clone());
+        let request_method = method;
+        let (frame, timing) = interruptible(py, OnSignal::Abandon, move || {
+            let mut renders = renders.lock().unwrap_or_else(PoisonError::into_inner);
+            let renders = renders.get_mut(|| Renders::new(scene));
             let mut frame = refract_scene::Frame::default();
             let request = FrameRequest {
-                method: &method,
+                method: &request_method,
                 backend,
                 camera,
                 outputs,

@@ -17,12 +17,15 @@ static LIVE_TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// handler calls before exiting, so that an interrupted write leaves nothing behind (error paths
 /// remove their temporaries themselves). Returns how many were removed.
 pub fn remove_temporaries() -> usize {
-    let live = match LIVE_TEMPORARIES.lock() {
-        Ok(live) => live.clone(),
-        Err(poisoned) => poisoned.into_inner().clone(),
-    };
-    live.iter()
-        .filter(|path| std::fs::remove_file(path).is_ok())
+    remove_temporaries_where(|_| true)
+}
+
+/// Removes the temporary files of writes in progress whose path `select` picks (those of one
+/// experiment, say, while another thread's writes go on). Returns how many were removed.
+pub fn remove_temporaries_where(select: impl Fn(&Path) -> bool) -> usize {
+    live_temporaries()
+        .iter()
+        .filter(|path| select(path) && std::fs::remove_file(path).is_ok())
         .count()
 }
 
