@@ -19,9 +19,10 @@ See docs/python.md.
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from dataclasses import dataclass
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._refract import Frame, RenderError, Scene, __version__
 from ._refract import builtin_scenes as _builtin_scenes
@@ -47,6 +48,54 @@ __all__ = [
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _describe(value: Any) -> str:
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:60] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def _int(name: str, value: Any) -> int:
+    """``value`` as an int, or a TypeError naming ``name`` (ranges are checked in Rust)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} = {_describe(value)}: expected an int")
+    return int(value)
+
+
+def _names(name: str, value: Any, what: str) -> List[str]:
+    """A str (one name) or a sequence of str as a list, or a TypeError naming ``name``."""
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, (bytes, Mapping)) or not isinstance(value, Iterable):
+        raise TypeError(f"{name} = {_describe(value)}: expected {what}: a str or a list of str")
+    names = list(value)
+    for item in names:
+        if not isinstance(item, str):
+            raise TypeError(
+                f"{name} = {_describe(value)}: expected {what}: a str or a list of str, "
+                f"not {_describe(item)}"
+            )
+    return names
+
+
+def _path(name: str, value: Any) -> str:
+    """``value`` as a path, or a TypeError naming ``name``."""
+    try:
+        return os.fspath(value)
+    except TypeError:
+        raise TypeError(f"{name} = {_describe(value)}: expected a path (str or os.PathLike)") from None
+
+
+def _params(value: Any) -> Optional[Dict[Any, Any]]:
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise TypeError(
+            f"params = {_describe(value)}: expected a dict of parameter names to str or int values"
+        )
+    return dict(value)
 
 
 @dataclass(frozen=True)
@@ -115,11 +164,18 @@ def builtin_scenes() -> List[Tuple[str, str]]:
     return list(_builtin_scenes())
 
 
+def _frames(frame: Any, reference: Any) -> None:
+    for name, value in (("frame", frame), ("reference", reference)):
+        if not isinstance(value, Frame):
+            raise TypeError(f"{name} = {_describe(value)}: expected a refract.Frame")
+
+
 def metrics(frame: Frame, reference: Frame) -> Dict[str, Any]:
     """The metrics of ``frame`` against ``reference``: a dict with every field of
     ``metrics.json`` (docs/metrics.md), computed as ``refract compare`` computes them. Both
     frames must come from one :class:`Scene` and camera, rendered with ``aovs=True``;
     ``reference`` is a ``"reference"`` frame. Fields that do not apply are ``None``."""
+    _frames(frame, reference)
     return _metrics(frame, reference)
 
 
@@ -127,6 +183,7 @@ def error_maps(frame: Frame, reference: Frame) -> Dict[str, Any]:
     """The per-pixel error maps behind :func:`metrics`: ``flip`` (FLIP, 0 to 1), ``t2_deg``
     (angle between the T2 directions, degrees) and ``p2_rel`` (exit-point distance over the
     refractor's diameter), each ``float32`` of shape ``(height, width)``, NaN where undefined."""
+    _frames(frame, reference)
     return _error_maps(frame, reference)
 
 
@@ -151,19 +208,21 @@ def compare(
     (the WGSL tracer, ``docs/reference.md``). ``engines`` (``"threejs"``) also render each
     scene with the engines themselves, a row ``threejs@VERSION`` on backend ``webgl``
     (``docs/engines.md``); one that cannot run raises. Ctrl-C stops the run between frames."""
-    if isinstance(scenes, str):
-        scenes = [scenes]
+    if not isinstance(reference_backend, str):
+        raise TypeError(
+            f"reference_backend = {_describe(reference_backend)}: expected \"cpu\" or \"gpu\""
+        )
     text = _compare(
-        list(scenes),
-        None if methods is None else list(methods),
-        list(backends),
-        res,
-        spp,
-        frames,
-        None if params is None else dict(params),
-        os.fspath(out),
+        _names("scenes", scenes, "built-in scene names or scene files"),
+        None if methods is None else _names("methods", methods, "method ids"),
+        _names("backends", backends, "backends (\"cpu\", \"gpu\")"),
+        _int("res", res),
+        _int("spp", spp),
+        _int("frames", frames),
+        _params(params),
+        _path("out", out),
         reference_backend,
-        list(engines),
+        _names("engines", engines, "engine ids"),
     )
     return json.loads(text)
 
@@ -201,10 +260,14 @@ def sweep(
     run again, references are shared through ``cache`` when given. Returns one flat record per
     job of the shard (its axes, ``param.NAME`` columns, ``status``, ``error`` and the metrics),
     ready for ``pandas.DataFrame(records)``. Ctrl-C stops the run between jobs."""
+    if shard is not None:
+        if isinstance(shard, (str, bytes)) or not isinstance(shard, Sequence) or len(shard) != 2:
+            raise TypeError(f"shard = {_describe(shard)}: expected (i, n), two ints, or None")
+        shard = (_int("shard[0]", shard[0]), _int("shard[1]", shard[1]))
     text = _sweep(
-        os.fspath(path),
-        None if shard is None else (int(shard[0]), int(shard[1])),
-        os.fspath(out),
-        None if cache is None else os.fspath(cache),
+        _path("path", path),
+        shard,
+        _path("out", out),
+        None if cache is None else _path("cache", cache),
     )
     return [_flatten(result) for result in json.loads(text)]

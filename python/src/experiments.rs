@@ -101,6 +101,8 @@ pub fn compare(
     engines: Vec<String>,
 ) -> PyResult<String> {
     let params = crate::scene::param_pairs(params)?;
+    let backends = backends::parse_backends(&backends)
+        .map_err(|err| value_error(err.to_string().replace("--backends", "backends")))?;
     let engines = refract_lab::engines::parse_engines(&engines)
         .map_err(|err| value_error(err.to_string().replace("--engines", "engines")))?;
     let reference_backend = match reference_backend {
@@ -146,7 +148,7 @@ pub fn compare(
             .map(|(n, v)| (n.as_str(), v.as_str()))
             .collect();
         let options = CompareOptions {
-            backends: backends::parse_backends(&backends)?,
+            backends,
             gpu_policy: GpuPolicy::Required,
             scenes,
             methods: refract_lab::compare::method_params(

@@ -110,7 +110,12 @@ impl Frame {
 
     /// One AOV layer: vectors as `float32` `(height, width, 3)` (NaN where the quantity does
     /// not exist), counts as `uint32` `(height, width)`, flags as `bool` `(height, width)`.
-    fn aov<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+    fn aov<'py>(
+        &self,
+        py: Python<'py>,
+        #[pyo3(from_py_with = crate::args::layer)] name: String,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let name = name.as_str();
         let missing = || {
             let have = self.aovs().join(", ");
             value_error(format!(
@@ -195,7 +200,11 @@ impl Frame {
 
     /// Writes the frame: `.exr` (linear colour and every AOV layer, 32-bit float, as
     /// `refract render` writes it) or `.png` (tonemapped sRGB colour).
-    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+    fn save(
+        &self,
+        py: Python<'_>,
+        #[pyo3(from_py_with = crate::args::path)] path: PathBuf,
+    ) -> PyResult<()> {
         let extension = path
             .extension()
             .and_then(|e| e.to_str())
@@ -205,7 +214,7 @@ impl Frame {
             Some("png") => false,
             _ => {
                 return Err(value_error(format!(
-                    "{}: expected a .png or .exr file",
+                    "path = {}: expected a .png or .exr file",
                     path.display()
                 )));
             }
@@ -222,7 +231,10 @@ impl Frame {
 
     /// Reads a frame an `.exr` of `refract render`, `Frame.save` or `refract compare` holds.
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn load(
+        py: Python<'_>,
+        #[pyo3(from_py_with = crate::args::path)] path: PathBuf,
+    ) -> PyResult<Self> {
         let frame = detached(py, || Ok(refract_scene::Frame::read_exr(&path)?))?;
         Ok(Self::new(frame, None))
     }

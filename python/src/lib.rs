@@ -10,6 +10,7 @@
 
 #![deny(unsafe_code)]
 
+mod args;
 mod errors;
 mod experiments;
 mod frame;

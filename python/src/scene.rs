@@ -9,6 +9,7 @@ use refract_core::CameraDesc;
 use refract_lab::render::{FrameRequest, MAX_SIZE, Renders};
 use refract_scene::{BackendId, FrameOutputs, MethodId, MethodParams};
 
+use crate::args;
 use crate::errors::{OnSignal, detached, interruptible, to_py, value_error};
 use crate::frame::{Frame, Origin};
 use crate::workers::ForkLocal;
@@ -112,7 +113,11 @@ impl Scene {
     /// (docs/scenes.md); `ior` replaces the refractor's index of refraction.
     #[staticmethod]
     #[pyo3(signature = (name_or_path, ior=None))]
-    fn load(py: Python<'_>, name_or_path: std::path::PathBuf, ior: Option<f32>) -> PyResult<Self> {
+    fn load(
+        py: Python<'_>,
+        #[pyo3(from_py_with = args::scene)] name_or_path: std::path::PathBuf,
+        #[pyo3(from_py_with = args::ior)] ior: Option<f32>,
+    ) -> PyResult<Self> {
         let spec = name_or_path.to_string_lossy().into_owned();
         let loaded = detached(py, move || {
             let mut loaded = refract_eval::load_scene(&spec)?;
@@ -164,8 +169,8 @@ impl Scene {
     }
 
     #[setter]
-    fn set_eye(&self, eye: (f64, f64, f64)) -> PyResult<()> {
-        let eye = point("eye", eye)?;
+    fn set_eye(&self, eye: &Bound<'_, PyAny>) -> PyResult<()> {
+        let eye = point("eye", args::point("eye", eye)?)?;
         self.set_camera(CameraDesc {
             eye,
             ..self.camera()
@@ -179,8 +184,8 @@ impl Scene {
     }
 
     #[setter]
-    fn set_target(&self, target: (f64, f64, f64)) -> PyResult<()> {
-        let target = point("target", target)?;
+    fn set_target(&self, target: &Bound<'_, PyAny>) -> PyResult<()> {
+        let target = point("target", args::point("target", target)?)?;
         self.set_camera(CameraDesc {
             target,
             ..self.camera()
@@ -194,8 +199,8 @@ impl Scene {
     }
 
     #[setter]
-    fn set_up(&self, up: (f64, f64, f64)) -> PyResult<()> {
-        let up = point("up", up)?;
+    fn set_up(&self, up: &Bound<'_, PyAny>) -> PyResult<()> {
+        let up = point("up", args::point("up", up)?)?;
         self.set_camera(CameraDesc {
             up,
             ..self.camera()
@@ -209,7 +214,8 @@ impl Scene {
     }
 
     #[setter]
-    fn set_fov(&self, degrees: f64) -> PyResult<()> {
+    fn set_fov(&self, degrees: &Bound<'_, PyAny>) -> PyResult<()> {
+        let degrees = args::fov(degrees)?;
         if !(degrees > 0.0 && degrees < 180.0) {
             return Err(value_error(format!(
                 "fov = {degrees}: expected degrees in (0, 180)"
@@ -226,20 +232,24 @@ impl Scene {
     /// `params` (names and values as `refract.methods()` lists them) applied to the method's
     /// defaults; `aovs=True` also computes the method's AOV layers (needed by
     /// `refract.metrics`). The GIL is released while rendering.
-    #[pyo3(signature = (method, backend="cpu", res=(512, 512), params=None, aovs=false))]
+    #[pyo3(
+        signature = (method, backend="cpu".to_owned(), res=(512, 512), params=None, aovs=false),
+        text_signature = "(self, method, backend='cpu', res=(512, 512), params=None, aovs=False)"
+    )]
     fn render(
         &self,
         py: Python<'_>,
-        method: &str,
-        backend: &str,
-        res: (i64, i64),
-        params: Option<&Bound<'_, PyDict>>,
-        aovs: bool,
+        #[pyo3(from_py_with = args::method)] method: String,
+        #[pyo3(from_py_with = args::backend)] backend: String,
+        #[pyo3(from_py_with = args::res)] res: (i64, i64),
+        #[pyo3(from_py_with = args::params)] params: Option<Bound<'_, PyDict>>,
+        #[pyo3(from_py_with = args::aovs)] aovs: bool,
     ) -> PyResult<Frame> {
+        let params = params.as_ref();
         let id: MethodId = method
             .parse()
             .map_err(|err: refract_scene::registry::UnknownMethod| value_error(err.to_string()))?;
-        let backend = match backend {
+        let backend = match backend.as_str() {
             "cpu" => BackendId::Cpu,
             "gpu" => BackendId::Gpu,
             other => {

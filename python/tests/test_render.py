@@ -206,3 +206,55 @@ def test_gpu_frames_agree_with_the_cpu(sphere, gpu_available):
     diff = np.abs(cpu.color - gpu.color)[covered]
     # The backends share the algorithm core: the same colour up to f32 differences.
     assert np.median(diff) < 1e-3, np.median(diff)
+
+
+# Issue 54 #17: every argument error names the argument and what it takes; a value of the wrong
+# type is a TypeError, a value out of range a ValueError.
+ARGUMENT_ERRORS = [
+    (lambda s: s.render("wyman", res="big"), TypeError, "res = 'big' (str): expected (width, height)"),
+    (lambda s: s.render("wyman", res=(1, 2, 3)), TypeError, "res = (1, 2, 3)"),
+    (lambda s: s.render("wyman", res=(32.5, 32)), TypeError, "res = (32.5, 32)"),
+    (lambda s: s.render(3), TypeError, "method = 3 (int)"),
+    (lambda s: s.render("wyman", backend=None), TypeError, "backend = None"),
+    (lambda s: s.render("wyman", params=[1]), TypeError, "params = [1] (list)"),
+    (lambda s: s.render("wyman", aovs="yes"), TypeError, "aovs = 'yes'"),
+    (lambda s: setattr(s, "eye", "x"), TypeError, "eye = 'x' (str): expected (x, y, z)"),
+    (lambda s: setattr(s, "target", (1, 2)), TypeError, "target = (1, 2)"),
+    (lambda s: setattr(s, "fov", "wide"), TypeError, "fov = 'wide'"),
+    (lambda s: refract.Scene.load(5), TypeError, "name_or_path = 5"),
+    (lambda s: refract.Scene.load("sphere", ior="x"), TypeError, "ior = 'x'"),
+    (lambda s: s.render("single", res=(8, 8)).save(5), TypeError, "path = 5"),
+    (lambda s: s.render("single", res=(8, 8)).save("f.jpg"), ValueError, "path = f.jpg"),
+    (lambda s: s.render("single", res=(8, 8)).aov(3), TypeError, "name = 3"),
+    (lambda s: refract.Frame.load(3), TypeError, "path = 3"),
+    (lambda s: refract.metrics(None, None), TypeError, "frame = None"),
+    (lambda s: refract.error_maps(s.render("single", res=(8, 8)), "r"), TypeError, "reference = 'r'"),
+    (lambda s: refract.compare("sphere", res="x"), TypeError, "res = 'x' (str): expected an int"),
+    (lambda s: refract.compare("sphere", spp=1.5), TypeError, "spp = 1.5"),
+    (lambda s: refract.compare("sphere", frames=True), TypeError, "frames = True"),
+    (lambda s: refract.compare("sphere", methods=5), TypeError, "methods = 5"),
+    (lambda s: refract.compare("sphere", methods=["wyman", 2]), TypeError, "not 2 (int)"),
+    (lambda s: refract.compare("sphere", backends=["tpu"]), ValueError, "backends: unknown backend `tpu`"),
+    (lambda s: refract.compare("sphere", out=5), TypeError, "out = 5"),
+    (lambda s: refract.compare("sphere", params=[("tir", "clamp")]), TypeError, "params = "),
+    (lambda s: refract.compare("sphere", reference_backend=1), TypeError, "reference_backend = 1"),
+    (lambda s: refract.sweep("x.toml", shard=(1,)), TypeError, "shard = (1,)"),
+    (lambda s: refract.sweep("x.toml", shard="1/2"), TypeError, "shard = '1/2'"),
+    (lambda s: refract.sweep("x.toml", shard=(0, "2")), TypeError, "shard[1] = '2'"),
+    (lambda s: refract.sweep(None), TypeError, "path = None"),
+    (lambda s: refract.sweep("x.toml", cache=3), TypeError, "cache = 3"),
+]
+
+
+@pytest.mark.parametrize("call, error, message", ARGUMENT_ERRORS)
+def test_argument_errors_name_the_argument(sphere, call, error, message):
+    with pytest.raises(error) as raised:
+        call(sphere)
+    assert message in str(raised.value)
+
+
+def test_one_name_given_as_a_str_is_one_name(tmp_path):
+    # Before: methods="wyman" was the methods "w", "y", ... and failed on `w`.
+    records = refract.compare("sphere", methods="single", backends="cpu", res=8, frames=1,
+                              out=tmp_path)
+    assert [r["method"] for r in records] == ["reference", "single"]
