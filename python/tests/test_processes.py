@@ -111,3 +111,36 @@ def test_ctrl_c_interrupts_a_long_render():
     result = run_python(code, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "interrupted"
+
+
+def test_sigterm_while_saving_leaves_no_temporary(tmp_path):
+    # Before: `.frame.exr.XXXXXX.partial` stayed beside the frame. Now the file being written
+    # has no name until it is finished (docs/python.md).
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    code = textwrap.dedent(
+        f"""
+        import refract
+        frame = refract.Scene.load("sphere").render("reference", res=(512, 512), aovs=True)
+        print("saving", flush=True)
+        while True:
+            frame.save({str(tmp_path / "frame.exr")!r})
+        """
+    )
+    env = dict(__import__("os").environ)
+    env["PYTHONPATH"] = __import__("os").pathsep.join(p for p in sys.path if p)
+    child = subprocess.Popen(
+        [sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert child.stdout.readline().strip() == "saving"
+        time.sleep(0.5)
+        child.send_signal(signal.SIGTERM)
+        assert child.wait(timeout=60) == -signal.SIGTERM
+    finally:
+        child.kill()
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left in ([], ["frame.exr"]), left

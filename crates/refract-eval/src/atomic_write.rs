@@ -1,6 +1,13 @@
 //! The one way refract writes a file: to a temporary file beside the target, flushed and
-//! checked, then renamed into place, so a failed or interrupted write never leaves a partial
+//! checked, then moved into place, so a failed or interrupted write never leaves a partial
 //! file under the final name (the temporary is removed on every error path).
+//!
+//! On Linux the temporary has no name while it is written (`O_TMPFILE`): a process killed
+//! then (SIGTERM with no handler, SIGKILL, a crash) leaves nothing. When it is done it is
+//! linked under the final name, or, to replace a file, under a temporary name renamed over
+//! it at once. Where the file system has no unnamed files (or `/proc` is not mounted) the
+//! temporary is a named `.NAME.XXXXXX.partial`, which a program's signal handler removes
+//! ([`remove_temporaries`]).
 
 use std::fmt::Display;
 use std::fs::File;
@@ -102,38 +109,123 @@ pub fn write_atomically<E: Display>(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut temporary = builder.tempfile_in(dir).map_err(|source| SceneError::Io {
+    let create_error = |source| SceneError::Io {
         path: path.to_owned(),
         action: "cannot create a temporary file beside it",
         source,
-    })?;
+    };
+    let mut temporary = match unnamed::create(dir) {
+        Some(file) => Temporary::Unnamed(file),
+        None => Temporary::Named(builder.tempfile_in(dir).map_err(create_error)?),
+    };
     let format = |message: String| SceneError::Format {
         path: path.to_owned(),
         message,
     };
-    let _live = LiveTemporary::new(temporary.path());
+    let _live = match &temporary {
+        Temporary::Named(named) => Some(LiveTemporary::new(named.path())),
+        Temporary::Unnamed(_) => None,
+    };
+    let file = match &mut temporary {
+        Temporary::Named(named) => named.as_file_mut(),
+        Temporary::Unnamed(file) => file,
+    };
     {
-        let mut writer = BufWriter::new(temporary.as_file_mut());
+        let mut writer = BufWriter::new(&mut *file);
         write(&mut writer).map_err(|err| format(format!("cannot write {what}: {err}")))?;
         writer
             .flush()
             .map_err(|err| format(format!("cannot write {what}: {err}")))?;
     }
     if let Some(existing) = existing {
-        std::fs::set_permissions(temporary.path(), existing.permissions()).map_err(|source| {
-            SceneError::Io {
+        file.set_permissions(existing.permissions())
+            .map_err(|source| SceneError::Io {
                 path: path.to_owned(),
                 action: "cannot give the new file the mode of the one it replaces",
                 source,
-            }
-        })?;
+            })?;
     }
-    temporary.persist(path).map_err(|err| SceneError::Io {
+    let moved = match temporary {
+        Temporary::Named(named) => named.persist(path).map(drop).map_err(|err| err.error),
+        Temporary::Unnamed(file) => unnamed::persist(&file, path, &builder, dir),
+    };
+    moved.map_err(|source| SceneError::Io {
         path: path.to_owned(),
         action: "cannot move the finished file into place",
-        source: err.error,
-    })?;
-    Ok(())
+        source,
+    })
+}
+
+/// The file [`write_atomically`] writes before it is moved into place.
+enum Temporary {
+    /// A file with no name yet (Linux `O_TMPFILE`).
+    Unnamed(File),
+    /// `.NAME.XXXXXX.partial`, removed when dropped.
+    Named(tempfile::NamedTempFile),
+}
+
+/// Files without a name until they are finished (Linux `O_TMPFILE`).
+#[cfg(target_os = "linux")]
+mod unnamed {
+    use std::fs::File;
+    use std::os::fd::AsRawFd;
+    use std::path::Path;
+
+    use rustix::fs::{AtFlags, CWD, Mode, OFlags};
+
+    /// An unnamed file in `dir`, or `None` where the file system or the kernel has none.
+    pub fn create(dir: &Path) -> Option<File> {
+        // Without /proc the finished file could not be linked.
+        if !Path::new("/proc/self/fd").is_dir() {
+            return None;
+        }
+        let flags = OFlags::TMPFILE | OFlags::WRONLY | OFlags::CLOEXEC;
+        // 0666: the umask applies, as for any file a program creates.
+        rustix::fs::openat(CWD, dir, flags, Mode::from_raw_mode(0o666))
+            .ok()
+            .map(File::from)
+    }
+
+    /// Links the finished `file` as `path`: directly when `path` does not exist, else under a
+    /// temporary name (made by `builder` in `dir`) renamed over `path`.
+    pub fn persist(
+        file: &File,
+        path: &Path,
+        builder: &tempfile::Builder<'_, '_>,
+        dir: &Path,
+    ) -> std::io::Result<()> {
+        let source = format!("/proc/self/fd/{}", file.as_raw_fd());
+        let link = |to: &Path| {
+            rustix::fs::linkat(CWD, source.as_str(), CWD, to, AtFlags::SYMLINK_FOLLOW)
+                .map_err(std::io::Error::from)
+        };
+        match link(path) {
+            Err(err) if err.kind() == std::io::ErrorKind::AlreadyExists => {}
+            linked => return linked,
+        }
+        let named = builder.make_in(dir, |name| link(name))?;
+        named.persist(path).map(drop).map_err(|err| err.error)
+    }
+}
+
+/// Elsewhere every temporary is named.
+#[cfg(not(target_os = "linux"))]
+mod unnamed {
+    use std::fs::File;
+    use std::path::Path;
+
+    pub fn create(_dir: &Path) -> Option<File> {
+        None
+    }
+
+    pub fn persist(
+        _file: &File,
+        _path: &Path,
+        _builder: &tempfile::Builder<'_, '_>,
+        _dir: &Path,
+    ) -> std::io::Result<()> {
+        unreachable!("no unnamed temporaries are created here")
+    }
 }
 
 /// Checks, before a long computation, that [`write_atomically`] will be able to write `path`:
@@ -217,10 +309,13 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
     }
 
-    /// A write in progress is listed for signal handlers ([`remove_temporaries`]), and no
-    /// longer once it is done. (Removing them here would race the other tests' writes.)
+    /// A write in progress leaves nothing behind if the process dies there: on Linux it has no
+    /// name in the directory (issue 54 #18: SIGTERM during a Python `Frame.save` left
+    /// `.NAME.XXXXXX.partial`); elsewhere its named temporary is listed for signal handlers
+    /// ([`remove_temporaries`]). Replacing a file works the same way. (Removing them here would
+    /// race the other tests' writes.)
     #[test]
-    fn temporaries_in_progress_are_listed_for_signal_handlers() {
+    fn a_write_in_progress_leaves_nothing_to_clean_up() {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("slow.txt");
         let mine = |live: Vec<PathBuf>| {
@@ -228,13 +323,26 @@ mod tests {
                 .filter(|p| p.starts_with(dir.path()))
                 .count()
         };
-        write_atomically(&path, "the text", |w| {
-            w.write_all(b"half")?;
-            assert_eq!(mine(live_temporaries()), 1);
-            std::io::Result::Ok(())
-        })
-        .expect("write");
-        assert_eq!(mine(live_temporaries()), 0);
+        let entries = || std::fs::read_dir(dir.path()).expect("dir").count();
+        for (existing, text) in [(0, "first"), (1, "second")] {
+            write_atomically(&path, "the text", |w| {
+                w.write_all(b"half")?;
+                if cfg!(target_os = "linux") {
+                    assert_eq!(entries(), existing, "an entry for the file being written");
+                    assert_eq!(mine(live_temporaries()), 0);
+                } else {
+                    assert_eq!(mine(live_temporaries()), 1);
+                }
+                w.write_all(text.as_bytes())
+            })
+            .expect("write");
+            assert_eq!(mine(live_temporaries()), 0);
+            assert_eq!(entries(), 1);
+            assert_eq!(
+                std::fs::read_to_string(&path).expect("read"),
+                format!("half{text}")
+            );
+        }
     }
 
     #[test]
