@@ -64,15 +64,16 @@ def _int(name: str, value: Any) -> int:
     return int(value)
 
 
-def _names(name: str, value: Any, what: str) -> List[str]:
-    """A str (one name) or a sequence of str as a list, or a TypeError naming ``name``."""
-    if isinstance(value, str):
+def _names(name: str, value: Any, what: str, paths: bool = False) -> List[Any]:
+    """A str (one name) or a sequence of str as a list, or a TypeError naming ``name``; with
+    ``paths``, os.PathLike values count as names too."""
+    if isinstance(value, str) or (paths and isinstance(value, os.PathLike)):
         return [value]
     if isinstance(value, (bytes, Mapping)) or not isinstance(value, Iterable):
         raise TypeError(f"{name} = {_describe(value)}: expected {what}: a str or a list of str")
     names = list(value)
     for item in names:
-        if not isinstance(item, str):
+        if not (isinstance(item, str) or (paths and isinstance(item, os.PathLike))):
             raise TypeError(
                 f"{name} = {_describe(value)}: expected {what}: a str or a list of str, "
                 f"not {_describe(item)}"
@@ -188,7 +189,7 @@ def error_maps(frame: Frame, reference: Frame) -> Dict[str, Any]:
 
 
 def compare(
-    scenes: Union[str, Sequence[str]],
+    scenes: Union[PathLike, Sequence[PathLike]],
     methods: Optional[Sequence[str]] = None,
     backends: Sequence[str] = ("cpu",),
     res: int = 256,
@@ -213,7 +214,7 @@ def compare(
             f"reference_backend = {_describe(reference_backend)}: expected \"cpu\" or \"gpu\""
         )
     text = _compare(
-        _names("scenes", scenes, "built-in scene names or scene files"),
+        _names("scenes", scenes, "built-in scene names or scene files", paths=True),
         None if methods is None else _names("methods", methods, "method ids"),
         _names("backends", backends, "backends (\"cpu\", \"gpu\")"),
         _int("res", res),

@@ -89,7 +89,7 @@ fn run_experiment<T: Send + 'static>(
 #[allow(clippy::too_many_arguments)]
 pub fn compare(
     py: Python<'_>,
-    scenes: Vec<String>,
+    scenes: Vec<PathBuf>,
     methods: Option<Vec<String>>,
     backends: Vec<String>,
     res: i64,
@@ -150,7 +150,7 @@ pub fn compare(
         let options = CompareOptions {
             backends,
             gpu_policy: GpuPolicy::Required,
-            scenes,
+            scenes: scenes.into_iter().map(PathBuf::into_os_string).collect(),
             methods: refract_lab::compare::method_params(
                 &ids,
                 TirPolicy::ClampToCritical,

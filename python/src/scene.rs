@@ -118,9 +118,8 @@ impl Scene {
         #[pyo3(from_py_with = args::scene)] name_or_path: std::path::PathBuf,
         #[pyo3(from_py_with = args::ior)] ior: Option<f32>,
     ) -> PyResult<Self> {
-        let spec = name_or_path.to_string_lossy().into_owned();
         let loaded = detached(py, move || {
-            let mut loaded = refract_eval::load_scene(&spec)?;
+            let mut loaded = refract_eval::load_scene(&name_or_path)?;
             if let Some(ior) = ior {
                 loaded.scene.refractor.set_ior(ior)?;
             }

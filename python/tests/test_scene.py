@@ -64,3 +64,15 @@ def test_bad_camera_values_are_refused_and_leave_the_camera():
     with pytest.raises(ValueError, match="camera"):
         scene.eye = scene.target
     assert (scene.eye, scene.up, scene.fov) == before
+
+
+def test_file_names_that_are_not_utf8_load(tmp_path):
+    # Issue 54 #12: before, the name was decoded lossily and the file "did not exist".
+    import os
+
+    path = os.path.join(os.fsdecode(bytes(tmp_path)), os.fsdecode(b"glass\xff.toml"))
+    with open(path, "w") as f:
+        f.write('[refractor]\nmesh = "builtin:sphere"\n')
+    assert refract.Scene.load(path).name == "glass\ufffd"
+    records = refract.compare(path, methods="single", res=8, frames=1, out=tmp_path / "out")
+    assert [r["method"] for r in records] == ["reference", "single"]

@@ -188,7 +188,7 @@ proptest! {
 [[objects]]\nmesh = \"builtin:plane\"\ntranslate = [0.0, -1.0, 0.0]\nscale = 3.0\ncolor = [0.5, 0.5, 0.5]\n";
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "s.toml", &mutate(seed, &edits));
-        let _ = refract_eval::load_scene(&path.display().to_string());
+        let _ = refract_eval::load_scene(&path);
     }
 
     /// Sweep files: any edit loads or is an error; digits inserted into the axes can make the

@@ -20,7 +20,7 @@ use serde::Serialize;
 #[derive(Debug, clap::Args)]
 pub struct ExportArgs {
     /// A built-in scene or a .toml scene file.
-    pub scene: String,
+    pub scene: std::ffi::OsString,
     /// Output directory (created).
     #[arg(long)]
     pub out: PathBuf,

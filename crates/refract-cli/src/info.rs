@@ -12,7 +12,7 @@ use refract_geometry::{MeshBvh, builtin, normal_distances};
 pub struct InfoArgs {
     /// A mesh file (.obj, .gltf, .glb) or a built-in shape (builtin:sphere, builtin:lens, ...);
     /// without one, only the GPU adapters are listed.
-    pub mesh: Option<String>,
+    pub mesh: Option<std::ffi::OsString>,
     /// Keep the file's coordinates instead of centring and scaling into the unit sphere.
     #[arg(long)]
     pub no_normalize: bool,
@@ -56,8 +56,11 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     };
     println!();
     let start = Instant::now();
-    let (mesh, report, material) = if mesh_spec.starts_with(builtin::PREFIX) {
-        (builtin::mesh(mesh_spec)?, None, None)
+    let builtin_name = mesh_spec
+        .to_str()
+        .filter(|spec| spec.starts_with(builtin::PREFIX));
+    let (mesh, report, material) = if let Some(spec) = builtin_name {
+        (builtin::mesh(spec)?, None, None)
     } else {
         let options = LoadOptions {
             normalize: !args.no_normalize,

@@ -108,7 +108,7 @@ impl From<TirArg> for TirPolicy {
 struct CompareArgs {
     /// Built-in scene names (see `refract scenes`) or .toml scene files.
     #[arg(required = true)]
-    scenes: Vec<String>,
+    scenes: Vec<std::ffi::OsString>,
     /// Comma-separated method ids (`refract methods`); default: every method but the reference.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<MethodId>>,

@@ -26,7 +26,7 @@ pub enum TraceArg {
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
     /// A built-in scene (see `refract scenes`) or a .toml scene file.
-    pub scene: String,
+    pub scene: std::ffi::OsString,
     /// A method of the registry (`refract methods`), or `reference`.
     #[arg(long, default_value = "wyman")]
     pub method: String,

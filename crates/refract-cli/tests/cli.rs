@@ -1141,3 +1141,66 @@ fn resolution_and_sample_bounds_are_the_same_everywhere() {
     assert!(!run.status.success());
     assert!(stderr(&run).contains(&max), "{}", stderr(&run));
 }
+
+/// Issue 54 #12: file names that are not UTF-8 are taken like any other path, by every command
+/// that takes a scene or a mesh (before: clap's "invalid UTF-8 was detected" for the scene while
+/// `--out` took them, and Python looked for a lossily renamed file).
+#[cfg(unix)]
+#[test]
+fn file_names_that_are_not_utf8_are_paths_like_any_other() {
+    use std::ffi::OsStr;
+    use std::os::unix::ffi::OsStrExt;
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = OsStr::from_bytes(b"glass\xff.toml");
+    std::fs::write(
+        dir.path().join(scene),
+        "[refractor]\nmesh = \"builtin:sphere\"\n",
+    )
+    .expect("write the scene");
+    let run = |args: &[&OsStr]| {
+        Command::new(env!("CARGO_BIN_EXE_refract"))
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .expect("run refract")
+    };
+    let png = OsStr::from_bytes(b"frame\xfe.png");
+    let os = |s: &'static str| OsStr::new(s);
+    let output = run(&[
+        os("render"),
+        scene,
+        os("--method"),
+        os("single"),
+        os("--res"),
+        os("16"),
+        os("--out"),
+        png,
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(dir.path().join(png).is_file());
+
+    let output = run(&[
+        os("compare"),
+        scene,
+        os("--methods"),
+        os("single"),
+        os("--res"),
+        os("16"),
+        os("--frames"),
+        os("1"),
+        os("--out"),
+        os("out"),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    // The scene's name (its file stem) is shown lossily, as every message shows a path.
+    assert!(dir.path().join("out/glass\u{fffd}/reference.png").is_file());
+
+    let output = run(&[os("info"), OsStr::from_bytes(b"missing\xff.obj")]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("missing\u{fffd}.obj: cannot read the file"),
+        "{}",
+        stderr(&output)
+    );
+}

@@ -556,9 +556,14 @@ pub struct LoadedScene {
     pub warnings: Vec<String>,
 }
 
-/// A built-in scene name or a path to a `.toml` scene file.
-pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
-    if let Some((name, _, toml)) = BUILTIN_SCENES.iter().find(|(name, _, _)| *name == spec) {
+/// A built-in scene name or a path to a `.toml` scene file. The path may be any the OS takes,
+/// not only UTF-8 (`&str`, `String`, `Path`, `OsStr`); messages show it lossily.
+pub fn load_scene(spec: impl AsRef<std::ffi::OsStr>) -> Result<LoadedScene, SceneError> {
+    let spec = spec.as_ref();
+    if let Some((name, _, toml)) = BUILTIN_SCENES
+        .iter()
+        .find(|(name, _, _)| spec.to_str() == Some(*name))
+    {
         return build(
             name,
             toml,
@@ -569,7 +574,7 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, SceneError> {
     let path = PathBuf::from(spec);
     if path.extension().is_none_or(|e| e != "toml") {
         return Err(SceneError::UnknownScene {
-            name: spec.to_owned(),
+            name: spec.to_string_lossy().into_owned(),
             builtins: builtin_names(),
         });
     }
@@ -1118,7 +1123,7 @@ mod tests {
         for (k, (text, key)) in cases.iter().enumerate() {
             let path = dir.path().join(format!("case{k}.toml"));
             std::fs::write(&path, text).expect("write");
-            let err = load_scene(&path.display().to_string()).expect_err(text);
+            let err = load_scene(&path).expect_err(text);
             let message = err.to_string();
             assert!(
                 message.contains(&format!("case{k}.toml")) && message.contains(key),
@@ -1148,7 +1153,7 @@ mod tests {
             )
             .expect("write");
             let err = refract_scene::full_message(
-                &load_scene(&path.display().to_string()).expect_err("huge"),
+                &load_scene(&path).expect_err("huge"),
             );
             assert!(err.contains("huge.obj") && err.contains("1e18"), "{err}");
         }
@@ -1165,7 +1170,7 @@ mod tests {
              translate = [0.0, -1.0, 0.0]\nscale = 3.0\n",
         )
         .expect("write");
-        let scene = load_scene(&path.display().to_string())
+        let scene = load_scene(&path)
             .expect("scene")
             .scene;
         assert_eq!(scene.objects.len(), 1);

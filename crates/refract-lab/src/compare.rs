@@ -64,7 +64,7 @@ pub fn default_options() -> crate::Result<CompareOptions> {
     Ok(CompareOptions {
         backends: vec![BackendId::Cpu, BackendId::Gpu],
         gpu_policy: GpuPolicy::IfAvailable,
-        scenes: BUILTIN_SCENES.iter().map(|s| s.0.to_owned()).collect(),
+        scenes: BUILTIN_SCENES.iter().map(|s| s.0.into()).collect(),
         methods: method_params(&ids, TirPolicy::ClampToCritical, &[], "default job")?,
         res: 512,
         spp: 1,

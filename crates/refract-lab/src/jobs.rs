@@ -17,8 +17,8 @@ pub struct CompareOptions {
     pub backends: Vec<BackendId>,
     /// What a missing adapter means.
     pub gpu_policy: GpuPolicy,
-    /// Scene names or files.
-    pub scenes: Vec<String>,
+    /// Scene names or files (any path the OS takes).
+    pub scenes: Vec<std::ffi::OsString>,
     /// Methods with their parameters.
     pub methods: Vec<MethodParams>,
     /// Square resolution.

@@ -826,7 +826,7 @@ fn run_job(
     let p = match prepared.entry(key.clone()) {
         Entry::Occupied(entry) => entry.into_mut(),
         Entry::Vacant(slot) => {
-            let mut scene = load_scene(&scene_spec(sweep, &job.scene))?.scene;
+            let mut scene = load_scene(scene_spec(sweep, &job.scene))?.scene;
             if let Some(ior) = job.ior {
                 scene.refractor.set_ior(ior)?;
             }

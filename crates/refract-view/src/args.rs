@@ -10,7 +10,7 @@ use refract_scene::MethodId;
 pub struct ViewArgs {
     /// A built-in scene or a .toml scene file.
     #[arg(default_value = "sphere")]
-    pub scene: String,
+    pub scene: std::ffi::OsString,
     /// The method shown first (`m`/`n` switch).
     #[arg(long, default_value = "wyman")]
     pub method: MethodId,
