@@ -1152,9 +1152,7 @@ mod tests {
                 format!("{section}\nmesh = \"huge.obj\"\nnormalize = false\n"),
             )
             .expect("write");
-            let err = refract_scene::full_message(
-                &load_scene(&path).expect_err("huge"),
-            );
+            let err = refract_scene::full_message(&load_scene(&path).expect_err("huge"));
             assert!(err.contains("huge.obj") && err.contains("1e18"), "{err}");
         }
     }
@@ -1170,9 +1168,7 @@ mod tests {
              translate = [0.0, -1.0, 0.0]\nscale = 3.0\n",
         )
         .expect("write");
-        let scene = load_scene(&path)
-            .expect("scene")
-            .scene;
+        let scene = load_scene(&path).expect("scene").scene;
         assert_eq!(scene.objects.len(), 1);
         let sphere = scene.refractor.mesh().bounding_sphere();
         assert!(

@@ -316,51 +316,138 @@ fn tir_mask(frame: &Frame) -> Vec<bool> {
         .map_or_else(|| vec![false; frame.pixel_count()], <[bool]>::to_vec)
 }
 
-/// The summary table of a comparison (what `refract compare` prints at the end).
+/// The most result rows [`summary`] prints as a table; above it, the best row per scene.
+pub const MAX_SUMMARY_ROWS: usize = 24;
+
+/// The console summary of a comparison: up to [`MAX_SUMMARY_ROWS`] results, the table of them;
+/// more (the default job has hundreds), the best method of each scene (lowest mean FLIP over
+/// the refractor's pixels) and where the full table is. Columns are as wide as their cells.
 pub fn summary(records: &[MetricsRecord], out: &Path) -> String {
-    let mut text = String::new();
     let f = |v: Option<f64>, digits: usize| {
         v.map_or_else(|| "-".to_owned(), |v| format!("{v:.digits$}"))
     };
-    let _ = writeln!(
-        text,
-        "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
-        "scene",
-        "method",
-        "backend",
-        "PSNR dB",
-        "FLIP",
-        "T2 err deg",
-        "P2 err/diam",
-        "P2 px p90",
-        "TIR",
-        "ms/frame"
-    );
-    for r in records {
+    let mut text = String::new();
+    if records.len() <= MAX_SUMMARY_ROWS {
+        let header = [
+            "scene",
+            "method",
+            "backend",
+            "PSNR dB",
+            "FLIP",
+            "T2 err deg",
+            "P2 err/diam",
+            "P2 px p90",
+            "TIR",
+            "ms/frame",
+        ];
+        let rows: Vec<Vec<String>> = records
+            .iter()
+            .map(|r| {
+                vec![
+                    r.scene.clone(),
+                    r.method.clone(),
+                    r.backend.clone(),
+                    f(r.psnr_ldr_db, 2),
+                    f(r.flip_mean, 4),
+                    f(r.t2_angle_deg_mean_non_tir, 3),
+                    f(r.p2_error_rel_mean_non_tir, 4),
+                    f(r.p2_error_px_p90_non_tir, 2),
+                    f(r.tir_fraction.map(|t| 100.0 * t), 1) + "%",
+                    f(r.ms_per_frame, 1),
+                ]
+            })
+            .collect();
+        text += &aligned(&header, &rows, 3);
+        text += "\nrefractor pixels only; T2 and P2 at the first exit, without TIR there \
+                 (docs/metrics.md)\n";
+    } else {
+        let scenes = distinct(records.iter().map(|r| r.scene.as_str()));
+        let methods = distinct(records.iter().map(|r| r.method.as_str()));
+        let backends = distinct(records.iter().map(|r| r.backend.as_str()));
         let _ = writeln!(
             text,
-            "{:<10} {:<10} {:<7} {:>8} {:>8} {:>11} {:>11} {:>11} {:>7} {:>9}",
-            r.scene,
-            r.method,
-            r.backend,
-            f(r.psnr_ldr_db, 2),
-            f(r.flip_mean, 4),
-            f(r.t2_angle_deg_mean_non_tir, 3),
-            f(r.p2_error_rel_mean_non_tir, 4),
-            f(r.p2_error_px_p90_non_tir, 2),
-            f(r.tir_fraction.map(|t| 100.0 * t), 1) + "%",
-            f(r.ms_per_frame, 1)
+            "{} results: {} scenes, {} methods (the reference included), {} backends; the \
+             full table is {}",
+            records.len(),
+            scenes.len(),
+            methods.len(),
+            backends.len(),
+            out.join("report.md").display()
         );
+        let _ = writeln!(
+            text,
+            "\nbest per scene (lowest mean FLIP over the refractor's pixels; docs/metrics.md):"
+        );
+        let header = ["scene", "method", "backend", "FLIP", "ms/frame"];
+        let rows: Vec<Vec<String>> = scenes
+            .iter()
+            .filter_map(|scene| {
+                records
+                    .iter()
+                    .filter(|r| r.scene == *scene && r.method != "reference")
+                    .filter_map(|r| r.flip_mean.map(|flip| (flip, r)))
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+            })
+            .map(|(flip, r)| {
+                vec![
+                    r.scene.clone(),
+                    r.method.clone(),
+                    r.backend.clone(),
+                    format!("{flip:.4}"),
+                    f(r.ms_per_frame, 1),
+                ]
+            })
+            .collect();
+        text += &aligned(&header, &rows, 3);
     }
-    let _ = writeln!(
-        text,
-        "\nrefractor pixels only; T2 and P2 at the first exit, without TIR there (docs/metrics.md)"
-    );
     let _ = writeln!(
         text,
         "\nwrote {}/index.html, report.md and metrics.json",
         out.display()
     );
+    text
+}
+
+/// The distinct values of `values`, in their first order.
+fn distinct<'a>(values: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut seen = Vec::new();
+    for value in values {
+        if !seen.contains(&value) {
+            seen.push(value);
+        }
+    }
+    seen
+}
+
+/// `header` and `rows` as a text table, each column as wide as its widest cell, the first
+/// `text_columns` left-aligned and the rest (numbers) right-aligned.
+fn aligned(header: &[&str], rows: &[Vec<String>], text_columns: usize) -> String {
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            rows.iter()
+                .map(|row| row[c].chars().count())
+                .chain([header[c].chars().count()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut text = String::new();
+    let cells = header.iter().map(|h| (*h).to_owned());
+    for row in std::iter::once(cells.collect::<Vec<_>>()).chain(rows.iter().cloned()) {
+        let line: Vec<String> = row
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(c, (cell, &width))| {
+                if c < text_columns {
+                    format!("{cell:<width$}")
+                } else {
+                    format!("{cell:>width$}")
+                }
+            })
+            .collect();
+        let _ = writeln!(text, "{}", line.join("  ").trim_end());
+    }
     text
 }
 
@@ -429,4 +516,66 @@ fn skipped_pairs(methods: &[MethodParams], scenes: &[Arc<Scene>]) -> Vec<Note> {
         }
     }
     notes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(scene: &str, method: &str, flip: f64) -> MetricsRecord {
+        MetricsRecord {
+            scene: scene.to_owned(),
+            method: method.to_owned(),
+            backend: "cpu".to_owned(),
+            flip_mean: Some(flip),
+            ms_per_frame: Some(1.5),
+            ..MetricsRecord::default()
+        }
+    }
+
+    /// A few results: their table, columns as wide as the widest cell (before: method names
+    /// wider than the column shifted the rest of their row).
+    #[test]
+    fn a_few_results_are_an_aligned_table() {
+        let records = [
+            record("sphere", "reference", 0.0),
+            record("sphere", "iterative-seeded", 0.05),
+            record("engine-failures", "wyman", 0.1),
+        ];
+        let text = summary(&records, Path::new("out"));
+        let lines: Vec<&str> = text.lines().take(4).collect();
+        let column = |line: &str| line.find("cpu").or_else(|| line.find("backend"));
+        let at = column(lines[0]).expect("the header");
+        assert!(lines.iter().all(|l| column(l) == Some(at)), "{text}");
+        assert!(text.contains("iterative-seeded"));
+    }
+
+    /// Many results (the default job's hundreds): the best method of each scene, not every row.
+    #[test]
+    fn many_results_are_the_best_per_scene() {
+        let mut records = Vec::new();
+        for scene in ["sphere", "torus"] {
+            records.push(record(scene, "reference", 0.0));
+            for i in 0..20 {
+                let flip = if scene == "torus" {
+                    0.2 - 0.01 * i as f64
+                } else {
+                    0.1 + 0.01 * i as f64
+                };
+                records.push(record(scene, &format!("m{i}"), flip));
+            }
+        }
+        let text = summary(&records, Path::new("out"));
+        assert!(text.contains("42 results: 2 scenes, 21 methods"), "{text}");
+        assert!(text.contains("out/report.md"), "{text}");
+        let best: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("sphere") || l.starts_with("torus"))
+            .collect();
+        assert_eq!(best.len(), 2, "{text}");
+        assert!(
+            best[0].contains(" m0 ") && best[1].contains(" m19 "),
+            "{text}"
+        );
+    }
 }
