@@ -260,7 +260,7 @@ impl Sweep {
             Some(iors) => iors.iter().copied().map(Some).collect(),
         };
         check_exclusions(&origin, &file.exclude, &methods)?;
-        let mut exclusion_used = vec![false; file.exclude.len()];
+        let mut exclusions = Exclusions::new(&file.exclude);
         // The product of the axes, counted before any job is built (exclusions only remove).
         let per_method: u128 = methods
             .iter()
@@ -308,14 +308,7 @@ impl Sweep {
                                     method: method.name().to_owned(),
                                     params: combination.into_iter().collect(),
                                 };
-                                let mut keep = true;
-                                for (rule, used) in file.exclude.iter().zip(&mut exclusion_used) {
-                                    if excluded(&job, rule) {
-                                        *used = true;
-                                        keep = false;
-                                    }
-                                }
-                                if keep {
+                                if exclusions.keep(&job) {
                                     // Checked only for the jobs that run: a combination
                                     // excluded is no error.
                                     MethodParams::defaults(method).set_all(
@@ -338,27 +331,14 @@ impl Sweep {
                             method: engine.id().to_owned(),
                             params: BTreeMap::new(),
                         };
-                        let mut keep = true;
-                        for (rule, used) in file.exclude.iter().zip(&mut exclusion_used) {
-                            if excluded(&job, rule) {
-                                *used = true;
-                                keep = false;
-                            }
-                        }
-                        if keep {
+                        if exclusions.keep(&job) {
                             jobs.push(job);
                         }
                     }
                 }
             }
         }
-        if let Some(k) = exclusion_used.iter().position(|used| !used) {
-            crate::bail!(
-                "{origin}: [[exclude]] number {} ({}) matches no job of the sweep; check its values",
-                k + 1,
-                rule_text(&file.exclude[k])
-            );
-        }
+        exclusions.check_all_matched(&origin)?;
         for (index, job) in jobs.iter_mut().enumerate() {
             job.index = index;
             let mut id = format!(
@@ -458,6 +438,45 @@ fn rule_text(rule: &BTreeMap<String, toml::Value>) -> String {
         .join(", ")
 }
 
+/// A sweep file's `[[exclude]]` rules while its jobs are built: which rules matched a job.
+struct Exclusions<'a> {
+    rules: &'a [BTreeMap<String, toml::Value>],
+    matched: Vec<bool>,
+}
+
+impl<'a> Exclusions<'a> {
+    fn new(rules: &'a [BTreeMap<String, toml::Value>]) -> Self {
+        Self {
+            rules,
+            matched: vec![false; rules.len()],
+        }
+    }
+
+    /// Whether `job` runs: no rule matches it. Every rule that matches is marked.
+    fn keep(&mut self, job: &Job) -> bool {
+        let mut keep = true;
+        for (rule, matched) in self.rules.iter().zip(&mut self.matched) {
+            if excluded(job, rule) {
+                *matched = true;
+                keep = false;
+            }
+        }
+        keep
+    }
+
+    /// An error naming the first rule that matched no job (its values are likely wrong).
+    fn check_all_matched(&self, origin: &str) -> crate::Result<()> {
+        if let Some(k) = self.matched.iter().position(|matched| !matched) {
+            crate::bail!(
+                "{origin}: [[exclude]] number {} ({}) matches no job of the sweep; check its values",
+                k + 1,
+                rule_text(&self.rules[k])
+            );
+        }
+        Ok(())
+    }
+}
+
 fn excluded(job: &Job, rule: &BTreeMap<String, toml::Value>) -> bool {
     rule.iter().all(|(key, value)| {
         let value = value_text(value);
@@ -549,26 +568,14 @@ pub fn run(args: &SweepArgs, progress: &dyn Progress) -> crate::Result<SweepSumm
         todo.len()
     )));
     progress.start(STAGE_JOBS, todo.len() as u64);
-    let mut prepared: HashMap<(String, Option<u32>, u32), Prepared> = HashMap::new();
-    let mut renderers: HashMap<String, Box<dyn Renderer>> = HashMap::new();
-    let mut prepared_for: HashMap<String, (String, Option<u32>, u32)> = HashMap::new();
-    let mut engines: Option<EngineRenderers> = None;
+    let mut state = JobState::default();
     let (mut ok, mut failed) = (0usize, 0usize);
     for job in todo {
         if progress.cancelled() {
             return Err(crate::LabError::Cancelled);
         }
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            run_job(
-                &sweep,
-                job,
-                args,
-                &mut prepared,
-                &mut renderers,
-                &mut prepared_for,
-                &mut engines,
-                progress,
-            )
+            run_job(&sweep, job, args, &mut state, progress)
         }));
         let result = match outcome {
             Ok(Ok((metrics, images))) => {
@@ -735,9 +742,9 @@ fn method_job(
     sweep: &Sweep,
     job: &Job,
     p: &Prepared,
-    key: &(String, Option<u32>, u32),
+    key: &SceneKey,
     renderers: &mut HashMap<String, Box<dyn Renderer>>,
-    prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
+    prepared_for: &mut HashMap<String, SceneKey>,
     progress: &dyn Progress,
 ) -> crate::Result<(MetricsRecord, ErrorMaps, Frame)> {
     let backend = backends::parse_backends(std::slice::from_ref(&job.backend))?[0];
@@ -807,17 +814,35 @@ fn engine_job(
     Ok((record, maps, rendered.frame))
 }
 
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+/// A scene as the jobs share it: its spec, the IOR's bits where the sweep sets one, the
+/// resolution.
+type SceneKey = (String, Option<u32>, u32);
+
+/// What the jobs of one run share: each scene prepared with its reference, the renderers of
+/// each backend and the scene each is prepared for, the engines once one is needed.
+#[derive(Default)]
+struct JobState {
+    prepared: HashMap<SceneKey, Prepared>,
+    renderers: HashMap<String, Box<dyn Renderer>>,
+    prepared_for: HashMap<String, SceneKey>,
+    engines: Option<EngineRenderers>,
+}
+
+/// One job: its scene prepared (the reference traced or read from the cache) unless an
+/// earlier job did, the method or the engine rendered, the metrics and the images.
 fn run_job(
     sweep: &Sweep,
     job: &Job,
     args: &SweepArgs,
-    prepared: &mut HashMap<(String, Option<u32>, u32), Prepared>,
-    renderers: &mut HashMap<String, Box<dyn Renderer>>,
-    prepared_for: &mut HashMap<String, (String, Option<u32>, u32)>,
-    engines: &mut Option<EngineRenderers>,
+    state: &mut JobState,
     progress: &dyn Progress,
 ) -> crate::Result<(MetricsRecord, Option<JobImages>)> {
+    let JobState {
+        prepared,
+        renderers,
+        prepared_for,
+        engines,
+    } = state;
     let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
     let settings = MethodParams::Reference(TraceSettings {
         spp: sweep.spp,
