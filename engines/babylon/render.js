@@ -2,6 +2,8 @@
 // hands the pixels back (engines/README.md). Every setting that changes pixels is pinned here
 // and returned in `settings`.
 // `BABYLON` is the global of the UMD builds index.html loads (with the glTF loader).
+import { topDownBase64 } from '../common.js';
+
 const { BABYLON } = window;
 
 // Babylon's lat-long lookup of an HDR in a right-handed scene is a half turn about +y from
@@ -11,15 +13,6 @@ const { BABYLON } = window;
 const ENVIRONMENT_ROTATION_Y = Math.PI;
 // The cube faces Babylon resamples the lat-long map into (HDRCubeTexture).
 const CUBE_SIZE = 512;
-
-function base64(bytes) {
-  let text = '';
-  const chunk = 0x8000;
-  for (let i = 0; i < bytes.length; i += chunk) {
-    text += String.fromCharCode.apply(null, bytes.subarray(i, i + chunk));
-  }
-  return btoa(text);
-}
 
 window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
   const canvas = document.createElement('canvas');
@@ -92,11 +85,6 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   if (!(rows instanceof Float32Array) || rows.length !== width * height * 4) {
     throw new Error(`read back ${rows?.length} values, expected ${width * height * 4} floats`);
   }
-  // WebGL reads rows from the bottom; refract's frames start at the top.
-  const pixels = new Float32Array(width * height * 4);
-  for (let y = 0; y < height; y++) {
-    pixels.set(rows.subarray((height - 1 - y) * width * 4, (height - y) * width * 4), y * width * 4);
-  }
   const webgl = gl.getParameter(gl.VERSION);
   engine.dispose();
   return {
@@ -118,6 +106,6 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
       hideRefractor: Boolean(hideRefractor),
       webgl,
     },
-    pixels: base64(new Uint8Array(pixels.buffer)),
+    pixels: topDownBase64(rows, width, height),
   };
 };

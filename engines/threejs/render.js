@@ -4,21 +4,13 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
+import { topDownBase64 } from '../common.js';
 
 // refract's lat-long orientation is u = atan2(x, -z) / 2 pi; three.js's equirectangular lookup
 // is u = atan2(z, x) / 2 pi + 1/2, a quarter turn further for every direction: rotating the
 // looked-up direction by -pi/2 about +y turns one into the other (held by the background test,
-// crates/refract-engines/tests/threejs.rs).
+// crates/refract-engines/tests/engines.rs).
 const ENVIRONMENT_ROTATION_Y = -Math.PI / 2;
-
-function base64(bytes) {
-  let text = '';
-  const chunk = 0x8000;
-  for (let i = 0; i < bytes.length; i += chunk) {
-    text += String.fromCharCode.apply(null, bytes.subarray(i, i + chunk));
-  }
-  return btoa(text);
-}
 
 window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
   const canvas = document.createElement('canvas');
@@ -72,11 +64,6 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
 
   const rows = new Float32Array(width * height * 4);
   renderer.readRenderTargetPixels(target, 0, 0, width, height, rows);
-  // WebGL reads rows from the bottom; refract's frames start at the top.
-  const pixels = new Float32Array(width * height * 4);
-  for (let y = 0; y < height; y++) {
-    pixels.set(rows.subarray((height - 1 - y) * width * 4, (height - y) * width * 4), y * width * 4);
-  }
   const info = renderer.getContext().getParameter(renderer.getContext().VERSION);
   renderer.dispose();
   return {
@@ -98,6 +85,6 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
       hideRefractor: Boolean(hideRefractor),
       webgl: info,
     },
-    pixels: base64(new Uint8Array(pixels.buffer)),
+    pixels: topDownBase64(rows, width, height),
   };
 };
