@@ -45,6 +45,8 @@ pub struct EngineRenderers {
 
 /// One engine's frame of a scene, ready for the metrics.
 pub struct EngineFrame {
+    /// The engine.
+    pub engine: Engine,
     /// `threejs@0.187.0`.
     pub label: String,
     /// Colour, `Covered` and `P_geom`.
@@ -141,6 +143,7 @@ impl EngineRenderers {
             frame.insert_layer(Aov::Covered, Layer::Flag(covered.clone()));
             frame.insert_layer(Aov::PGeom, Layer::Vec3(p_geom));
             frames.push(EngineFrame {
+                engine,
                 label: color.label,
                 frame,
             });

@@ -142,7 +142,7 @@ fn fidelity(
     name: &str,
     truth: &Truth,
     records: &[(&str, MetricsRecord, Frame)],
-    engines: &[(String, MetricsRecord, Frame)],
+    engines: &[(Engine, String, MetricsRecord, Frame)],
 ) -> String {
     let Some(mask) = truth.frame.flag(Aov::Covered) else {
         return String::new();
@@ -157,8 +157,8 @@ fn fidelity(
     let engine_frame = |engine: Engine| {
         engines
             .iter()
-            .find(|(label, _, _)| label.starts_with(&format!("`{}@", engine.id())))
-            .map(|(_, _, frame)| frame)
+            .find(|(e, _, _, _)| *e == engine)
+            .map(|(_, _, _, frame)| frame)
     };
     let mut rows = String::new();
     let images = std::iter::once(("`volume-thickness`".to_owned(), reimplementation, None)).chain(
@@ -251,6 +251,7 @@ pub fn section(
                 let (record, _) =
                     engine_record(&truth.frame, &engine.frame, &truth.scene, &truth.camera);
                 engine_frames.push((
+                    engine.engine,
                     format!("`{}` (the engine itself)", engine.label),
                     record,
                     engine.frame,
@@ -264,7 +265,7 @@ pub fn section(
             .chain(
                 engine_frames
                     .iter()
-                    .map(|(l, r, f)| (l.as_str(), r.clone(), f.clone())),
+                    .map(|(_, l, r, f)| (l.as_str(), r.clone(), f.clone())),
             )
             .collect();
         for (label, r, _) in &records {
