@@ -13,6 +13,8 @@ const { BABYLON } = window;
 const ENVIRONMENT_ROTATION_Y = Math.PI;
 // The cube faces Babylon resamples the lat-long map into (HDRCubeTexture).
 const CUBE_SIZE = 512;
+// The default skybox's edge: far behind every object of refract's scenes.
+const SKYBOX_EDGE = 1e4;
 
 window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
   const canvas = document.createElement('canvas');
@@ -31,15 +33,6 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   scene.imageProcessingConfiguration.toneMappingEnabled = false;
   scene.imageProcessingConfiguration.skipFinalColorClamp = true;
 
-  await BABYLON.AppendSceneAsync(sceneUrl, scene);
-  const camera = scene.cameras[0];
-  if (!camera) throw new Error(`${sceneUrl} has no camera`);
-  scene.activeCamera = camera;
-  if (hideRefractor) {
-    const refractor = scene.getMeshByName('refractor') ?? scene.getNodeByName('refractor');
-    if (!refractor) throw new Error(`${sceneUrl} has no node named refractor`);
-    for (const mesh of [refractor, ...refractor.getChildMeshes?.() ?? []]) mesh.setEnabled(false);
-  }
   let environmentTexture = null;
   if (environment) {
     environmentTexture = new BABYLON.HDRCubeTexture(environment, scene, CUBE_SIZE, false, true, false, true);
@@ -49,15 +42,36 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
       setTimeout(() => reject(new Error(`${environment}: not loaded in 60 s`)), 60000);
     });
     scene.environmentTexture = environmentTexture;
-    // The skybox samples a clone of the texture, which does not keep the rotation.
-    const skybox = scene.createDefaultSkybox(environmentTexture, true, 1e4, 0, false);
+    // The skybox samples a clone of the texture, which does not keep the rotation. It is made
+    // before the glTF is loaded: one made later is not drawn into the transmission helper's
+    // target, which the glass reads (nor is one beyond the camera's far plane: see below).
+    const skybox = scene.createDefaultSkybox(environmentTexture, true, SKYBOX_EDGE, 0, false);
     skybox.material.reflectionTexture.rotationY = ENVIRONMENT_ROTATION_Y;
   }
 
+  await BABYLON.AppendSceneAsync(sceneUrl, scene);
+  const camera = scene.cameras[0];
+  if (!camera) throw new Error(`${sceneUrl} has no camera`);
+  scene.activeCamera = camera;
+  // The skybox's corners lie at 0.87 of its edge; the far plane goes beyond them (the export's is
+  // refract's, 100), or the transmission helper's target leaves the sky out. Depth precision
+  // is all the far plane changes here.
+  if (environment) camera.maxZ = Math.max(camera.maxZ, 2 * SKYBOX_EDGE);
+  if (hideRefractor) {
+    const refractor = scene.getMeshByName('refractor') ?? scene.getNodeByName('refractor');
+    if (!refractor) throw new Error(`${sceneUrl} has no node named refractor`);
+    for (const mesh of [refractor, ...refractor.getChildMeshes?.() ?? []]) mesh.setEnabled(false);
+  }
   // The glTF loader's transmission helper renders the opaque objects into its own target,
   // 1024 x 1024, 4x MSAA, half float by default; pinned to the frame's size, one sample, float.
   const helper = scene._transmissionHelper;
   if (helper) {
+    // The helper sorts each new mesh into its opaque or transparent list a tick later
+    // (`Tools.SetImmediate`); a frame rendered before that reads an empty target.
+    const sorted = () => helper._opaqueMeshesCache.length + helper._transparentMeshesCache.length
+      >= scene.meshes.filter((mesh) => mesh.material).length;
+    for (let tick = 0; tick < 100 && !sorted(); tick++) await new Promise((r) => setTimeout(r, 10));
+    if (!sorted()) throw new Error('the transmission helper did not sort the meshes in 1 s');
     helper.updateOptions({
       renderSize: { width, height },
       samples: 1,
@@ -102,7 +116,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
       transmissionTarget: helper ? `${width}x${height}, 1 sample, float, mipmapped` : null,
       useRightHandedSystem: true,
       clearColor: [0, 0, 0, 1],
-      environment: environment ? `HDRCubeTexture ${CUBE_SIZE}, default skybox, rotationY ${ENVIRONMENT_ROTATION_Y}` : null,
+      environment: environment ? `HDRCubeTexture ${CUBE_SIZE}, default skybox (edge ${SKYBOX_EDGE}) made before the glTF, camera far ${camera.maxZ}, rotationY ${ENVIRONMENT_ROTATION_Y}` : null,
       hideRefractor: Boolean(hideRefractor),
       webgl,
     },
