@@ -126,7 +126,7 @@ translate = [0.6, -0.75, 2.6]
 }
 
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 12] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 15] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -290,7 +290,108 @@ scale = 0.3
 translate = [0.5, -0.9, -1.0]
 "#,
     ),
+    (
+        "glass-behind-glass",
+        "two glass spheres (IOR 1.5), the smaller one in front, partly before the larger, on the chart's floor before the colour chart",
+        GLASS_BEHIND_GLASS_SCENE,
+    ),
+    (
+        "vessel",
+        "a hollow glass cube (IOR 1.5, walls 0.15 thick, air inside): four interfaces on most rays, TIR in the walls",
+        VESSEL_SCENE,
+    ),
+    (
+        "liquid",
+        "water (IOR 1.33) filling a round glass flask (IOR 1.5, walls 0.16 thick), before the colour chart",
+        LIQUID_SCENE,
+    ),
 ];
+
+/// The chart stage of the many-refractor scenes (issue 49): `chart`'s camera, colour chart and
+/// wood floor (`y = −0.8`); each scene adds its refractors.
+macro_rules! chart_stage {
+    () => {
+        r#"[camera]
+eye = [0.0, 0.9, 4.2]
+target = [0.0, -0.15, 0.0]
+fov_y_deg = 40.0
+near = 0.05
+far = 12.0
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "color-chart"
+scale = 4.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.9, -3.2]
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "wood"
+scale = 6.0
+translate = [0.0, -0.8, 0.6]
+"#
+    };
+}
+
+/// `glass-behind-glass`: a sphere of radius 0.5 in front (refractor 0, the one the
+/// one-refractor methods follow) and one of radius 0.75 behind it and to the right, both resting
+/// on the floor; seen from the camera they overlap by about a third of the smaller one.
+const GLASS_BEHIND_GLASS_SCENE: &str = concat!(
+    chart_stage!(),
+    r#"
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.5
+translate = [-0.3, -0.3, 1.0]
+
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.75
+translate = [0.35, -0.05, -0.6]
+"#
+);
+
+/// `vessel`: a glass cube (half edge 0.52) with a cube of air (half edge 0.375) inside it, both
+/// turned alike, so the walls are 0.145 thick and parallel; it floats just above the floor.
+const VESSEL_SCENE: &str = concat!(
+    chart_stage!(),
+    r#"
+[[refractor]]
+mesh = "builtin:box"
+ior = 1.5
+scale = 0.9
+rotate_deg = [20.0, 35.0, 0.0]
+translate = [0.0, 0.1, 0.0]
+
+[[refractor]]
+mesh = "builtin:box"
+ior = 1.0
+scale = 0.65
+rotate_deg = [20.0, 35.0, 0.0]
+translate = [0.0, 0.1, 0.0]
+"#
+);
+
+/// `liquid`: a glass sphere of radius 0.8 on the floor, filled with a water sphere of radius
+/// 0.64 (Mitsuba: the outer surface `int_ior = 1.5, ext_ior = 1`, the inner one
+/// `int_ior = 1.33, ext_ior = 1.5`).
+const LIQUID_SCENE: &str = concat!(
+    chart_stage!(),
+    r#"
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.8
+
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.33
+scale = 0.64
+"#
+);
 
 /// The `engine-failures` scene (issue 28): what the engines' screen-space refraction cannot
 /// show, each where a pixel count can find it. The torus (tilted 60°, left of centre) has glass
@@ -373,9 +474,40 @@ struct SceneFile {
     camera: CameraSection,
     #[serde(default)]
     environment: EnvironmentSection,
-    refractor: RefractorSection,
+    /// One `[refractor]` table or an array of `[[refractor]]` tables ([`refractor_sections`]).
+    refractor: toml::Value,
     #[serde(default)]
     objects: Vec<ObjectSection>,
+}
+
+/// The refractors of a scene file, each with the name its errors use: `[refractor]` for the
+/// one table of a single-refractor file, `refractor[k]` for the tables of `[[refractor]]`.
+fn refractor_sections(
+    origin: &str,
+    value: toml::Value,
+) -> Result<Vec<(String, RefractorSection)>, SceneError> {
+    let parse = |section: String, value: toml::Value| {
+        RefractorSection::deserialize(value)
+            .map(|r| (section.clone(), r))
+            .map_err(|err| SceneError::Parse {
+                origin: origin.to_owned(),
+                message: format!("{section}: {}", err.message()),
+            })
+    };
+    match value {
+        toml::Value::Table(_) => Ok(vec![parse("[refractor]".to_owned(), value)?]),
+        toml::Value::Array(tables) if !tables.is_empty() => tables
+            .into_iter()
+            .enumerate()
+            .map(|(k, table)| parse(format!("refractor[{k}]"), table))
+            .collect(),
+        other => Err(SceneError::field(
+            origin,
+            "refractor",
+            other.type_str(),
+            "one [refractor] table or one or more [[refractor]] tables",
+        )),
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -446,6 +578,11 @@ struct RefractorSection {
     scale: f32,
     #[serde(default)]
     rotate_deg: [f32; 3],
+    /// `KHR_materials_volume`'s `attenuationColor`: the fraction of each channel left after
+    /// `attenuation_distance` (each in (0, 1]); with `attenuation_distance`, or neither.
+    attenuation_color: Option<[f32; 3]>,
+    /// `attenuationDistance` in world units (> 0).
+    attenuation_distance: Option<f32>,
 }
 
 fn default_ior() -> f32 {
@@ -719,16 +856,6 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         message: err.to_string().trim_end().to_owned(),
     })?;
     check_camera(origin, &file.camera)?;
-    let r = &file.refractor;
-    check_placement(origin, "[refractor]", r.translate, r.scale, r.rotate_deg)?;
-    refract_scene::scene::check_ior(r.ior).map_err(|_| {
-        SceneError::field(
-            origin,
-            "[refractor] ior",
-            r.ior,
-            refract_scene::scene::IOR_EXPECTED,
-        )
-    })?;
     check_range(
         origin,
         "[environment] intensity",
@@ -750,53 +877,9 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         }
     }
     let mut warnings = Vec::new();
-    let (mesh, glass) = load_mesh_spec(
-        &file.refractor.mesh,
-        file.refractor.normalize,
-        base,
-        origin,
-        &mut warnings,
-    )?;
-    let mut mesh = mesh;
-    mesh.transform(&affine(r.translate, r.scale, r.rotate_deg));
-    let ior = file.refractor.ior;
-    let (glass_ior, glass_thickness) = glass.map_or((None, None), |g| (g.ior, g.thickness));
-    if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
-        warnings.push(format!(
-            "the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
-        ));
-    }
-    let conductor = parse_conductor(
-        origin,
-        "[refractor]",
-        "glass",
-        r.material.as_deref(),
-        r.eta,
-        r.k,
-    )?;
-    let mut refractor = Refractor::new(mesh, ior)?;
-    refractor.set_conductor(conductor);
-    // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
-    refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
-    let d_n = refractor.normal_distances();
-    // d_N serves refraction only: a conductor (an open mirror) has no use for it.
-    if d_n.misses > 0 && refractor.is_dielectric() {
-        warnings.push(format!(
-            "d_N: {} of {} vertices missed (open mesh); they use {:.4}",
-            d_n.misses,
-            d_n.values.len(),
-            d_n.fallback
-        ));
-    }
-    if d_n.over_budget > 0 {
-        warnings.push(format!(
-            "d_N: {} of {} vertices' rays crossed more than {} triangles (near-coincident \
-             triangles); they use {:.4}",
-            d_n.over_budget,
-            d_n.values.len(),
-            refract_geometry::distance_along_normal::RAY_BUDGET,
-            d_n.fallback
-        ));
+    let mut refractors = Vec::new();
+    for (section, r) in refractor_sections(origin, file.refractor)? {
+        refractors.push(build_refractor(origin, &section, &r, base, &mut warnings)?);
     }
 
     let mut environment_file = None;
@@ -869,11 +952,128 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         far: c.far,
         ..CameraDesc::default()
     };
-    let mut scene = Scene::new(name, refractor, environment);
+    let mut scene = Scene::with_refractors(name, refractors, environment)
+        .map_err(|err| SceneError::Parse {
+            origin: origin.to_owned(),
+            message: err.to_string(),
+        })?;
     scene.objects = objects;
     scene.camera = camera;
     scene.environment_file = environment_file;
     Ok(LoadedScene { scene, warnings })
+}
+
+/// The refractor of section `section` (`[refractor]` or `refractor[k]`): its ranges checked,
+/// its mesh loaded and placed, its material, `d_N` (with warnings for vertices it missed).
+fn build_refractor(
+    origin: &str,
+    section: &str,
+    r: &RefractorSection,
+    base: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Refractor, SceneError> {
+    check_placement(origin, section, r.translate, r.scale, r.rotate_deg)?;
+    refract_scene::scene::check_ior(r.ior).map_err(|_| {
+        SceneError::field(
+            origin,
+            format!("{section} ior"),
+            r.ior,
+            refract_scene::scene::IOR_EXPECTED,
+        )
+    })?;
+    let attenuation = match (r.attenuation_color, r.attenuation_distance) {
+        (None, None) => None,
+        (Some(color), Some(distance)) => {
+            let field = |name: &str, value: String, expected: &str| {
+                SceneError::field(origin, format!("{section} {name}"), value, expected)
+            };
+            Some(
+                refract_scene::Attenuation::new(Vec3::from(color), distance).map_err(|_| {
+                    if Vec3::from(color).cmpgt(Vec3::ZERO).all()
+                        && Vec3::from(color).cmple(Vec3::ONE).all()
+                    {
+                        field(
+                            "attenuation_distance",
+                            distance.to_string(),
+                            refract_scene::scene::ATTENUATION_DISTANCE_EXPECTED,
+                        )
+                    } else {
+                        field(
+                            "attenuation_color",
+                            format!("{color:?}"),
+                            refract_scene::scene::ATTENUATION_COLOR_EXPECTED,
+                        )
+                    }
+                })?,
+            )
+        }
+        _ => {
+            return Err(SceneError::field(
+                origin,
+                format!("{section} attenuation_color/attenuation_distance"),
+                "one of the two",
+                "both keys, or neither",
+            ));
+        }
+    };
+    let (mesh, glass) = load_mesh_spec(&r.mesh, r.normalize, base, origin, warnings)?;
+    let mut mesh = mesh;
+    mesh.transform(&affine(r.translate, r.scale, r.rotate_deg));
+    // Warnings name the section when the file has several refractors.
+    let label = if section.starts_with('[') {
+        String::new()
+    } else {
+        format!("{section}: ")
+    };
+    let ior = r.ior;
+    let (glass_ior, glass_thickness) = glass.map_or((None, None), |g| (g.ior, g.thickness));
+    if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
+        warnings.push(format!(
+            "{label}the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
+        ));
+    }
+    let conductor = parse_conductor(
+        origin,
+        section,
+        "glass",
+        r.material.as_deref(),
+        r.eta,
+        r.k,
+    )?;
+    if conductor.is_some() && attenuation.is_some() {
+        return Err(SceneError::field(
+            origin,
+            format!("{section} attenuation_color"),
+            "given for a conductor",
+            "absorption only for glass (a conductor has no inside)",
+        ));
+    }
+    let mut refractor = Refractor::new(mesh, ior)?;
+    refractor.set_conductor(conductor);
+    refractor.set_attenuation(attenuation);
+    // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
+    refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
+    let d_n = refractor.normal_distances();
+    // d_N serves refraction only: a conductor (an open mirror) has no use for it.
+    if d_n.misses > 0 && refractor.is_dielectric() {
+        warnings.push(format!(
+            "{label}d_N: {} of {} vertices missed (open mesh); they use {:.4}",
+            d_n.misses,
+            d_n.values.len(),
+            d_n.fallback
+        ));
+    }
+    if d_n.over_budget > 0 {
+        warnings.push(format!(
+            "{label}d_N: {} of {} vertices' rays crossed more than {} triangles (near-coincident \
+             triangles); they use {:.4}",
+            d_n.over_budget,
+            d_n.values.len(),
+            refract_geometry::distance_along_normal::RAY_BUDGET,
+            d_n.fallback
+        ));
+    }
+    Ok(refractor)
 }
 
 /// What a glTF material says about the glass: its IOR and its volume thickness in the

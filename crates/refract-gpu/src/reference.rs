@@ -99,12 +99,10 @@ struct TraceUniforms {
     light_direction: [f32; 4],
     light_radiance: [f32; 4],
     light_ambient: [f32; 4],
-    refractor_eta: [f32; 4],
-    refractor_k: [f32; 4],
     ior: f32,
     max_depth: u32,
     interface_rule: u32,
-    refractor_conductor: u32,
+    refractor_count: u32,
     write_records: u32,
     mode: u32,
     spp: u32,
@@ -114,16 +112,52 @@ struct TraceUniforms {
     _padding: [u32; 2],
 }
 
-/// `struct ObjectConductor` of `src/reference.wgsl` (`eta.w` = 1 for a conductor).
+/// `struct TraceSurface` of `src/reference.wgsl`, one per mesh: a conductor (`eta.w` = 1) or a
+/// refractor's media (`absorption.w` = 1 for an absorbing one; `within` [`NO_MEDIUM`] for air).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct ObjectConductor {
+struct TraceSurface {
     eta: [f32; 4],
     k: [f32; 4],
+    absorption: [f32; 4],
+    ior: f32,
+    outside_ior: f32,
+    within: u32,
+    _padding: u32,
 }
 
-/// The words of a pixel's path record (`RECORD_WORDS`): eight vectors, a mask, a count.
-const RECORD_WORDS: usize = 26;
+/// `NO_MEDIUM` of `src/reference.wgsl`: air.
+const NO_MEDIUM: u32 = u32::MAX;
+
+impl TraceSurface {
+    fn conductor(conductor: Option<refract_scene::Conductor>) -> Self {
+        conductor.map_or_else(Self::default, |c| Self {
+            eta: c.eta.extend(1.0).to_array(),
+            k: c.k.extend(0.0).to_array(),
+            ..Self::default()
+        })
+    }
+
+    /// Refractor `index` of `scene`.
+    fn refractor(scene: &Scene, index: usize, refractor: &refract_scene::Refractor) -> Self {
+        Self {
+            absorption: refractor
+                .attenuation()
+                .map_or([0.0; 4], |a| a.coefficient().extend(1.0).to_array()),
+            ior: refractor.ior(),
+            outside_ior: scene.outside_ior(index),
+            within: refractor
+                .within()
+                .and_then(|w| u32::try_from(w).ok())
+                .unwrap_or(NO_MEDIUM),
+            ..Self::conductor(refractor.conductor())
+        }
+    }
+}
+
+/// The words of a pixel's path record (`RECORD_WORDS`): eight vectors, a mask, the interfaces
+/// crossed, the refractors met.
+const RECORD_WORDS: usize = 27;
 
 /// Pixel samples traced per dispatch by default: about two million (1024² at two samples, 96²
 /// at 227), a few hundred milliseconds of `full` mode on a desktop GPU.
@@ -368,7 +402,8 @@ pub struct GpuReference {
     environment_texels: wgpu::Buffer,
     environment: EnvironmentUniforms,
     triangles: wgpu::Buffer,
-    conductors: wgpu::Buffer,
+    /// One [`TraceSurface`] per mesh.
+    surfaces: wgpu::Buffer,
     uniforms: TraceUniforms,
     /// Samples per dispatch, `None`: [`DEFAULT_PIXEL_SAMPLES_PER_DISPATCH`] over the pixels.
     samples_per_dispatch: Option<u32>,
@@ -455,32 +490,26 @@ impl GpuReference {
         } else {
             ordered
         };
-        let mut conductors: Vec<ObjectConductor> = scene
-            .objects
-            .iter()
-            .map(|o| match o.conductor() {
-                Some(c) => ObjectConductor {
-                    eta: c.eta.extend(1.0).to_array(),
-                    k: c.k.extend(0.0).to_array(),
-                },
-                None => ObjectConductor::default(),
-            })
+        let surfaces: Vec<TraceSurface> = scene
+            .refractors()
+            .enumerate()
+            .map(|(i, r)| TraceSurface::refractor(scene, i, r))
+            .chain(
+                scene
+                    .objects
+                    .iter()
+                    .map(|o| TraceSurface::conductor(o.conductor())),
+            )
             .collect();
-        if conductors.is_empty() {
-            conductors.push(ObjectConductor::default());
-        }
-        let refractor = scene.refractor.conductor();
         let light = &scene.light;
         let uniforms = TraceUniforms {
             light_direction: light.direction.extend(0.0).to_array(),
             light_radiance: light.radiance.extend(0.0).to_array(),
             light_ambient: light.ambient.extend(0.0).to_array(),
-            refractor_eta: refractor.map_or([0.0; 4], |c| c.eta.extend(0.0).to_array()),
-            refractor_k: refractor.map_or([0.0; 4], |c| c.k.extend(0.0).to_array()),
             ior: scene.refractor.ior(),
             max_depth: 0,
             interface_rule: 0,
-            refractor_conductor: u32::from(refractor.is_some()),
+            refractor_count: scene.refractor_count() as u32,
             write_records: 0,
             mode: 0,
             spp: 1,
@@ -501,9 +530,9 @@ impl GpuReference {
                 contents: bytemuck::cast_slice(&ordered),
                 usage: wgpu::BufferUsages::STORAGE,
             }),
-            conductors: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("reference conductors"),
-                contents: bytemuck::cast_slice(&conductors),
+            surfaces: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference surfaces"),
+                contents: bytemuck::cast_slice(&surfaces),
                 usage: wgpu::BufferUsages::STORAGE,
             }),
             uniforms,
@@ -525,7 +554,8 @@ impl GpuReference {
     }
 
     /// Renders `camera`'s frame with `settings` into `frame`: the colour and every layer of the
-    /// `reference` row (`Covered`, `P1` … `PGeom`, `Interfaces`, `Tir`, `TirFirstExit`; NaN where
+    /// `reference` row (`Covered`, `P1` … `PGeom`, `Interfaces`, `RefractorsMet`, `Tir`,
+    /// `TirFirstExit`; NaN where
     /// a quantity does not exist, as on the CPU), and `frame.rays`, the closest-hit queries
     /// traced, counted as the CPU tracer counts them.
     pub fn render(
@@ -748,7 +778,7 @@ impl GpuReference {
                     entry(0, &frame),
                     entry(1, &trace),
                     entry(2, &self.materials),
-                    entry(3, &self.conductors),
+                    entry(3, &self.surfaces),
                     entry(4, &self.environment_texels),
                     entry(5, &self.triangles),
                     entry(6, &color.0),
@@ -824,21 +854,27 @@ fn write_frame(
         Aov::Interfaces,
         Layer::Count((0..n).map(|i| record(i)[25]).collect()),
     );
+    frame.insert_layer(
+        Aov::RefractorsMet,
+        Layer::Count((0..n).map(|i| record(i)[26]).collect()),
+    );
 }
 
-/// The refractor (mesh 0) and every object (mesh 1 + k) as one mesh for the BVH, and each
-/// triangle's attributes in that order.
+/// Every refractor (mesh `i`) and every object (mesh `refractor_count + k`) as one mesh for the
+/// BVH, and each triangle's attributes in that order.
 fn combined_mesh(scene: &Scene) -> (Mesh, Vec<TraceTriangle>) {
     let mut combined = Mesh {
-        name: "scene (refractor and objects)".into(),
+        name: "scene (refractors and objects)".into(),
         positions: Vec::new(),
         normals: Vec::new(),
         uvs: Vec::new(),
         triangles: Vec::new(),
     };
     let mut attributes = Vec::new();
-    let meshes =
-        core::iter::once(scene.refractor.mesh()).chain(scene.objects.iter().map(|o| o.mesh()));
+    let meshes = scene
+        .refractors()
+        .map(|r| r.mesh())
+        .chain(scene.objects.iter().map(|o| o.mesh()));
     for (id, mesh) in meshes.enumerate() {
         let base = combined.positions.len() as u32;
         combined.positions.extend_from_slice(&mesh.positions);

@@ -1,6 +1,8 @@
 // The exact reference in WGSL (issue 32): the twin of refract_trace::Tracer over the whole
-// scene's BVH (bvh.wgsl, group 1; the refractor and every object in one tree, each triangle
-// tagged with its mesh). Snell at every refractor interface with the interpolated shading normal,
+// scene's BVH (bvh.wgsl, group 1; every refractor and every object in one tree, each triangle
+// tagged with its mesh). Snell at every refractor interface with the interpolated shading normal
+// between the refractor's medium and the one around it, Beer-Lambert absorption along every
+// segment inside an absorbing medium (issue 49),
 // conductors reflect with the exact conductor Fresnel reflectance per channel, diffuse objects
 // are shaded under the scene light, rays that leave the scene read the environment (WGSL's atan2,
 // no polynomial). Both modes: `transmission` (the refracted path, TIR reflects:
@@ -12,7 +14,8 @@
 
 // The per-triangle attributes the hit needs, in the BVH's leaf order.
 struct TraceTriangle {
-    // Vertex normals; n0.w is the mesh: 0 the refractor, 1 + k object k.
+    // Vertex normals; n0.w is the mesh: i < refractor_count refractor i, refractor_count + k
+    // object k.
     n0: vec4<f32>,
     n1: vec4<f32>,
     n2: vec4<f32>,
@@ -21,19 +24,18 @@ struct TraceTriangle {
     uv2: vec4<f32>,
 }
 
-// refract_trace::TraceSettings and the scene's light and refractor (refract_gpu::reference).
+// refract_trace::TraceSettings and the scene's light (refract_gpu::reference).
 struct TraceUniforms {
     light_direction: vec4<f32>,
     light_radiance: vec4<f32>,
     light_ambient: vec4<f32>,
-    // The refractor's conductor (eta, k per channel) when refractor_conductor is 1.
-    refractor_eta: vec4<f32>,
-    refractor_k: vec4<f32>,
+    // The first refractor's index (the frame uniforms').
     ior: f32,
     max_depth: u32,
     // 0: Mitsuba's shading-normal rule, 1: the geometric rule.
     interface_rule: u32,
-    refractor_conductor: u32,
+    // Meshes below it are refractors.
+    refractor_count: u32,
     // 1: write the path records (the AOV layers); 0: the colour only (a 4-byte record buffer).
     write_records: u32,
     // 0: transmission, 1: full (TraceMode).
@@ -48,22 +50,33 @@ struct TraceUniforms {
     throughput_cutoff: f32,
 }
 
-// An object's conductor (flag 1) or none: exact Fresnel needs eta and k, not the GPU
-// material's F_p.
-struct ObjectConductor {
+// What a mesh's surface is, one per mesh in mesh order: a conductor (eta.w = 1; exact Fresnel
+// needs eta and k, not the GPU material's F_p) or, for a refractor, the media on its two sides.
+struct TraceSurface {
     eta: vec4<f32>,
     k: vec4<f32>,
+    // The refractor medium's absorption coefficient per world unit (xyz).
+    absorption: vec4<f32>,
+    // Index inside, index of the medium around it, the refractor around it (NO_MEDIUM: air).
+    ior: f32,
+    outside_ior: f32,
+    within: u32,
+    _padding: u32,
 }
+
+// The medium of air (no refractor).
+const NO_MEDIUM: u32 = 0xffffffffu;
 
 @group(0) @binding(1) var<uniform> trace: TraceUniforms;
 @group(0) @binding(2) var<storage, read> trace_materials: array<Material>;
-@group(0) @binding(3) var<storage, read> trace_conductors: array<ObjectConductor>;
+@group(0) @binding(3) var<storage, read> trace_surfaces: array<TraceSurface>;
 @group(0) @binding(5) var<storage, read> trace_triangles: array<TraceTriangle>;
 @group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
 // RECORD_WORDS words per pixel: p1, n1, t1, p2, n2, t2, t_out, p_geom (xyz, as f32 bits), then
-// a mask (bit k: vector k exists; bit 8 covered, 9 tir, 10 tir_first_exit), then interfaces.
+// a mask (bit k: vector k exists; bit 8 covered, 9 tir, 10 tir_first_exit), then interfaces,
+// then the refractors met (bit i: refractor i).
 @group(0) @binding(7) var<storage, read_write> out_record: array<u32>;
-const RECORD_WORDS: u32 = 26u;
+const RECORD_WORDS: u32 = 27u;
 
 // refract_trace's OFFSET: secondary rays start ε (1 + max|pᵢ|) off the surface.
 const TRACE_OFFSET: f32 = 4e-6;
@@ -71,6 +84,8 @@ const TRACE_OFFSET: f32 = 4e-6;
 // A hit with what the path needs (refract_geometry's MeshBvh::hit_details).
 struct SceneHit {
     found: bool,
+    // The ray parameter of the hit (the distance: directions are unit).
+    t: f32,
     p: vec3<f32>,
     mesh: u32,
     geometric: vec3<f32>,
@@ -95,6 +110,7 @@ fn scene_hit(origin: vec3<f32>, dir: vec3<f32>) -> SceneHit {
     let b1 = dot(cross(p - tri.v0.xyz, e2), face) * inv_area2;
     let b2 = dot(cross(e1, p - tri.v0.xyz), face) * inv_area2;
     let b0 = 1.0 - b1 - b2;
+    h.t = closest.t;
     h.p = p;
     h.mesh = u32(attributes.n0.w);
     h.geometric = normalize_or_zero(face);
@@ -122,19 +138,33 @@ fn continue_origin(h: SceneHit, dir: vec3<f32>) -> vec3<f32> {
 
 // Whether mesh `mesh` is a conductor, and its (eta, k).
 fn conductor_of(mesh: u32) -> array<vec4<f32>, 3> {
-    if mesh == 0u {
-        return array<vec4<f32>, 3>(
-            vec4<f32>(f32(trace.refractor_conductor)),
-            trace.refractor_eta,
-            trace.refractor_k,
-        );
-    }
-    let c = trace_conductors[mesh - 1u];
+    let c = trace_surfaces[mesh];
     return array<vec4<f32>, 3>(vec4<f32>(c.eta.w), c.eta, c.k);
 }
 
+// Tracer's beer_lambert: exp(−σ s) per channel of the medium `medium`'s absorption (1 in air or
+// a clear medium; a clear channel keeps everything even over an infinite segment).
+fn absorbed(medium: u32, length: f32) -> vec3<f32> {
+    if medium == NO_MEDIUM {
+        return vec3<f32>(1.0);
+    }
+    let sigma = trace_surfaces[medium].absorption;
+    if sigma.w == 0.0 {
+        return vec3<f32>(1.0);
+    }
+    return select(exp(-sigma.xyz * length), vec3<f32>(1.0), sigma.xyz == vec3<f32>(0.0));
+}
+
+// Tracer::medium_after: the medium after crossing an interface of refractor `refractor`.
+fn medium_after(refractor: u32, entering: bool) -> u32 {
+    if entering {
+        return refractor;
+    }
+    return trace_surfaces[refractor].within;
+}
+
 fn shade_object(mesh: u32, h: SceneHit) -> vec3<f32> {
-    let m = trace_materials[mesh - 1u];
+    let m = trace_materials[mesh - trace.refractor_count];
     var uv = h.uv;
     if m.world_uv != 0u {
         uv = h.p.xz;
@@ -157,6 +187,7 @@ struct PathOut {
     tir: bool,
     tir_first_exit: bool,
     interfaces: u32,
+    refractors_met: u32,
     // Closest-hit queries traced (the frame's ray count).
     rays: u32,
 }
@@ -172,6 +203,7 @@ struct Interface {
 }
 
 fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
+    let surface = trace_surfaces[h.mesh];
     var i: Interface;
     if trace.interface_rule == 0u {
         i.entering = -dot(dir, h.shading) >= 0.0;
@@ -180,7 +212,7 @@ fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
         i.entering = dot(dir, h.geometric) < 0.0;
         i.facing = face_forward_shading_normal(select(-h.shading, h.shading, i.entering), dir);
     }
-    i.eta = select(trace.ior, 1.0 / trace.ior, i.entering);
+    i.eta = select(surface.ior / surface.outside_ior, surface.outside_ior / surface.ior, i.entering);
     i.transmitted_radiance = 1.0;
     if trace.interface_rule == 0u {
         i.transmitted_radiance = i.eta * i.eta;
@@ -195,9 +227,11 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
     var dir = dir_in;
     var depth = 0u;
     var scale = vec3<f32>(1.0);
+    var medium = NO_MEDIUM;
     loop {
         let h = scene_hit(origin, dir);
         out.rays += 1u;
+        scale *= absorbed(medium, select(BVH_INF, h.t, h.found));
         if !h.found {
             if out.p1.w != 0.0 {
                 out.t_out = vec4<f32>(dir, 1.0);
@@ -224,16 +258,19 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
                 fresnel_conductor(cos_i, conductor[1].y, conductor[2].y),
                 fresnel_conductor(cos_i, conductor[1].z, conductor[2].z),
             );
-            if out.p1.w == 0.0 && h.mesh == 0u {
-                out.p1 = vec4<f32>(h.p, 1.0);
-                out.n1 = vec4<f32>(h.shading, 1.0);
-                out.t1 = vec4<f32>(next, 1.0);
+            if h.mesh < trace.refractor_count {
+                out.refractors_met |= 1u << h.mesh;
+                if out.p1.w == 0.0 {
+                    out.p1 = vec4<f32>(h.p, 1.0);
+                    out.n1 = vec4<f32>(h.shading, 1.0);
+                    out.t1 = vec4<f32>(next, 1.0);
+                }
             }
             origin = continue_origin(h, next);
             dir = next;
             continue;
         }
-        if h.mesh != 0u {
+        if h.mesh >= trace.refractor_count {
             if out.p1.w != 0.0 {
                 out.t_out = vec4<f32>(dir, 1.0);
                 out.p_geom = vec4<f32>(h.p, 1.0);
@@ -258,6 +295,7 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
             next = normalize(reflect_dir(dir, facing));
         } else {
             scale *= transmitted;
+            medium = medium_after(h.mesh, entering);
             next = normalize(refracted);
         }
         if out.p1.w == 0.0 {
@@ -270,6 +308,7 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
             out.t2 = vec4<f32>(next, 1.0);
             out.tir_first_exit = tir;
         }
+        out.refractors_met |= 1u << h.mesh;
         out.tir = out.tir || tir;
         out.interfaces += select(1u, 0u, tir);
         origin = continue_origin(h, next);
@@ -312,6 +351,8 @@ struct Branch {
     dir: vec3<f32>,
     throughput: f32,
     weight: vec3<f32>,
+    // The medium it travels in (NO_MEDIUM: air).
+    medium: u32,
 }
 
 // Pending branches never outnumber the depth limit (their depths strictly increase from the
@@ -327,11 +368,12 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
     var top = 0u;
     var radiance = vec3<f32>(0.0);
     var rays = 0u;
-    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0));
+    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0), NO_MEDIUM);
     let cutoff = trace.throughput_cutoff;
     loop {
         let h = scene_hit(b.origin, b.dir);
         rays += 1u;
+        b.weight *= absorbed(b.medium, select(BVH_INF, h.t, h.found));
         // Whether the branch ended here (its contribution, if any, added).
         var ended = true;
         if !h.found {
@@ -354,11 +396,11 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
                     );
                     let throughput = b.throughput * max(max(reflectance.x, reflectance.y), reflectance.z);
                     if throughput > cutoff {
-                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance);
+                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance, b.medium);
                         ended = false;
                     }
                 }
-            } else if h.mesh != 0u {
+            } else if h.mesh >= trace.refractor_count {
                 radiance += b.weight * shade_object(h.mesh, h);
             } else if b.depth < trace.max_depth {
                 let i = interface_at(b.dir, h);
@@ -373,7 +415,7 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
                 let depth = b.depth + 1u;
                 if reflected {
                     let next = normalize(reflect_dir(b.dir, i.facing));
-                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance);
+                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance, b.medium);
                     // (The stack cannot be full: see FULL_STACK.)
                     if transmitted && top < FULL_STACK {
                         stack[top] = branch;
@@ -391,6 +433,7 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
                         next,
                         b.throughput * transmittance,
                         b.weight * (transmittance * i.transmitted_radiance),
+                        medium_after(h.mesh, i.entering),
                     );
                     ended = false;
                 }
@@ -468,4 +511,5 @@ fn write_record(i: u32, path: PathOut) {
     mask |= select(0u, 1u << 10u, path.tir_first_exit);
     out_record[r + 24u] = mask;
     out_record[r + 25u] = path.interfaces;
+    out_record[r + 26u] = path.refractors_met;
 }

@@ -45,6 +45,9 @@ pub enum Aov {
     ExitNormalSource,
     /// Interfaces crossed by refraction (TIR bounces not counted).
     Interfaces,
+    /// The refractors the path met, as a bit mask: bit `i` for refractor `i` of
+    /// `Scene::refractors` (0: none).
+    RefractorsMet,
     /// Total internal reflection anywhere on the path.
     Tir,
     /// Total internal reflection at the first exit.
@@ -100,7 +103,7 @@ pub enum AovKind {
 
 impl Aov {
     /// Every AOV, in EXR channel order.
-    pub const ALL: [Aov; 23] = [
+    pub const ALL: [Aov; 24] = [
         Aov::Covered,
         Aov::P1,
         Aov::N1,
@@ -113,6 +116,7 @@ impl Aov {
         Aov::NgTexel,
         Aov::ExitNormalSource,
         Aov::Interfaces,
+        Aov::RefractorsMet,
         Aov::Iterations,
         Aov::Tir,
         Aov::TirFirstExit,
@@ -143,6 +147,7 @@ impl Aov {
             Aov::Converged => "converged",
             Aov::ExitNormalSource => "n2_source",
             Aov::Interfaces => "interfaces",
+            Aov::RefractorsMet => "refractors_met",
             Aov::Tir => "tir",
             Aov::TirFirstExit => "tir_first_exit",
             Aov::HitLayer => "hit_layer",
@@ -169,6 +174,7 @@ impl Aov {
             | Aov::NgTexel => AovKind::Vec3,
             Aov::ExitNormalSource
             | Aov::Interfaces
+            | Aov::RefractorsMet
             | Aov::Iterations
             | Aov::HitLayer
             | Aov::LinearSteps

@@ -5,7 +5,7 @@
 //! definition. It links no file format, no TOML and no FLIP: scene files, built-in scenes,
 //! image writers and metrics live in refract-eval, above it.
 //!
-//! * [`scene`]: [`Scene`]: camera, refractor (mesh, BVH, `d_N`, IOR, each built once), opaque
+//! * [`scene`]: [`Scene`]: camera, refractors (mesh, BVH, `d_N`, IOR, absorption, each built once), opaque
 //!   objects (mesh, BVH, material), light, environment.
 //! * [`environment`]: lat-long maps, constant and procedural environments, looked up with the
 //!   backends' or the exact `atan2`.
@@ -36,6 +36,6 @@ pub use registry::{
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{
-    Albedo, COLOR_CHART, CONDUCTORS, Conductor, DirectionalLight, Material, Object, Refractor,
-    Scene, SceneMesh, SurfaceTexel, conductor_name,
+    Albedo, Attenuation, COLOR_CHART, CONDUCTORS, Conductor, DirectionalLight, MAX_REFRACTORS,
+    Material, Object, Refractor, Scene, SceneMesh, SurfaceTexel, conductor_name,
 };

@@ -1,6 +1,16 @@
-//! What every renderer consumes: a camera, one refractor (mesh, BVH, `d_N`, IOR), nearby
-//! opaque objects (mesh, BVH, material), a directional light and a distant environment. Built
-//! once, with one BVH per mesh; shared by the backends and the reference through `Arc<Scene>`.
+//! What every renderer consumes: a camera, one or more refractors (mesh, BVH, `d_N`, IOR,
+//! absorption), nearby opaque objects (mesh, BVH, material), a directional light and a distant
+//! environment. Built once, with one BVH per mesh; shared by the backends and the reference
+//! through `Arc<Scene>`.
+//!
+//! Media (issue 49). Every refractor is a closed surface filled with its own medium (index
+//! [`Refractor::ior`], absorption [`Refractor::attenuation`]); a refractor that lies inside
+//! another is immersed in it ([`Refractor::within`]), every other one in air (index 1, no
+//! absorption). An interface of refractor `r` therefore separates `r`'s medium from the medium
+//! of [`Scene::outside_ior`]`(r)`: exactly Mitsuba 3's `dielectric` with `int_ior = ior` and
+//! `ext_ior` the enclosing medium's index, and its `homogeneous` interior medium with
+//! `sigma_t = ` [`Attenuation::coefficient`] and albedo 0. Surfaces never touch: water in a
+//! glass is a water surface inside the glass's, not one shared wall.
 
 use glam::{Vec2, Vec3};
 use refract_core::CameraDesc;
@@ -26,6 +36,67 @@ pub struct Refractor {
     ior: f32,
     conductor: Option<Conductor>,
     volume_thickness: Option<f32>,
+    attenuation: Option<Attenuation>,
+    within: Option<usize>,
+}
+
+/// The most refractors a scene holds (the GPU reference keeps one bit per refractor met).
+pub const MAX_REFRACTORS: usize = 32;
+
+/// Beer-Lambert absorption of a refractor's medium, as glTF `KHR_materials_volume` defines
+/// it: white light that travels [`Self::distance`] through the medium keeps [`Self::color`] of
+/// itself, so radiance after a segment of length `s` is scaled by
+/// `exp(−σ s)`, `σ = −ln(color) / distance` per channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attenuation {
+    /// `attenuationColor`: the fraction per channel left after [`Self::distance`], each in
+    /// `(0, 1]` ([`ATTENUATION_COLOR_EXPECTED`]).
+    pub color: Vec3,
+    /// `attenuationDistance` in world units, finite and > 0.
+    pub distance: f32,
+}
+
+/// The range of [`Attenuation::color`]'s components, as an error message says it.
+pub const ATTENUATION_COLOR_EXPECTED: &str = "fractions in (0, 1] (1: that channel is not absorbed)";
+/// The range of [`Attenuation::distance`], as an error message says it.
+pub const ATTENUATION_DISTANCE_EXPECTED: &str = "a finite distance > 0 in world units";
+
+impl Attenuation {
+    /// An absorption, or an error naming the field out of range.
+    pub fn new(color: Vec3, distance: f32) -> Result<Self, SceneError> {
+        if !color.cmpgt(Vec3::ZERO).all() || !color.cmple(Vec3::ONE).all() {
+            return Err(SceneError::field(
+                "refractor",
+                "attenuation_color",
+                color,
+                ATTENUATION_COLOR_EXPECTED,
+            ));
+        }
+        if !(distance.is_finite() && distance > 0.0) {
+            return Err(SceneError::field(
+                "refractor",
+                "attenuation_distance",
+                distance,
+                ATTENUATION_DISTANCE_EXPECTED,
+            ));
+        }
+        Ok(Self { color, distance })
+    }
+
+    /// The absorption coefficient per channel, `σ = −ln(color) / distance` (per world unit).
+    pub fn coefficient(&self) -> Vec3 {
+        Vec3::new(-self.color.x.ln(), -self.color.y.ln(), -self.color.z.ln()) / self.distance
+    }
+
+    /// The fraction of radiance left after `length` world units: `exp(−σ length)`.
+    pub fn transmittance(&self, length: f32) -> Vec3 {
+        let sigma = self.coefficient();
+        Vec3::new(
+            (-sigma.x * length).exp(),
+            (-sigma.y * length).exp(),
+            (-sigma.z * length).exp(),
+        )
+    }
 }
 
 pub use refract_core::optics::{IOR_EXPECTED, IOR_RANGE, MAX_IOR, MIN_IOR, ior_in_range};
@@ -44,6 +115,8 @@ impl Refractor {
             ior,
             conductor: None,
             volume_thickness: None,
+            attenuation: None,
+            within: None,
         })
     }
 
@@ -79,6 +152,8 @@ impl Refractor {
             ior,
             conductor: None,
             volume_thickness: None,
+            attenuation: None,
+            within: None,
         })
     }
 
@@ -173,6 +248,22 @@ impl Refractor {
         check_ior(ior)?;
         self.ior = ior;
         Ok(())
+    }
+
+    /// The absorption of its medium (`None`: clear).
+    pub fn attenuation(&self) -> Option<Attenuation> {
+        self.attenuation
+    }
+
+    /// Sets [`Self::attenuation`].
+    pub fn set_attenuation(&mut self, attenuation: Option<Attenuation>) {
+        self.attenuation = attenuation;
+    }
+
+    /// The refractor (its index in [`Scene::refractors`]) whose medium surrounds this one, or
+    /// `None` for air; set by [`Scene::nest_refractors`].
+    pub fn within(&self) -> Option<usize> {
+        self.within
     }
 
     /// The diameter of the mesh's bounding sphere (the unit of the `|P~2 − P2|` metric).
@@ -354,6 +445,44 @@ fn planar(mesh: &Mesh, tolerance: f32) -> Option<Plane> {
     flat.then(|| Plane::through(a, n))
 }
 
+/// Where the probed vertices of one mesh lie with respect to a closed refractor.
+enum Containment {
+    Outside,
+    Inside,
+    Crossing,
+}
+
+/// How many vertices [`containment`] probes.
+const CONTAINMENT_PROBES: usize = 16;
+
+/// Ray parity at up to [`CONTAINMENT_PROBES`] vertices of `mesh` spread over its vertex list,
+/// along a fixed direction no axis-aligned mesh is parallel to.
+fn containment(mesh: &Mesh, other: &Refractor) -> Containment {
+    let dir = Vec3::new(0.284_169, 0.876_221, 0.389_284).normalize();
+    let n = mesh.positions.len();
+    let step = (n / CONTAINMENT_PROBES).max(1);
+    let mut hits = Vec::new();
+    let (mut inside, mut outside) = (0, 0);
+    for p in mesh.positions.iter().step_by(step).take(CONTAINMENT_PROBES) {
+        hits.clear();
+        let ray = refract_core::Ray {
+            origin: *p,
+            dir,
+        };
+        other.bvh().all_hits(&ray, 0.0, f32::INFINITY, &mut hits);
+        if hits.len() % 2 == 1 {
+            inside += 1;
+        } else {
+            outside += 1;
+        }
+    }
+    match (inside, outside) {
+        (0, _) => Containment::Outside,
+        (_, 0) => Containment::Inside,
+        _ => Containment::Crossing,
+    }
+}
+
 /// Which mesh of a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SceneMesh {
@@ -394,8 +523,12 @@ pub struct Scene {
     pub name: String,
     /// The scene's camera; each run sets its resolution (`width`, `height`).
     pub camera: CameraDesc,
-    /// The refractor.
+    /// The first refractor: the one the one-refractor methods (every family but the
+    /// reference) refract through; refractor 0 of [`Self::refractors`].
     pub refractor: Refractor,
+    /// The refractors after the first: entry `k` is refractor `k + 1` of [`Self::refractors`].
+    /// [`Self::nest_refractors`] must run after it changes.
+    pub other_refractors: Vec<Refractor>,
     /// Opaque objects near it.
     pub objects: Vec<Object>,
     /// Distant lighting.
@@ -413,11 +546,120 @@ impl Scene {
             name: name.into(),
             camera: CameraDesc::default(),
             refractor,
+            other_refractors: Vec::new(),
             objects: Vec::new(),
             environment,
             environment_file: None,
             light: DirectionalLight::default(),
         }
+    }
+
+    /// Several refractors in an environment, seen by the default camera, nested by
+    /// [`Self::nest_refractors`]; an error for no refractor, more than [`MAX_REFRACTORS`] or
+    /// surfaces that cross.
+    pub fn with_refractors(
+        name: impl Into<String>,
+        refractors: Vec<Refractor>,
+        environment: Environment,
+    ) -> Result<Self, SceneError> {
+        let name = name.into();
+        let mut refractors = refractors.into_iter();
+        let Some(first) = refractors.next() else {
+            return Err(SceneError::field(
+                format!("scene {name}"),
+                "refractors",
+                0,
+                "at least one refractor",
+            ));
+        };
+        let mut scene = Self::new(name, first, environment);
+        scene.other_refractors = refractors.collect();
+        scene.nest_refractors()?;
+        Ok(scene)
+    }
+
+    /// Every refractor, the first ([`Self::refractor`]) first.
+    pub fn refractors(&self) -> impl Iterator<Item = &Refractor> + Clone {
+        core::iter::once(&self.refractor).chain(&self.other_refractors)
+    }
+
+    /// How many refractors the scene has (at least 1).
+    pub fn refractor_count(&self) -> usize {
+        1 + self.other_refractors.len()
+    }
+
+    /// Refractor `index` of [`Self::refractors`], or `None` out of range.
+    pub fn refractor_at(&self, index: usize) -> Option<&Refractor> {
+        match index {
+            0 => Some(&self.refractor),
+            k => self.other_refractors.get(k - 1),
+        }
+    }
+
+    /// The index of the medium that surrounds refractor `index`: the index of the refractor it
+    /// lies within, or 1 (air) for one in air or an index out of range.
+    pub fn outside_ior(&self, index: usize) -> f32 {
+        self.refractor_at(index)
+            .and_then(Refractor::within)
+            .and_then(|outer| self.refractor_at(outer))
+            .map_or(1.0, Refractor::ior)
+    }
+
+    /// Finds which refractor each glass refractor lies within (the innermost one that contains
+    /// it; conductors hold no medium and are skipped) and stores it ([`Refractor::within`]).
+    /// Containment is decided by ray parity from a few vertices spread over the mesh: a vertex is
+    /// inside a closed mesh when a ray from it crosses the mesh an odd number of times.
+    /// Errors: more than [`MAX_REFRACTORS`] refractors, or two refractors whose surfaces cross
+    /// (some of the probed vertices inside the other, some outside), which no medium
+    /// assignment describes. A scene with one refractor is left as it is.
+    pub fn nest_refractors(&mut self) -> Result<(), SceneError> {
+        let count = self.refractor_count();
+        if count > MAX_REFRACTORS {
+            return Err(SceneError::field(
+                format!("scene {}", self.name),
+                "refractors",
+                count,
+                format!("at most {MAX_REFRACTORS} refractors"),
+            ));
+        }
+        let mut within = vec![None; count];
+        if count > 1 {
+            let refractors: Vec<&Refractor> = self.refractors().collect();
+            for (inner, refractor) in refractors.iter().enumerate() {
+                if !refractor.is_dielectric() {
+                    continue;
+                }
+                let mut best: Option<(usize, f32)> = None;
+                for (outer, other) in refractors.iter().enumerate() {
+                    if outer == inner || !other.is_dielectric() {
+                        continue;
+                    }
+                    match containment(refractor.mesh(), other) {
+                        Containment::Outside => {}
+                        Containment::Inside => {
+                            let radius = other.mesh().bounding_sphere().radius;
+                            if best.is_none_or(|(_, r)| radius < r) {
+                                best = Some((outer, radius));
+                            }
+                        }
+                        Containment::Crossing => {
+                            return Err(SceneError::field(
+                                format!("scene {}", self.name),
+                                format!("refractor {inner}"),
+                                format!("a surface crossing refractor {outer}'s"),
+                                "refractors that do not intersect: one inside another (immersed in it) or apart",
+                            ));
+                        }
+                    }
+                }
+                within[inner] = best.map(|(outer, _)| outer);
+            }
+        }
+        self.refractor.within = within[0];
+        for (refractor, within) in self.other_refractors.iter_mut().zip(&within[1..]) {
+            refractor.within = *within;
+        }
+        Ok(())
     }
 
     /// The mesh `which`, or `None` for an object index out of range.

@@ -1,8 +1,10 @@
-//! Exact recursive ray tracing through the refractor: Snell at every interface with the same
-//! interpolated shading normals as the approximate methods, total internal reflection as
-//! internal reflection, conductors (mirrors, metals: the refractor or opaque objects) as
-//! reflection weighted by the exact conductor Fresnel reflectance per channel, a depth limit on
-//! specular interactions.
+//! Exact recursive ray tracing through any number of refractors: Snell at every interface with
+//! the same interpolated shading normals as the approximate methods, between the refractor's
+//! medium and the one around it (air, or the refractor it lies within: see
+//! [`refract_scene::scene`]), total internal reflection as internal reflection, Beer-Lambert
+//! absorption along every segment inside an absorbing medium, conductors (mirrors, metals:
+//! refractors or opaque objects) as reflection weighted by the exact conductor Fresnel
+//! reflectance per channel, a depth limit on specular interactions.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -36,6 +38,8 @@ pub struct PathRecord {
     pub t_out: Vec3,
     /// Interfaces crossed by refraction (TIR bounces not counted).
     pub interfaces: u32,
+    /// The refractors the path met (bit `i`: refractor `i` of `Scene::refractors`).
+    pub refractors_met: u32,
     /// Total internal reflection anywhere on the path.
     pub tir: bool,
     /// Total internal reflection at the first exit `P2`.
@@ -55,6 +59,7 @@ impl PathRecord {
         t2: Vec3::NAN,
         t_out: Vec3::NAN,
         interfaces: 0,
+        refractors_met: 0,
         tir: false,
         tir_first_exit: false,
         p_geom: Vec3::NAN,
@@ -69,8 +74,38 @@ impl PathRecord {
 /// Which surface a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Surface {
-    Refractor,
+    /// Refractor `i` of `Scene::refractors`.
+    Refractor(usize),
     Object(usize),
+}
+
+/// What the tracer needs of refractor `i`'s two sides.
+#[derive(Clone, Copy, Debug)]
+struct Medium {
+    /// Index inside.
+    ior: f32,
+    /// Index of the medium around it.
+    outside_ior: f32,
+    /// The refractor around it (`None`: air).
+    within: Option<usize>,
+    /// Its absorption coefficient per world unit (`None`: clear).
+    absorption: Option<Vec3>,
+}
+
+/// Bit `i` of [`PathRecord::refractors_met`] (none past the 32nd refractor; scenes hold at most
+/// `refract_scene::MAX_REFRACTORS`).
+fn refractor_bit(i: usize) -> u32 {
+    u32::try_from(i)
+        .ok()
+        .and_then(|i| 1u32.checked_shl(i))
+        .unwrap_or(0)
+}
+
+/// `exp(−σ s)` per channel; a clear channel (`σ = 0`) keeps everything even over an infinite
+/// segment (a ray that leaves a mesh that is not closed).
+fn beer_lambert(sigma: Vec3, length: f32) -> Vec3 {
+    let keep = |s: f32| if s == 0.0 { 1.0 } else { (-s * length).exp() };
+    Vec3::new(keep(sigma.x), keep(sigma.y), keep(sigma.z))
 }
 
 /// The refraction geometry at a refractor hit.
@@ -89,13 +124,18 @@ struct Interface {
 }
 
 impl Interface {
-    fn at(dir: Vec3, hit: &Hit, ior: f32, rule: InterfaceRule) -> Self {
+    /// The interface of a refractor of index `ior` in a medium of index `outside_ior`.
+    fn at(dir: Vec3, hit: &Hit, ior: f32, outside_ior: f32, rule: InterfaceRule) -> Self {
         match rule {
             InterfaceRule::ShadingNormal => {
                 // Mitsuba 3's dielectric: the side from the shading frame, cos θi = −d·Ns ≥ 0
                 // outside; the oriented shading normal faces the ray by construction.
                 let entering = -dir.dot(hit.shading_normal) >= 0.0;
-                let eta = if entering { 1.0 / ior } else { ior };
+                let eta = if entering {
+                    outside_ior / ior
+                } else {
+                    ior / outside_ior
+                };
                 Self {
                     entering,
                     facing: if entering {
@@ -117,7 +157,11 @@ impl Interface {
                 Self {
                     entering,
                     facing: face_forward_shading_normal(oriented, dir),
-                    eta: if entering { 1.0 / ior } else { ior },
+                    eta: if entering {
+                        outside_ior / ior
+                    } else {
+                        ior / outside_ior
+                    },
                     transmitted_radiance: 1.0,
                 }
             }
@@ -129,6 +173,8 @@ impl Interface {
 pub struct Tracer<'a> {
     scene: &'a Scene,
     settings: TraceSettings,
+    /// Per refractor, in `Scene::refractors` order.
+    media: Vec<Medium>,
 }
 
 /// Secondary rays start this far off the surface, relative to the hit point's magnitude:
@@ -140,17 +186,52 @@ const OFFSET: f32 = 4e-6;
 impl<'a> Tracer<'a> {
     /// A tracer of `scene`.
     pub fn new(scene: &'a Scene, settings: TraceSettings) -> Self {
-        Self { scene, settings }
+        let media = scene
+            .refractors()
+            .enumerate()
+            .map(|(i, r)| Medium {
+                ior: r.ior(),
+                outside_ior: scene.outside_ior(i),
+                within: r.within(),
+                absorption: r.attenuation().map(|a| a.coefficient()),
+            })
+            .collect();
+        Self {
+            scene,
+            settings,
+            media,
+        }
+    }
+
+    /// The absorption of the medium a ray is in (`None`: air or a clear medium).
+    fn absorption(&self, medium: Option<usize>) -> Option<Vec3> {
+        medium.and_then(|m| self.media.get(m)).and_then(|m| m.absorption)
+    }
+
+    /// The medium a ray is in after crossing an interface of refractor `refractor`.
+    fn medium_after(&self, refractor: usize, entering: bool) -> Option<usize> {
+        if entering {
+            Some(refractor)
+        } else {
+            self.media[refractor].within
+        }
+    }
+
+    /// The interface of refractor `refractor` at `hit`.
+    fn interface(&self, refractor: usize, dir: Vec3, hit: &Hit) -> Interface {
+        let m = &self.media[refractor];
+        Interface::at(dir, hit, m.ior, m.outside_ior, self.settings.interface)
     }
 
     fn closest_hit(&self, ray: &Ray, rays: &mut u64) -> Option<(Surface, Hit)> {
         *rays += 1;
-        let mut best = self
-            .scene
-            .refractor
-            .bvh()
-            .closest_hit(ray, 0.0, f32::INFINITY)
-            .map(|h| (Surface::Refractor, h));
+        let mut best: Option<(Surface, Hit)> = None;
+        for (i, refractor) in self.scene.refractors().enumerate() {
+            let t_max = best.map_or(f32::INFINITY, |(_, h)| h.t);
+            if let Some(h) = refractor.bvh().closest_hit(ray, 0.0, t_max) {
+                best = Some((Surface::Refractor(i), h));
+            }
+        }
         for (i, object) in self.scene.objects.iter().enumerate() {
             let t_max = best.map_or(f32::INFINITY, |(_, h)| h.t);
             if let Some(h) = object.bvh().closest_hit(ray, 0.0, t_max) {
@@ -178,7 +259,7 @@ impl<'a> Tracer<'a> {
     /// The conductor at a hit, if the surface is one.
     fn conductor(&self, surface: Surface) -> Option<Conductor> {
         match surface {
-            Surface::Refractor => self.scene.refractor.conductor(),
+            Surface::Refractor(i) => self.scene.refractor_at(i).and_then(|r| r.conductor()),
             Surface::Object(k) => self.scene.objects[k].conductor(),
         }
     }
@@ -205,14 +286,19 @@ impl<'a> Tracer<'a> {
     }
 
     /// Follows the refracted path of `ray` (TIR reflects), recording the ground truth of
-    /// [`PathRecord`]; returns the radiance and the record.
+    /// [`PathRecord`]; returns the radiance and the record. The camera is in air.
     pub fn transmission_path(&self, ray: Ray, rays: &mut u64) -> (Vec3, PathRecord) {
         let mut aov = PathRecord::EMPTY;
         let mut ray = ray;
         let mut depth = 0;
         let mut scale = Vec3::ONE;
+        let mut medium: Option<usize> = None;
         loop {
-            let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
+            let hit = self.closest_hit(&ray, rays);
+            if let Some(sigma) = self.absorption(medium) {
+                scale *= beer_lambert(sigma, hit.map_or(f32::INFINITY, |(_, h)| h.t));
+            }
+            let Some((surface, hit)) = hit else {
                 if aov.covers_refractor() {
                     aov.t_out = ray.dir;
                 }
@@ -226,86 +312,111 @@ impl<'a> Tracer<'a> {
                 depth += 1;
                 let (next, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor);
                 scale *= reflectance;
-                if !aov.covers_refractor() && surface == Surface::Refractor {
-                    aov.p1 = p;
-                    aov.n1 = hit.shading_normal;
-                    aov.t1 = next;
+                if let Surface::Refractor(i) = surface {
+                    aov.refractors_met |= refractor_bit(i);
+                    if !aov.covers_refractor() {
+                        aov.p1 = p;
+                        aov.n1 = hit.shading_normal;
+                        aov.t1 = next;
+                    }
                 }
                 ray = self.continue_ray(&ray, &hit, next);
                 continue;
             }
-            let Surface::Object(index) = surface else {
-                if depth == self.settings.max_depth {
-                    return (Vec3::ZERO, aov);
+            let refractor = match surface {
+                Surface::Refractor(i) => i,
+                Surface::Object(index) => {
+                    if aov.covers_refractor() {
+                        aov.t_out = ray.dir;
+                        aov.p_geom = p;
+                    }
+                    return (scale * self.shade_object(index, &ray, &hit), aov);
                 }
-                depth += 1;
-                let interface = Interface::at(
-                    ray.dir,
-                    &hit,
-                    self.scene.refractor.ior(),
-                    self.settings.interface,
-                );
-                let refracted = refract(ray.dir, interface.facing, interface.eta);
-                let tir = refracted == Vec3::ZERO;
-                let next = if tir {
-                    reflect(ray.dir, interface.facing)
-                } else {
-                    scale *= interface.transmitted_radiance;
-                    refracted
-                }
-                .normalize();
-                if !aov.covers_refractor() {
-                    aov.p1 = p;
-                    aov.n1 = hit.shading_normal;
-                    aov.t1 = next;
-                } else if aov.p2.is_nan() && !interface.entering {
-                    aov.p2 = p;
-                    aov.n2 = hit.shading_normal;
-                    aov.t2 = next;
-                    aov.tir_first_exit = tir;
-                }
-                aov.tir |= tir;
-                aov.interfaces += u32::from(!tir);
-                ray = self.continue_ray(&ray, &hit, next);
-                continue;
             };
-            if aov.covers_refractor() {
-                aov.t_out = ray.dir;
-                aov.p_geom = p;
+            if depth == self.settings.max_depth {
+                return (Vec3::ZERO, aov);
             }
-            return (scale * self.shade_object(index, &ray, &hit), aov);
+            depth += 1;
+            let interface = self.interface(refractor, ray.dir, &hit);
+            let refracted = refract(ray.dir, interface.facing, interface.eta);
+            let tir = refracted == Vec3::ZERO;
+            let next = if tir {
+                reflect(ray.dir, interface.facing)
+            } else {
+                scale *= interface.transmitted_radiance;
+                medium = self.medium_after(refractor, interface.entering);
+                refracted
+            }
+            .normalize();
+            if !aov.covers_refractor() {
+                aov.p1 = p;
+                aov.n1 = hit.shading_normal;
+                aov.t1 = next;
+            } else if aov.p2.is_nan() && !interface.entering {
+                aov.p2 = p;
+                aov.n2 = hit.shading_normal;
+                aov.t2 = next;
+                aov.tir_first_exit = tir;
+            }
+            aov.refractors_met |= refractor_bit(refractor);
+            aov.tir |= tir;
+            aov.interfaces += u32::from(!tir);
+            ray = self.continue_ray(&ray, &hit, next);
         }
     }
 
-    /// Radiance along `ray` with Fresnel splitting at every refractor interface ([`TraceMode::Full`]).
-    pub fn full_radiance(&self, ray: Ray, depth: u32, throughput: f32, rays: &mut u64) -> Vec3 {
-        let Some((surface, hit)) = self.closest_hit(&ray, rays) else {
+    /// Radiance along `ray`, which travels in `medium` (`None`: air), with Fresnel splitting
+    /// at every refractor interface ([`TraceMode::Full`]).
+    pub fn full_radiance(
+        &self,
+        ray: Ray,
+        medium: Option<usize>,
+        depth: u32,
+        throughput: f32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let hit = self.closest_hit(&ray, rays);
+        let absorbed = self
+            .absorption(medium)
+            .map(|sigma| beer_lambert(sigma, hit.map_or(f32::INFINITY, |(_, h)| h.t)));
+        let radiance = self.full_radiance_after(&ray, hit, medium, depth, throughput, rays);
+        absorbed.map_or(radiance, |a| a * radiance)
+    }
+
+    /// [`Self::full_radiance`] from the closest hit `hit` of `ray` on, before the absorption
+    /// along `ray`.
+    fn full_radiance_after(
+        &self,
+        ray: &Ray,
+        hit: Option<(Surface, Hit)>,
+        medium: Option<usize>,
+        depth: u32,
+        throughput: f32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let Some((surface, hit)) = hit else {
             return self.scene.environment.radiance_exact(ray.dir);
         };
         if let Some(conductor) = self.conductor(surface) {
             if depth >= self.settings.max_depth {
                 return Vec3::ZERO;
             }
-            let (dir, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor);
-            let next = self.continue_ray(&ray, &hit, dir);
+            let (dir, reflectance) = Self::conductor_bounce(ray, &hit, &conductor);
+            let next = self.continue_ray(ray, &hit, dir);
             let weight = throughput * reflectance.max_element();
             if weight <= self.settings.throughput_cutoff {
                 return Vec3::ZERO;
             }
-            return reflectance * self.full_radiance(next, depth + 1, weight, rays);
+            return reflectance * self.full_radiance(next, medium, depth + 1, weight, rays);
         }
-        if let Surface::Object(index) = surface {
-            return self.shade_object(index, &ray, &hit);
-        }
+        let refractor = match surface {
+            Surface::Refractor(i) => i,
+            Surface::Object(index) => return self.shade_object(index, ray, &hit),
+        };
         if depth >= self.settings.max_depth {
             return Vec3::ZERO;
         }
-        let interface = Interface::at(
-            ray.dir,
-            &hit,
-            self.scene.refractor.ior(),
-            self.settings.interface,
-        );
+        let interface = self.interface(refractor, ray.dir, &hit);
         let reflectance = fresnel_dielectric(-ray.dir.dot(interface.facing), interface.eta);
         let refracted = refract(ray.dir, interface.facing, interface.eta);
         let reflectance = if refracted == Vec3::ZERO {
@@ -317,16 +428,17 @@ impl<'a> Tracer<'a> {
         let mut radiance = Vec3::ZERO;
         if reflectance * throughput > cutoff {
             let dir = reflect(ray.dir, interface.facing).normalize();
-            let next = self.continue_ray(&ray, &hit, dir);
-            radiance +=
-                reflectance * self.full_radiance(next, depth + 1, throughput * reflectance, rays);
+            let next = self.continue_ray(ray, &hit, dir);
+            radiance += reflectance
+                * self.full_radiance(next, medium, depth + 1, throughput * reflectance, rays);
         }
         let transmittance = 1.0 - reflectance;
         if transmittance * throughput > cutoff {
-            let next = self.continue_ray(&ray, &hit, refracted.normalize());
+            let next = self.continue_ray(ray, &hit, refracted.normalize());
+            let inside = self.medium_after(refractor, interface.entering);
             radiance += transmittance
                 * interface.transmitted_radiance
-                * self.full_radiance(next, depth + 1, throughput * transmittance, rays);
+                * self.full_radiance(next, inside, depth + 1, throughput * transmittance, rays);
         }
         radiance
     }
@@ -335,7 +447,7 @@ impl<'a> Tracer<'a> {
     pub fn sample_radiance(&self, ray: Ray, rays: &mut u64) -> Vec3 {
         match self.settings.mode {
             TraceMode::Transmission => self.transmission_path(ray, rays).0,
-            TraceMode::Full => self.full_radiance(ray, 0, 1.0, rays),
+            TraceMode::Full => self.full_radiance(ray, None, 0, 1.0, rays),
         }
     }
 
@@ -404,6 +516,7 @@ struct RecordLayers {
     vectors: [(Aov, Vec<Vec3>); 8],
     flags: [(Aov, Vec<bool>); 3],
     interfaces: Vec<u32>,
+    refractors_met: Vec<u32>,
 }
 
 /// One row of [`RecordLayers`].
@@ -411,6 +524,7 @@ struct RecordRow<'a> {
     vectors: [&'a mut [Vec3]; 8],
     flags: [&'a mut [bool]; 3],
     interfaces: &'a mut [u32],
+    refractors_met: &'a mut [u32],
 }
 
 struct RowOut<'a> {
@@ -435,6 +549,7 @@ impl RecordLayers {
             ],
             flags: [f(Aov::Covered), f(Aov::Tir), f(Aov::TirFirstExit)],
             interfaces: vec![0; n],
+            refractors_met: vec![0; n],
         }
     }
 
@@ -452,10 +567,12 @@ impl RecordLayers {
             .collect();
         self.interfaces
             .chunks_mut(width)
-            .map(move |interfaces| RecordRow {
+            .zip(self.refractors_met.chunks_mut(width))
+            .map(move |(interfaces, refractors_met)| RecordRow {
                 vectors: core::array::from_fn(|k| vectors[k].next().unwrap_or_default()),
                 flags: core::array::from_fn(|k| flags[k].next().unwrap_or_default()),
                 interfaces,
+                refractors_met,
             })
     }
 
@@ -467,6 +584,7 @@ impl RecordLayers {
             frame.insert_layer(aov, Layer::Flag(values));
         }
         frame.insert_layer(Aov::Interfaces, Layer::Count(self.interfaces));
+        frame.insert_layer(Aov::RefractorsMet, Layer::Count(self.refractors_met));
     }
 }
 
@@ -482,6 +600,7 @@ impl RecordRow<'_> {
             layer[x] = f;
         }
         self.interfaces[x] = r.interfaces;
+        self.refractors_met[x] = r.refractors_met;
     }
 }
 
@@ -504,13 +623,13 @@ mod tests {
         let dir = Vec3::new(0.8, 0.0, -0.6);
         assert!(-dir.dot(hit.geometric_normal) > 0.0 && -dir.dot(hit.shading_normal) < 0.0);
         let ior = 1.5;
-        let geometric = Interface::at(dir, &hit, ior, InterfaceRule::GeometricNormal);
+        let geometric = Interface::at(dir, &hit, ior, 1.0, InterfaceRule::GeometricNormal);
         assert!(geometric.entering);
         assert_eq!(
             (geometric.eta, geometric.transmitted_radiance),
             (1.0 / ior, 1.0)
         );
-        let shading = Interface::at(dir, &hit, ior, InterfaceRule::ShadingNormal);
+        let shading = Interface::at(dir, &hit, ior, 1.0, InterfaceRule::ShadingNormal);
         assert!(!shading.entering);
         assert_eq!(
             (shading.eta, shading.transmitted_radiance),
@@ -521,7 +640,7 @@ mod tests {
             "the oriented normal faces the ray"
         );
         // Where they agree, the shading rule scales a refraction into glass by 1/n².
-        let head_on = Interface::at(Vec3::NEG_Z, &hit, ior, InterfaceRule::ShadingNormal);
+        let head_on = Interface::at(Vec3::NEG_Z, &hit, ior, 1.0, InterfaceRule::ShadingNormal);
         assert!(
             head_on.entering && (head_on.transmitted_radiance - 1.0 / (ior * ior)).abs() < 1e-7
         );

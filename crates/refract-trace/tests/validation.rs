@@ -440,7 +440,7 @@ fn conductor_sphere_reflects_the_known_direction() {
             ..TraceSettings::default()
         },
     );
-    let radiance = full.full_radiance(ray, 0, 1.0, &mut 0);
+    let radiance = full.full_radiance(ray, None, 0, 1.0, &mut 0);
     assert!(
         (radiance - expected).abs().max_element() < 1e-5,
         "{radiance}"

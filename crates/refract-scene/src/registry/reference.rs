@@ -114,7 +114,7 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     paper: "ground truth",
     section: "(docs/reference.md)",
     family: Family::Reference,
-    summary: "exact recursive ray tracing through the mesh (BVH), the same shading normals",
+    summary: "exact recursive ray tracing through every refractor (BVH), nested media, absorption, the same shading normals",
     params: REFERENCE_PARAMS,
     aovs: &[
         Aov::Covered,
@@ -127,6 +127,7 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
         Aov::TOut,
         Aov::PGeom,
         Aov::Interfaces,
+        Aov::RefractorsMet,
         Aov::Tir,
         Aov::TirFirstExit,
     ],
