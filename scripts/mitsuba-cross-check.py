@@ -58,16 +58,59 @@ def run(args):
 
 
 def bsdf(desc):
-    """The refractor's BSDF: Mitsuba's smooth `dielectric`, or its smooth `conductor` with the
+    """A refractor's BSDF: Mitsuba's smooth `dielectric` between its medium and the one around it
+    (`int_ior`/`ext_ior`, as refract's scene.json gives them), or its smooth `conductor` with the
     RGB complex index refract used."""
     conductor = desc.get("conductor")
     if conductor is None:
-        return {"type": "dielectric", "int_ior": desc["ior"], "ext_ior": 1.0}
+        return {
+            "type": "dielectric",
+            "int_ior": desc.get("int_ior", desc.get("ior")),
+            "ext_ior": desc.get("ext_ior", 1.0),
+        }
     return {
         "type": "conductor",
         "eta": {"type": "rgb", "value": conductor["eta"]},
         "k": {"type": "rgb", "value": conductor["k"]},
     }
+
+
+def absorbing(desc):
+    return any(r.get("attenuation") for r in desc.get("refractors") or [])
+
+
+def refractor_shapes(exported, desc):
+    """Every refractor of scene.json as an OBJ shape (older exports: the one `refractor`). An
+    absorbing medium is Mitsuba's `homogeneous` medium (sigma_t = refract's coefficient, albedo
+    0) inside the shape and, for a refractor within it, outside that one."""
+    refractors = desc.get("refractors") or [
+        {"file": desc["refractor"], "ior": desc["ior"], "conductor": desc.get("conductor")}
+    ]
+
+    def medium(index):
+        if index is None or refractors[index].get("attenuation") is None:
+            return None
+        sigma = refractors[index]["attenuation"]["coefficient"]
+        return {
+            "type": "homogeneous",
+            "sigma_t": {"type": "rgb", "value": sigma},
+            "albedo": 0.0,
+        }
+
+    shapes = {}
+    for k, r in enumerate(refractors):
+        shape = {
+            "type": "obj",
+            "filename": os.path.join(exported, r["file"]),
+            "face_normals": False,
+            "bsdf": bsdf(r),
+        }
+        if medium(k) is not None:
+            shape["interior"] = medium(k)
+        if medium(r.get("within")) is not None:
+            shape["exterior"] = medium(r.get("within"))
+        shapes["refractor" if k == 0 else f"refractor-{k}"] = shape
+    return shapes
 
 
 def mitsuba_render(mi, exported, res, spp, seed):
@@ -79,7 +122,12 @@ def mitsuba_render(mi, exported, res, spp, seed):
     scene = mi.load_dict(
         {
             "type": "scene",
-            "integrator": {"type": "path", "max_depth": 65, "rr_depth": 65},
+            # volpath where a refractor absorbs (its media), path otherwise.
+            "integrator": {
+                "type": "volpath" if absorbing(desc) else "path",
+                "max_depth": 65,
+                "rr_depth": 65,
+            },
             "sensor": {
                 "type": "perspective",
                 "fov": cam["fov_y_deg"],
@@ -103,12 +151,7 @@ def mitsuba_render(mi, exported, res, spp, seed):
                 "filename": env["file"],
                 "scale": env["intensity"],
             },
-            "refractor": {
-                "type": "obj",
-                "filename": os.path.join(exported, desc["refractor"]),
-                "face_normals": False,
-                "bsdf": bsdf(desc),
-            },
+            **refractor_shapes(exported, desc),
         }
     )
     return mi.render(scene, seed=seed)

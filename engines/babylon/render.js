@@ -58,9 +58,13 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   // is all the far plane changes here.
   if (environment) camera.maxZ = Math.max(camera.maxZ, 2 * SKYBOX_EDGE);
   if (hideRefractor) {
-    const refractor = scene.getMeshByName('refractor') ?? scene.getNodeByName('refractor');
-    if (!refractor) throw new Error(`${sceneUrl} has no node named refractor`);
-    for (const mesh of [refractor, ...refractor.getChildMeshes?.() ?? []]) mesh.setEnabled(false);
+    // Every refractor: nodes `refractor`, `refractor-1`, ... (refract's export).
+    const refractors = [...scene.meshes, ...scene.transformNodes]
+      .filter((node) => /^refractor(-\d+)?$/.test(node.name));
+    if (refractors.length === 0) throw new Error(`${sceneUrl} has no node named refractor`);
+    for (const node of refractors) {
+      for (const mesh of [node, ...node.getChildMeshes?.() ?? []]) mesh.setEnabled(false);
+    }
   }
   // The glTF loader's transmission helper renders the opaque objects into its own target,
   // 1024 x 1024, 4x MSAA, half float by default; pinned to the frame's size, one sample, float.

@@ -32,7 +32,13 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   if (!camera) throw new Error(`${sceneUrl} has no camera`);
   camera.aspect = width / height;
   camera.updateProjectionMatrix();
-  if (hideRefractor) scene.getObjectByName('refractor').visible = false;
+  // Every refractor: nodes `refractor`, `refractor-1`, ... (refract's export).
+  if (hideRefractor) {
+    const refractors = [];
+    scene.traverse((o) => { if (/^refractor(-\d+)?$/.test(o.name)) refractors.push(o); });
+    if (refractors.length === 0) throw new Error(`${sceneUrl} has no node named refractor`);
+    for (const o of refractors) o.visible = false;
+  }
   if (environment) {
     const map = await new HDRLoader().setDataType(THREE.FloatType).loadAsync(environment);
     map.mapping = THREE.EquirectangularReflectionMapping;

@@ -1,7 +1,8 @@
 //! `refract export SCENE --out DIR`: the scene exactly as refract renders it (meshes after
 //! loading, normalisation and transforms, with refract's vertex normals), for other renderers.
-//! `--format obj` (the default): `refractor.obj`, `object-K.obj`, `environment.exr` (the
-//! lat-long map as sampled) and `scene.json` (camera, IOR, environment); the Mitsuba 3
+//! `--format obj` (the default): `refractor.obj` (and `refractor-K.obj` for every further
+//! refractor), `object-K.obj`, `environment.exr` (the lat-long map as sampled) and `scene.json`
+//! (camera, each refractor's media as Mitsuba's `int_ior`/`ext_ior`, environment); the Mitsuba 3
 //! cross-check (`scripts/mitsuba-cross-check.py`) renders from these files. `--format gltf`:
 //! glTF 2.0 for the engines' own renderers (`refract_eval::gltf_export`).
 
@@ -67,8 +68,34 @@ struct SceneJson {
     /// The refractor's conductor (`eta`, `k` per RGB channel) when it is one, else `null`.
     conductor: Option<ConductorJson>,
     refractor: String,
+    /// Every refractor, the first (`refractor`, `ior`, `conductor` above) first.
+    refractors: Vec<RefractorJson>,
     objects: Vec<String>,
     environment: EnvironmentJson,
+}
+
+/// One refractor's surface as Mitsuba's `dielectric` describes it.
+#[derive(Serialize)]
+struct RefractorJson {
+    file: String,
+    /// The index inside (Mitsuba's `int_ior`).
+    int_ior: f32,
+    /// The index of the medium around it (`ext_ior`): 1, or that of the refractor it lies in.
+    ext_ior: f32,
+    /// The refractor it lies within (an index into `refractors`), `null` for air.
+    within: Option<usize>,
+    conductor: Option<ConductorJson>,
+    /// Beer-Lambert absorption of its medium, `null` for clear.
+    attenuation: Option<AttenuationJson>,
+}
+
+/// `KHR_materials_volume`'s attenuation and the coefficient it means (Mitsuba's
+/// `homogeneous` medium with `sigma_t` = `coefficient`, albedo 0).
+#[derive(Serialize)]
+struct AttenuationJson {
+    color: [f32; 3],
+    distance: f32,
+    coefficient: [f32; 3],
 }
 
 #[derive(Serialize)]
@@ -76,6 +103,14 @@ struct ConductorJson {
     name: String,
     eta: [f32; 3],
     k: [f32; 3],
+}
+
+fn conductor_json(c: refract_scene::Conductor) -> ConductorJson {
+    ConductorJson {
+        name: refract_scene::conductor_name(&c).to_owned(),
+        eta: c.eta.to_array(),
+        k: c.k.to_array(),
+    }
 }
 
 /// A mesh as OBJ with per-vertex normals (`f a//a b//b c//c`, 1-based).
@@ -110,10 +145,23 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    write_text_atomically(
-        &args.out.join("refractor.obj"),
-        &obj(scene.refractor.mesh()),
-    )?;
+    let mut refractors = Vec::new();
+    for (k, refractor) in scene.refractors().enumerate() {
+        let file = format!("{}.obj", refract_eval::gltf_export::refractor_name(k));
+        write_text_atomically(&args.out.join(&file), &obj(refractor.mesh()))?;
+        refractors.push(RefractorJson {
+            file,
+            int_ior: refractor.ior(),
+            ext_ior: scene.outside_ior(k),
+            within: refractor.within(),
+            conductor: refractor.conductor().map(conductor_json),
+            attenuation: refractor.attenuation().map(|a| AttenuationJson {
+                color: a.color.to_array(),
+                distance: a.distance,
+                coefficient: a.coefficient().to_array(),
+            }),
+        });
+    }
     let mut objects = Vec::new();
     for (k, object) in scene.objects.iter().enumerate() {
         let name = format!("object-{k}.obj");
@@ -161,12 +209,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             fov_y_deg: c.fov_y.to_degrees(),
         },
         ior: scene.refractor.ior(),
-        conductor: scene.refractor.conductor().map(|c| ConductorJson {
-            name: refract_scene::conductor_name(&c).to_owned(),
-            eta: c.eta.to_array(),
-            k: c.k.to_array(),
-        }),
+        conductor: scene.refractor.conductor().map(conductor_json),
         refractor: "refractor.obj".into(),
+        refractors,
         objects,
         environment,
     };

@@ -4,11 +4,13 @@
 //!
 //! * `scene.gltf` + `scene.bin`: every mesh after loading, normalisation and transforms, with
 //!   the vertex normals refract renders; the camera (`yfov`, `znear`, `zfar`; the viewport sets
-//!   the aspect ratio); the refractor as glass: `KHR_materials_transmission` 1,
-//!   `KHR_materials_ior`, `KHR_materials_volume` with the thickness the engine methods use by
-//!   default (`thickness=auto`: the file's thickness or the mean `d_N`, in world units, on a
-//!   node of scale 1), roughness 0, metalness 0, white. A conductor refractor is a metal of the
-//!   conductor's normal-incidence reflectance.
+//!   the aspect ratio); every refractor (nodes `refractor`, `refractor-1`, …: [`refractor_name`])
+//!   as glass: `KHR_materials_transmission` 1, `KHR_materials_ior`, `KHR_materials_volume` with
+//!   the thickness the engine methods use by default (`thickness=auto`: the file's thickness or
+//!   the mean `d_N`, in world units, on a node of scale 1) and its attenuation, roughness 0,
+//!   metalness 0, white. A conductor refractor is a metal of the conductor's normal-incidence
+//!   reflectance. glTF has no surrounding medium: a refractor inside another (water in a glass)
+//!   keeps its own IOR, which is what the engines refract with.
 //! * Opaque objects as `KHR_materials_unlit`: the colour refract shades them with,
 //!   `albedo(uv) × (ambient + |N·L| radiance)`, as the base colour texture (the albedo, baked
 //!   at [`ALBEDO_TEXELS`]² over the object's uv range, nearest filtering; a constant albedo is
@@ -33,7 +35,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec2, Vec3};
 use refract_core::environment::latlong_to_direction;
 use refract_geometry::Mesh;
-use refract_scene::{Albedo, Environment, Material, Scene, SceneError};
+use refract_scene::{Albedo, Environment, Material, Refractor, Scene, SceneError};
 use serde_json::{Value, json};
 
 use crate::atomic_write::{write_atomically, write_text_atomically};
@@ -285,20 +287,34 @@ pub fn position_from_code(code: Vec3, (lo, hi): (Vec3, Vec3)) -> Vec3 {
     lo + (code - Vec3::splat(POSITION_CODE_OFFSET)) / POSITION_CODE_SCALE * (hi - lo)
 }
 
+/// The name of refractor `index`'s mesh, node and material: `refractor` for the first,
+/// `refractor-1`, `refractor-2`, … for the others.
+pub fn refractor_name(index: usize) -> String {
+    match index {
+        0 => "refractor".to_owned(),
+        k => format!("refractor-{k}"),
+    }
+}
+
 /// The glass material of a dielectric refractor (`specular`: the `KHR_materials_specular`
-/// factor, 1 in the colour file, 0 in the position-coded one).
-fn glass_material(scene: &Scene, specular: f32) -> Value {
-    let thickness = scene.refractor.auto_thickness();
+/// factor, 1 in the colour file, 0 in the position-coded one). glTF has no medium around a
+/// refractor: a refractor inside another keeps its own index, as the engines read it.
+fn glass_material(name: &str, refractor: &Refractor, specular: f32) -> Value {
+    let mut volume = json!({ "thicknessFactor": refractor.auto_thickness() });
+    if let Some(a) = refractor.attenuation() {
+        volume["attenuationColor"] = json!(a.color.to_array());
+        volume["attenuationDistance"] = json!(a.distance);
+    }
     let mut extensions = json!({
         "KHR_materials_transmission": { "transmissionFactor": 1.0 },
-        "KHR_materials_ior": { "ior": scene.refractor.ior() },
-        "KHR_materials_volume": { "thicknessFactor": thickness },
+        "KHR_materials_ior": { "ior": refractor.ior() },
+        "KHR_materials_volume": volume,
     });
     if specular != 1.0 {
         extensions["KHR_materials_specular"] = json!({ "specularFactor": specular });
     }
     json!({
-        "name": "refractor",
+        "name": name,
         "pbrMetallicRoughness": {
             "baseColorFactor": [1.0, 1.0, 1.0, 1.0],
             "metallicFactor": 0.0,
@@ -383,24 +399,35 @@ fn document(
 pub fn export_gltf(scene: &Scene) -> Result<GltfExport, SceneError> {
     let camera = camera_matrix(scene)?;
     let mut buffer = Buffer::default();
-    let refractor = MeshAccessors::push(&mut buffer, scene.refractor.mesh());
     let bounds = position_code_bounds(scene);
 
-    // The colour file's and the position-coded file's meshes and materials, built side by side.
-    let mut meshes = vec![json!({
-        "name": "refractor",
-        "primitives": [{ "attributes": refractor.attributes(), "indices": refractor.indices, "material": 0 }],
-    })];
+    // The colour file's and the position-coded file's meshes and materials, built side by side:
+    // the refractors first (mesh and material k for refractor k), then the objects.
+    let mut meshes = Vec::new();
+    let mut materials = Vec::new();
+    let mut coded_materials = Vec::new();
+    for (k, refractor) in scene.refractors().enumerate() {
+        let name = refractor_name(k);
+        let accessors = MeshAccessors::push(&mut buffer, refractor.mesh());
+        meshes.push(json!({
+            "name": name,
+            "primitives": [{ "attributes": accessors.attributes(), "indices": accessors.indices, "material": k }],
+        }));
+        let (glass, coded_glass) = match refractor.conductor() {
+            Some(c) => {
+                let metal = metal_material(&name, conductor_f0(c.eta, c.k));
+                (metal.clone(), metal)
+            }
+            None => (
+                glass_material(&name, refractor, 1.0),
+                glass_material(&name, refractor, 0.0),
+            ),
+        };
+        materials.push(glass);
+        coded_materials.push(coded_glass);
+    }
     let mut coded_meshes = meshes.clone();
-    let (glass, coded_glass) = match scene.refractor.conductor() {
-        Some(c) => {
-            let metal = metal_material("refractor", conductor_f0(c.eta, c.k));
-            (metal.clone(), metal)
-        }
-        None => (glass_material(scene, 1.0), glass_material(scene, 0.0)),
-    };
-    let mut materials = vec![glass];
-    let mut coded_materials = vec![coded_glass];
+    let refractor_count = meshes.len();
     let mut textures = Vec::new();
     for (k, object) in scene.objects.iter().enumerate() {
         let mesh = object.mesh();
@@ -445,7 +472,7 @@ pub fn export_gltf(scene: &Scene) -> Result<GltfExport, SceneError> {
             .collect();
         let mut coded_attributes = accessors.attributes();
         coded_attributes["COLOR_0"] = json!(buffer.push_vec3(&codes, false));
-        let primitive = |attributes: Value| json!({ "name": name, "primitives": [{ "attributes": attributes, "indices": accessors.indices, "material": k + 1 }] });
+        let primitive = |attributes: Value| json!({ "name": name, "primitives": [{ "attributes": attributes, "indices": accessors.indices, "material": refractor_count + k }] });
         meshes.push(primitive(attributes));
         coded_meshes.push(primitive(coded_attributes));
         coded_materials.push(unlit_material(&name, Vec3::ONE, None));

@@ -952,8 +952,8 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
         far: c.far,
         ..CameraDesc::default()
     };
-    let mut scene = Scene::with_refractors(name, refractors, environment)
-        .map_err(|err| SceneError::Parse {
+    let mut scene =
+        Scene::with_refractors(name, refractors, environment).map_err(|err| SceneError::Parse {
             origin: origin.to_owned(),
             message: err.to_string(),
         })?;
@@ -1032,14 +1032,7 @@ fn build_refractor(
             "{label}the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
         ));
     }
-    let conductor = parse_conductor(
-        origin,
-        section,
-        "glass",
-        r.material.as_deref(),
-        r.eta,
-        r.k,
-    )?;
+    let conductor = parse_conductor(origin, section, "glass", r.material.as_deref(), r.eta, r.k)?;
     if conductor.is_some() && attenuation.is_some() {
         return Err(SceneError::field(
             origin,

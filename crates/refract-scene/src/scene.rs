@@ -57,7 +57,8 @@ pub struct Attenuation {
 }
 
 /// The range of [`Attenuation::color`]'s components, as an error message says it.
-pub const ATTENUATION_COLOR_EXPECTED: &str = "fractions in (0, 1] (1: that channel is not absorbed)";
+pub const ATTENUATION_COLOR_EXPECTED: &str =
+    "fractions in (0, 1] (1: that channel is not absorbed)";
 /// The range of [`Attenuation::distance`], as an error message says it.
 pub const ATTENUATION_DISTANCE_EXPECTED: &str = "a finite distance > 0 in world units";
 
@@ -465,10 +466,7 @@ fn containment(mesh: &Mesh, other: &Refractor) -> Containment {
     let (mut inside, mut outside) = (0, 0);
     for p in mesh.positions.iter().step_by(step).take(CONTAINMENT_PROBES) {
         hits.clear();
-        let ray = refract_core::Ray {
-            origin: *p,
-            dir,
-        };
+        let ray = refract_core::Ray { origin: *p, dir };
         other.bvh().all_hits(&ray, 0.0, f32::INFINITY, &mut hits);
         if hits.len() % 2 == 1 {
             inside += 1;

@@ -205,7 +205,9 @@ impl<'a> Tracer<'a> {
 
     /// The absorption of the medium a ray is in (`None`: air or a clear medium).
     fn absorption(&self, medium: Option<usize>) -> Option<Vec3> {
-        medium.and_then(|m| self.media.get(m)).and_then(|m| m.absorption)
+        medium
+            .and_then(|m| self.media.get(m))
+            .and_then(|m| m.absorption)
     }
 
     /// The medium a ray is in after crossing an interface of refractor `refractor`.

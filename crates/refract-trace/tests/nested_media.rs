@@ -7,8 +7,8 @@ use glam::Vec3;
 use refract_core::{Camera, CameraDesc, Ray};
 use refract_geometry::{Mesh, shapes};
 use refract_scene::{
-    Albedo, Attenuation, Environment, InterfaceRule, Material, Object, Refractor, Scene,
-    TraceMode, TraceSettings,
+    Albedo, Attenuation, Environment, InterfaceRule, Material, Object, Refractor, Scene, TraceMode,
+    TraceSettings,
 };
 use refract_trace::{Tracer, render};
 
@@ -113,7 +113,10 @@ fn concentric_spheres_deviate_rays_by_the_closed_form() {
             measured.to_degrees(),
             expected.to_degrees()
         );
-        assert_eq!((aov.interfaces, aov.refractors_met, aov.tir), (4, 0b11, false));
+        assert_eq!(
+            (aov.interfaces, aov.refractors_met, aov.tir),
+            (4, 0b11, false)
+        );
         // The first exit is the water's far side.
         assert!((aov.p2.length() - r2 as f32).abs() < 1e-3, "P2 {}", aov.p2);
     }
@@ -151,7 +154,11 @@ fn stacked_and_nested_slabs_move_rays_by_the_sum_of_their_layers() {
     )
     .expect("stacked");
     let cases = [
-        (nested, vec![(0.2f64, 1.5f64), (0.2, 1.33), (0.2, 1.5)], 0.3f64),
+        (
+            nested,
+            vec![(0.2f64, 1.5f64), (0.2, 1.33), (0.2, 1.5)],
+            0.3f64,
+        ),
         (stacked, vec![(0.2, 1.5), (0.2, 1.0), (0.2, 1.33)], 0.3),
     ];
     for (mut scene, layers, top) in cases {
@@ -183,7 +190,11 @@ fn stacked_and_nested_slabs_move_rays_by_the_sum_of_their_layers() {
                 scene.name,
                 aov.p_geom
             );
-            assert!((aov.t_out - dir).length() < 1e-5, "leaves along {}", aov.t_out);
+            assert!(
+                (aov.t_out - dir).length() < 1e-5,
+                "leaves along {}",
+                aov.t_out
+            );
             assert_eq!((aov.interfaces, aov.refractors_met), (4, 0b11));
         }
     }
@@ -231,9 +242,13 @@ fn absorption_follows_beer_lambert_along_each_segment() {
     // Absorbing water (radius ½) in absorbing glass (radius 1), through the centre: glass for
     // 2 × ½, water for 1.
     let mut outer = glass(sphere(4, 1.0), 1.5);
-    outer.set_attenuation(Some(Attenuation::new(Vec3::splat(0.9), 1.0).expect("valid")));
+    outer.set_attenuation(Some(
+        Attenuation::new(Vec3::splat(0.9), 1.0).expect("valid"),
+    ));
     let mut inner = glass(sphere(4, 0.5), 1.33);
-    inner.set_attenuation(Some(Attenuation::new(Vec3::splat(0.6), 0.5).expect("valid")));
+    inner.set_attenuation(Some(
+        Attenuation::new(Vec3::splat(0.6), 0.5).expect("valid"),
+    ));
     let scene = Scene::with_refractors(
         "absorbing water in glass",
         vec![outer, inner],
@@ -275,7 +290,9 @@ fn nested_media_without_absorption_keep_all_energy() {
     let scene = |absorbing: bool| {
         let mut water = glass(sphere(3, 0.55), 1.33);
         if absorbing {
-            water.set_attenuation(Some(Attenuation::new(Vec3::splat(0.5), 0.5).expect("valid")));
+            water.set_attenuation(Some(
+                Attenuation::new(Vec3::splat(0.5), 0.5).expect("valid"),
+            ));
         }
         Scene::with_refractors(
             "furnace",
@@ -308,6 +325,9 @@ fn nested_media_without_absorption_keep_all_energy() {
             "{interface:?}: furnace radiance in [{min}, {max}]"
         );
         let (dark, _) = range(&scene(true));
-        assert!(dark < 0.8, "{interface:?}: absorbing water's darkest pixel {dark}");
+        assert!(
+            dark < 0.8,
+            "{interface:?}: absorbing water's darkest pixel {dark}"
+        );
     }
 }
