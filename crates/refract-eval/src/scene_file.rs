@@ -469,44 +469,71 @@ translate = [0.0, -0.8, 0.6]
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SceneFile {
+struct SceneFile<R> {
     #[serde(default)]
     camera: CameraSection,
     #[serde(default)]
     environment: EnvironmentSection,
-    /// One `[refractor]` table or an array of `[[refractor]]` tables ([`refractor_sections`]).
-    refractor: toml::Value,
+    /// One `[refractor]` table (`R = RefractorSection`) or `[[refractor]]` tables
+    /// (`R = Vec<RefractorSection>`): [`parse_scene_file`].
+    refractor: R,
     #[serde(default)]
     objects: Vec<ObjectSection>,
 }
 
-/// The refractors of a scene file, each with the name its errors use: `[refractor]` for the
-/// one table of a single-refractor file, `refractor[k]` for the tables of `[[refractor]]`.
-fn refractor_sections(
+/// Refractor sections with the names their messages use.
+type NamedRefractors = Vec<(String, RefractorSection)>;
+
+/// The scene file in `text` with its refractors, each with the name its messages use:
+/// `[refractor]` for the one table of a single-refractor file, `refractor[k]` for the tables of
+/// `[[refractor]]`. The file is deserialised directly in either form, so that TOML errors keep
+/// their key and line.
+fn parse_scene_file(
+    text: &str,
     origin: &str,
-    value: toml::Value,
-) -> Result<Vec<(String, RefractorSection)>, SceneError> {
-    let parse = |section: String, value: toml::Value| {
-        RefractorSection::deserialize(value)
-            .map(|r| (section.clone(), r))
-            .map_err(|err| SceneError::Parse {
-                origin: origin.to_owned(),
-                message: format!("{section}: {}", err.message()),
-            })
+) -> Result<(SceneFile<()>, NamedRefractors), SceneError> {
+    let parse_error = |err: toml::de::Error| SceneError::Parse {
+        origin: origin.to_owned(),
+        message: err.to_string().trim_end().to_owned(),
     };
-    match value {
-        toml::Value::Table(_) => Ok(vec![parse("[refractor]".to_owned(), value)?]),
-        toml::Value::Array(tables) if !tables.is_empty() => tables
+    let many = matches!(
+        toml::from_str::<toml::Table>(text)
+            .map_err(parse_error)?
+            .get("refractor"),
+        Some(toml::Value::Array(_))
+    );
+    if many {
+        let file: SceneFile<Vec<RefractorSection>> = toml::from_str(text).map_err(parse_error)?;
+        if file.refractor.is_empty() {
+            return Err(SceneError::field(
+                origin,
+                "refractor",
+                "an empty array",
+                "one [refractor] table or one or more [[refractor]] tables",
+            ));
+        }
+        let refractors = file
+            .refractor
             .into_iter()
             .enumerate()
-            .map(|(k, table)| parse(format!("refractor[{k}]"), table))
-            .collect(),
-        other => Err(SceneError::field(
-            origin,
-            "refractor",
-            other.type_str(),
-            "one [refractor] table or one or more [[refractor]] tables",
-        )),
+            .map(|(k, r)| (format!("refractor[{k}]"), r))
+            .collect();
+        let rest = SceneFile {
+            camera: file.camera,
+            environment: file.environment,
+            refractor: (),
+            objects: file.objects,
+        };
+        Ok((rest, refractors))
+    } else {
+        let file: SceneFile<RefractorSection> = toml::from_str(text).map_err(parse_error)?;
+        let rest = SceneFile {
+            camera: file.camera,
+            environment: file.environment,
+            refractor: (),
+            objects: file.objects,
+        };
+        Ok((rest, vec![("[refractor]".to_owned(), file.refractor)]))
     }
 }
 
@@ -851,10 +878,7 @@ fn check_camera(origin: &str, c: &CameraSection) -> Result<(), SceneError> {
 }
 
 fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScene, SceneError> {
-    let file: SceneFile = toml::from_str(text).map_err(|err| SceneError::Parse {
-        origin: origin.to_owned(),
-        message: err.to_string().trim_end().to_owned(),
-    })?;
+    let (file, refractor_sections) = parse_scene_file(text, origin)?;
     check_camera(origin, &file.camera)?;
     check_range(
         origin,
@@ -878,7 +902,7 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
     }
     let mut warnings = Vec::new();
     let mut refractors = Vec::new();
-    for (section, r) in refractor_sections(origin, file.refractor)? {
+    for (section, r) in refractor_sections {
         refractors.push(build_refractor(origin, &section, &r, base, &mut warnings)?);
     }
 
@@ -1159,6 +1183,37 @@ mod tests {
             );
             assert!(loaded.warnings.is_empty(), "{name}: {:?}", loaded.warnings);
         }
+    }
+
+    /// `[[refractor]]` files load every table, and their errors keep the key and the line.
+    #[test]
+    fn refractor_arrays_load_and_their_errors_name_the_key() {
+        let two = "[[refractor]]\nmesh = \"builtin:sphere\"\n\n[[refractor]]\nmesh = \"builtin:sphere\"\nscale = 0.5\nior = 1.33\n";
+        let scene = load_scene_str("two", two, Path::new("."), "two.toml")
+            .expect("two refractors")
+            .scene;
+        assert_eq!(scene.refractor_count(), 2);
+        assert_eq!(
+            scene.outside_ior(1),
+            1.5,
+            "the small sphere lies in the large one"
+        );
+        let wrong = two.replace("ior = 1.33", "ior = \"water\"");
+        let err = load_scene_str("wrong", &wrong, Path::new("."), "wrong.toml")
+            .expect_err("wrong type")
+            .to_string();
+        assert!(
+            err.contains("wrong.toml") && err.contains("ior") && err.contains("line 7"),
+            "{err}"
+        );
+        let half = two.replace("ior = 1.33", "attenuation_distance = 2.0");
+        let err = load_scene_str("half", &half, Path::new("."), "half.toml")
+            .expect_err("attenuation without its colour")
+            .to_string();
+        assert!(
+            err.contains("refractor[1]") && err.contains("both"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -133,7 +133,7 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
     ],
     defaults: || MethodParams::Reference(TraceSettings::DEFAULT),
     renders_conductors: true,
-    memory: MemoryModel::per_pixel(118, 239),
+    memory: MemoryModel::per_pixel(118, 243),
     // The GPU traces both modes at any sample count (refract_gpu::reference).
     backends: &[BackendId::Trace, BackendId::Gpu],
 }];
