@@ -71,7 +71,8 @@ fn tetrahedron_obj() -> Vec<u8> {
     b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n".to_vec()
 }
 
-/// A small glTF with an embedded buffer: one triangle, a node transform and a glass material.
+/// A small glTF with an embedded buffer: one triangle, a node transform and a glass material
+/// (read as a mesh and as a scene).
 fn triangle_gltf() -> Vec<u8> {
     let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
     let bytes: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
@@ -80,8 +81,8 @@ fn triangle_gltf() -> Vec<u8> {
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
 "nodes":[{{"mesh":0,"translation":[0,0,1],"children":[]}}],
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],
-"materials":[{{"extensions":{{"KHR_materials_ior":{{"ior":1.4}}}}}}],
-"extensionsUsed":["KHR_materials_ior"],
+"materials":[{{"extensions":{{"KHR_materials_ior":{{"ior":1.4}},"KHR_materials_transmission":{{"transmissionFactor":1}}}}}}],
+"extensionsUsed":["KHR_materials_ior","KHR_materials_transmission"],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
 "bufferViews":[{{"buffer":0,"byteLength":36}}],
 "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{base64}"}}]}}"#
@@ -162,6 +163,7 @@ proptest! {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = write_case(dir.path(), "m.gltf", &mutate(&triangle_gltf(), &edits));
         let _ = load_mesh(&path, &LoadOptions::default());
+        let _ = refract_eval::load_scene(&path);
     }
 
     #[test]
@@ -219,6 +221,10 @@ fn the_seeds_load() {
     let gltf = write_case(dir.path(), "m.gltf", &triangle_gltf());
     let loaded = load_mesh(&gltf, &LoadOptions::default()).expect("gltf seed");
     assert_eq!(loaded.material.and_then(|m| m.ior), Some(1.4));
+    let scene = refract_eval::load_scene(&gltf)
+        .expect("gltf seed as a scene")
+        .scene;
+    assert_eq!(scene.refractor.ior(), 1.4);
     let exr = write_case(
         dir.path(),
         "e.exr",

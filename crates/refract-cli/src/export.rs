@@ -20,7 +20,7 @@ use serde::Serialize;
 /// Arguments of `refract export`.
 #[derive(Debug, clap::Args)]
 pub struct ExportArgs {
-    /// A built-in scene or a .toml scene file.
+    /// A built-in scene, a .toml scene file or a .gltf/.glb file.
     pub scene: std::ffi::OsString,
     /// Output directory (created).
     #[arg(long)]

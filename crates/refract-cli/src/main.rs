@@ -106,7 +106,7 @@ impl From<TirArg> for TirPolicy {
 
 #[derive(Debug, Args)]
 struct CompareArgs {
-    /// Built-in scene names (see `refract scenes`) or .toml scene files.
+    /// Built-in scene names (see `refract scenes`), .toml scene files or .gltf/.glb files.
     #[arg(required = true)]
     scenes: Vec<std::ffi::OsString>,
     /// Comma-separated method ids (`refract methods`); default: every method but the reference.
@@ -322,7 +322,7 @@ fn run() -> ExitCode {
             for (name, line, _) in BUILTIN_SCENES {
                 println!("{name:<8} {line}");
             }
-            println!("\nOr pass a .toml scene file; see docs/scenes.md.");
+            println!("\nOr pass a .toml scene file or a .gltf/.glb file; see docs/scenes.md.");
             Ok(())
         }
         Some(Command::Methods) => {

@@ -25,7 +25,7 @@ pub enum TraceArg {
 /// Arguments of `refract render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
-    /// A built-in scene (see `refract scenes`) or a .toml scene file.
+    /// A built-in scene (see `refract scenes`), a .toml scene file or a .gltf/.glb file.
     pub scene: std::ffi::OsString,
     /// A method of the registry (`refract methods`), or `reference`.
     #[arg(long, default_value = "wyman")]

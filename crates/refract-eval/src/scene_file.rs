@@ -7,7 +7,7 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use refract_core::CameraDesc;
 use refract_geometry::{Mesh, builtin};
 
-use crate::mesh_files::{LoadOptions, load_mesh};
+use crate::mesh_files::{LoadOptions, load_gltf_scene, load_mesh};
 use serde::Deserialize;
 
 use refract_scene::Environment;
@@ -720,8 +720,8 @@ pub struct LoadedScene {
     pub warnings: Vec<String>,
 }
 
-/// A built-in scene name or a path to a `.toml` scene file. The path may be any the OS takes,
-/// not only UTF-8 (`&str`, `String`, `Path`, `OsStr`); messages show it lossily.
+/// A built-in scene name, a path to a `.toml` scene file, or a path to a `.gltf`/`.glb` file
+/// read as a scene (see [`build_gltf`]). The path may be any the OS takes, not only UTF-8 (`&str`, `String`, `Path`, `OsStr`); messages show it lossily.
 pub fn load_scene(spec: impl AsRef<std::ffi::OsStr>) -> Result<LoadedScene, SceneError> {
     let spec = spec.as_ref();
     if let Some((name, _, toml)) = BUILTIN_SCENES
@@ -736,7 +736,17 @@ pub fn load_scene(spec: impl AsRef<std::ffi::OsStr>) -> Result<LoadedScene, Scen
         );
     }
     let path = PathBuf::from(spec);
-    if path.extension().is_none_or(|e| e != "toml") {
+    let name = path
+        .file_stem()
+        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if matches!(extension.as_deref(), Some("gltf" | "glb")) {
+        return build_gltf(&name, &path);
+    }
+    if extension.as_deref() != Some("toml") {
         return Err(SceneError::UnknownScene {
             name: spec.to_string_lossy().into_owned(),
             builtins: builtin_names(),
@@ -747,9 +757,6 @@ pub fn load_scene(spec: impl AsRef<std::ffi::OsStr>) -> Result<LoadedScene, Scen
         action: "cannot read the scene file",
         source,
     })?;
-    let name = path
-        .file_stem()
-        .map_or_else(|| "scene".to_owned(), |s| s.to_string_lossy().into_owned());
     let base = path.parent().map(Path::to_owned).unwrap_or_default();
     build(&name, &text, &base, &path.display().to_string())
 }
@@ -1050,7 +1057,8 @@ fn build_refractor(
         format!("{section}: ")
     };
     let ior = r.ior;
-    let (glass_ior, glass_thickness) = glass.map_or((None, None), |g| (g.ior, g.thickness));
+    let (glass_ior, glass_thickness, glass_attenuation) =
+        glass.map_or((None, None, None), |g| (g.ior, g.thickness, g.attenuation));
     if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
         warnings.push(format!(
             "{label}the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
@@ -1065,11 +1073,29 @@ fn build_refractor(
             "absorption only for glass (a conductor has no inside)",
         ));
     }
+    // The section's attenuation keys, else the glTF material's KHR_materials_volume.
+    let attenuation = match (attenuation, glass_attenuation) {
+        (Some(a), _) => Some(a),
+        (None, Some((color, distance))) if conductor.is_none() => Some(gltf_attenuation(
+            origin,
+            &format!("{section} mesh"),
+            color,
+            distance * r.scale,
+        )?),
+        _ => None,
+    };
     let mut refractor = Refractor::new(mesh, ior)?;
     refractor.set_conductor(conductor);
     refractor.set_attenuation(attenuation);
     // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
     refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
+    warn_of_d_n(&label, &refractor, warnings);
+    Ok(refractor)
+}
+
+/// The warnings of `refractor`'s `d_N` (vertices whose normal ray missed or crossed too many
+/// triangles), each prefixed by `label`.
+fn warn_of_d_n(label: &str, refractor: &Refractor, warnings: &mut Vec<String>) {
     let d_n = refractor.normal_distances();
     // d_N serves refraction only: a conductor (an open mirror) has no use for it.
     if d_n.misses > 0 && refractor.is_dielectric() {
@@ -1090,7 +1116,6 @@ fn build_refractor(
             d_n.fallback
         ));
     }
-    Ok(refractor)
 }
 
 /// What a glTF material says about the glass: its IOR and its volume thickness in the
@@ -1098,6 +1123,30 @@ fn build_refractor(
 struct GlassFacts {
     ior: Option<f32>,
     thickness: Option<f32>,
+    /// `attenuationColor` and `attenuationDistance` (normalised like the thickness).
+    attenuation: Option<(Vec3, f32)>,
+}
+
+/// A glTF material's `KHR_materials_volume` absorption as an [`refract_scene::Attenuation`],
+/// or an error naming `field` of `origin` when it is out of range.
+fn gltf_attenuation(
+    origin: &str,
+    field: &str,
+    color: Vec3,
+    distance: f32,
+) -> Result<refract_scene::Attenuation, SceneError> {
+    refract_scene::Attenuation::new(color, distance).map_err(|_| {
+        SceneError::field(
+            origin,
+            format!("{field}: KHR_materials_volume attenuationColor/attenuationDistance"),
+            format!("{color:?} / {distance}"),
+            format!(
+                "{}; {}",
+                refract_scene::scene::ATTENUATION_COLOR_EXPECTED,
+                refract_scene::scene::ATTENUATION_DISTANCE_EXPECTED
+            ),
+        )
+    })
 }
 
 fn load_mesh_spec(
@@ -1144,9 +1193,160 @@ fn load_mesh_spec(
     let glass = loaded.material.map(|m| GlassFacts {
         ior: m.ior,
         thickness: m.thickness.map(|d| d * scale),
+        attenuation: m.attenuation.map(|(color, d)| (color, d * scale)),
     });
     Ok((loaded.mesh, glass))
 }
+
+/// A `.gltf`/`.glb` file as a scene (`docs/scenes.md`, "glTF files as scenes"): every part
+/// whose material transmits (`KHR_materials_transmission` above 0) is a refractor with the
+/// material's `KHR_materials_ior` (glTF's default 1.5), `KHR_materials_volume` thickness and
+/// attenuation; every other part is a diffuse object of its `baseColorFactor`; the first
+/// perspective camera is the camera (else the built-in scenes' camera). The whole scene is
+/// moved and scaled together so that the refractors' bounding sphere is the unit sphere, as
+/// the built-in scenes' refractors are. Nested glass (water in a glass) nests by geometry
+/// ([`Scene::with_refractors`]); the environment is the procedural sky.
+fn build_gltf(name: &str, path: &Path) -> Result<LoadedScene, SceneError> {
+    let origin = path.display().to_string();
+    let loaded = load_gltf_scene(path).map_err(|source| SceneError::Geometry {
+        origin: origin.clone(),
+        source,
+    })?;
+    let mut warnings: Vec<String> = loaded
+        .notes
+        .iter()
+        .map(|note| format!("{origin}: {note}"))
+        .collect();
+    for part in &loaded.parts {
+        warnings.extend(
+            part.report
+                .warnings
+                .iter()
+                .map(|w| format!("{origin}: {}: {w}", part.label)),
+        );
+    }
+    // One transform for every part: the refractors' joint bounding sphere to the unit sphere.
+    let glass_positions = loaded
+        .parts
+        .iter()
+        .filter(|p| p.glass.is_some())
+        .flat_map(|p| p.mesh.positions.iter().copied());
+    let (lo, hi) = glass_positions.clone().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    );
+    if lo.x > hi.x {
+        return Err(SceneError::Parse {
+            origin,
+            message: format!(
+                "no transmissive material (KHR_materials_transmission above 0) among its {} \
+                 parts: a glTF read as a scene needs a glass part to refract through",
+                loaded.parts.len()
+            ),
+        });
+    }
+    let center = 0.5 * (lo + hi);
+    let radius = glass_positions
+        .map(|p| f64::from(p.distance(center)))
+        .fold(0.0_f64, f64::max) as f32;
+    let scale = if radius > 0.0 { 1.0 / radius } else { 1.0 };
+    let normalization =
+        Affine3A::from_scale(Vec3::splat(scale)) * Affine3A::from_translation(-center);
+
+    let mut refractors = Vec::new();
+    let mut objects = Vec::new();
+    for part in loaded.parts {
+        let mut mesh = part.mesh;
+        mesh.transform(&normalization);
+        let section = part.label;
+        match part.glass {
+            Some(glass) => {
+                let ior = glass.ior.unwrap_or(DEFAULT_GLTF_IOR);
+                refract_scene::scene::check_ior(ior).map_err(|_| {
+                    SceneError::field(
+                        &origin,
+                        format!("{section}: KHR_materials_ior ior"),
+                        ior,
+                        refract_scene::scene::IOR_EXPECTED,
+                    )
+                })?;
+                let attenuation = glass
+                    .attenuation
+                    .map(|(color, distance)| {
+                        gltf_attenuation(&origin, &section, color, distance * scale)
+                    })
+                    .transpose()?;
+                let mut refractor = Refractor::new(mesh, ior)?;
+                refractor.set_attenuation(attenuation);
+                refractor.set_volume_thickness(glass.thickness.map(|d| d * scale));
+                let label = format!("{origin}: refractor[{}] ({section}): ", refractors.len());
+                warn_of_d_n(&label, &refractor, &mut warnings);
+                refractors.push(refractor);
+            }
+            None => {
+                let color = part.base_color.clamp(Vec3::ZERO, Vec3::ONE);
+                objects.push(Object::new(
+                    mesh,
+                    Material::Diffuse(Albedo::Constant(color)),
+                )?);
+            }
+        }
+    }
+
+    let camera = match loaded.camera {
+        None => CameraDesc::default(),
+        Some(c) => {
+            let to_world = normalization * Affine3A::from_mat4(c.camera_to_world);
+            let eye = to_world.transform_point3(Vec3::ZERO);
+            let look = to_world.transform_vector3(-Vec3::Z).normalize_or_zero();
+            let up = to_world.transform_vector3(Vec3::Y).normalize_or_zero();
+            let near = c.near * scale;
+            // An infinite projection: twice the distance to the furthest vertex of the scene.
+            let furthest = refractors
+                .iter()
+                .map(Refractor::mesh)
+                .chain(objects.iter().map(Object::mesh))
+                .flat_map(|m| m.positions.iter())
+                .map(|p| p.distance(eye))
+                .fold(0.0_f32, f32::max);
+            let far = c.far.map_or(2.0 * furthest, |f| f * scale).max(2.0 * near);
+            let section = CameraSection {
+                eye: eye.into(),
+                target: (eye + look).into(),
+                up: up.into(),
+                fov_y_deg: c.fov_y.to_degrees(),
+                near,
+                far,
+            };
+            check_camera(
+                &format!("{origin} (its camera, scaled by {scale})"),
+                &section,
+            )?;
+            CameraDesc {
+                eye,
+                target: eye + look,
+                up,
+                fov_y: c.fov_y,
+                near,
+                far,
+                ..CameraDesc::default()
+            }
+        }
+    };
+    let mut scene =
+        Scene::with_refractors(name, refractors, Environment::Procedural).map_err(|err| {
+            SceneError::Parse {
+                origin: origin.clone(),
+                message: err.to_string(),
+            }
+        })?;
+    scene.objects = objects;
+    scene.camera = camera;
+    Ok(LoadedScene { scene, warnings })
+}
+
+/// The IOR of a glTF glass material without `KHR_materials_ior` (the extension's default).
+const DEFAULT_GLTF_IOR: f32 = 1.5;
 
 /// `x' = T · R_xyz · S · x`: scale, then XYZ Euler rotation, then translation.
 fn affine(translate: [f32; 3], scale: f32, rotate_deg: [f32; 3]) -> Affine3A {

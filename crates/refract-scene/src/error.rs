@@ -48,7 +48,9 @@ pub enum SceneError {
         message: String,
     },
     /// An unknown built-in scene name, or a path that is not a scene file.
-    #[error("unknown scene `{name}`: expected a built-in scene ({builtins}) or a .toml scene file")]
+    #[error(
+        "unknown scene `{name}`: expected a built-in scene ({builtins}), a .toml scene file or a .gltf/.glb file"
+    )]
     UnknownScene {
         /// The name or path given.
         name: String,

@@ -8,7 +8,7 @@ use refract_scene::MethodId;
 /// Arguments of `refract view`.
 #[derive(Debug, clap::Args)]
 pub struct ViewArgs {
-    /// A built-in scene or a .toml scene file.
+    /// A built-in scene, a .toml scene file or a .gltf/.glb file.
     #[arg(default_value = "sphere")]
     pub scene: std::ffi::OsString,
     /// The method shown first (`m`/`n` switch).

@@ -25,9 +25,15 @@ pub struct GlassMaterial {
     /// applies per axis and Bevy along the normal, both equal for a uniform scale), so in the
     /// file's world units, before any normalisation.
     pub thickness: Option<f32>,
+    /// `KHR_materials_volume`'s `attenuationColor` and `attenuationDistance` (the distance
+    /// scaled by the node's uniform scale like `thickness`), when the distance is finite
+    /// (glTF's default, infinity, absorbs nothing).
+    pub attenuation: Option<(Vec3, f32)>,
 }
 
-pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), GeometryError> {
+/// A glTF document with its buffers, checked (accessor indices and bounds, required
+/// extensions) and validated.
+fn open(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GeometryError> {
     let error = |message: String| GeometryError::Gltf {
         path: path.to_owned(),
         message,
@@ -56,13 +62,24 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|err| error(format!("cannot load its buffers: {err}")))?;
     check_accessor_bounds(&document, &buffers).map_err(error)?;
+    Ok((document, buffers))
+}
 
+pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), GeometryError> {
+    let error = |message: String| GeometryError::Gltf {
+        path: path.to_owned(),
+        message,
+    };
+    let (document, buffers) = open(path)?;
     let mut collector = Collector::default();
     match document
         .default_scene()
         .or_else(|| document.scenes().next())
     {
-        Some(scene) => collector.visit_tree(&document, scene, &buffers, &error)?,
+        Some(scene) => for_each_node(&document, scene, &error, |node, world| match node.mesh() {
+            Some(mesh) => collector.add_mesh(&mesh, world, &buffers, &error),
+            None => Ok(()),
+        })?,
         None => {
             for mesh in document.meshes() {
                 collector.add_mesh(&mesh, Mat4::IDENTITY, &buffers, &error)?;
@@ -189,7 +206,7 @@ fn material_label(material: &gltf::Material<'_>) -> String {
 }
 
 /// What refract does not model of a glass material (issue 54 #16: dropped without a word):
-/// textures of the transmission and the thickness, absorption, roughness, partial transmission.
+/// textures of the transmission and the thickness, roughness, partial transmission.
 fn unmodelled(material: &gltf::Material<'_>) -> Vec<String> {
     let label = material_label(material);
     let mut dropped = Vec::new();
@@ -204,17 +221,11 @@ fn unmodelled(material: &gltf::Material<'_>) -> Vec<String> {
             ));
         }
     }
-    if let Some(volume) = material.volume() {
-        if volume.thickness_texture().is_some() {
-            dropped.push("its thicknessTexture (thicknessFactor alone is read)".to_owned());
-        }
-        if volume.attenuation_distance().is_finite() {
-            dropped.push(format!(
-                "attenuationDistance {} and attenuationColor {:?} (no absorption is modelled)",
-                volume.attenuation_distance(),
-                volume.attenuation_color()
-            ));
-        }
+    if material
+        .volume()
+        .is_some_and(|v| v.thickness_texture().is_some())
+    {
+        dropped.push("its thicknessTexture (thicknessFactor alone is read)".to_owned());
     }
     let roughness = material.pbr_metallic_roughness().roughness_factor();
     if roughness > 0.0 {
@@ -306,35 +317,24 @@ fn check_accessor_bounds(
 }
 
 impl Collector {
-    /// The scene's node trees, depth first with an explicit stack (no recursion: a chain of
-    /// 50,000 nodes is fine), each node's transform composed with its parent's. A node
-    /// reached twice (a cycle, or a child shared by two parents, both invalid glTF) is an error.
-    fn visit_tree(
-        &mut self,
-        document: &gltf::Document,
-        scene: gltf::Scene<'_>,
-        buffers: &[gltf::buffer::Data],
-        error: &impl Fn(String) -> GeometryError,
-    ) -> Result<(), GeometryError> {
-        let mut seen = vec![false; document.nodes().len()];
-        let mut stack: Vec<(gltf::Node<'_>, Mat4)> =
-            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
-        stack.reverse();
-        while let Some((node, parent)) = stack.pop() {
-            if std::mem::replace(&mut seen[node.index()], true) {
-                return Err(error(format!(
-                    "node {} is reached twice: node hierarchies must be trees (a cycle or a shared child)",
-                    node.index()
-                )));
-            }
-            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-            if let Some(mesh) = node.mesh() {
-                self.add_mesh(&mesh, world, buffers, error)?;
-            }
-            let children: Vec<_> = node.children().collect();
-            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    /// Appends one primitive's vertices and triangles; normals and texture coordinates are kept
+    /// only while every primitive has them.
+    fn push(&mut self, data: PrimitiveData) {
+        let base = self.positions.len() as u32;
+        self.positions.extend(&data.positions);
+        match data.normals {
+            Some(normals) if self.all_have_normals => self.normals.extend(normals),
+            _ => self.all_have_normals = false,
         }
-        Ok(())
+        match data.uvs {
+            Some(uvs) if self.all_have_uvs => self.uvs.extend(uvs),
+            _ => self.all_have_uvs = false,
+        }
+        self.triangles.extend(
+            data.triangles
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
     }
 
     fn add_mesh(
@@ -344,79 +344,338 @@ impl Collector {
         buffers: &[gltf::buffer::Data],
         error: &impl Fn(String) -> GeometryError,
     ) -> Result<(), GeometryError> {
-        let transform = Affine3A::from_mat4(world);
-        let normal_matrix = transform.matrix3.inverse().transpose();
-        let mirrored = transform.matrix3.determinant() < 0.0;
         for primitive in mesh.primitives() {
-            if primitive.mode() != Mode::Triangles {
-                continue; // points, lines and strips are not surfaces we refract through
-            }
-            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
-            let Some(positions) = reader.read_positions() else {
-                return Err(error(format!(
-                    "mesh `{}` has a primitive without POSITION",
-                    mesh.name().unwrap_or("?")
-                )));
+            let Some(data) = read_primitive(mesh, &primitive, world, buffers, error)? else {
+                continue;
             };
-            let base = self.positions.len() as u32;
-            self.positions
-                .extend(positions.map(|p| transform.transform_point3(Vec3::from(p))));
-            let count = self.positions.len() - base as usize;
-            match reader.read_normals() {
-                Some(normals) if self.all_have_normals => self.normals.extend(
-                    normals.map(|n| Vec3::from(normal_matrix * glam::Vec3A::from(Vec3::from(n)))),
-                ),
-                _ => self.all_have_normals = false,
-            }
-            match reader.read_tex_coords(0) {
-                Some(uvs) if self.all_have_uvs => {
-                    self.uvs.extend(uvs.into_f32().map(Vec2::from));
-                }
-                _ => self.all_have_uvs = false,
-            }
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(indices) => indices.into_u32().collect(),
-                None => (0..count as u32).collect(),
-            };
-            if let Some(&index) = indices.iter().find(|&&i| i as usize >= count) {
-                return Err(error(format!(
-                    "mesh `{}`: index {index} out of range for a primitive of {count} vertices",
-                    mesh.name().unwrap_or("?")
-                )));
-            }
-            if !indices.len().is_multiple_of(3) {
-                return Err(error(format!(
-                    "{} indices is not a whole number of triangles",
-                    indices.len()
-                )));
-            }
-            self.triangles.extend(indices.chunks_exact(3).map(|t| {
-                let tri = [t[0] + base, t[1] + base, t[2] + base];
-                if mirrored {
-                    [tri[0], tri[2], tri[1]]
-                } else {
-                    tri
-                }
-            }));
+            self.push(data);
             let material = primitive.material();
-            let glass = material.ior().is_some()
-                || material.transmission().is_some()
-                || material.volume().is_some();
-            if glass && self.material.is_some() && self.material_index != Some(material.index()) {
+            let glass = glass_material(&material, world);
+            if glass.is_some()
+                && self.material.is_some()
+                && self.material_index != Some(material.index())
+            {
                 self.other_glass.insert(material_label(&material));
             }
-            if self.material.is_none() && glass {
+            if self.material.is_none() && glass.is_some() {
                 self.material_index = Some(material.index());
                 self.dropped = unmodelled(&material);
-                self.material = Some(GlassMaterial {
-                    ior: material.ior(),
-                    transmission: material.transmission().map(|t| t.transmission_factor()),
-                    thickness: material.volume().map(|v| {
-                        v.thickness_factor() * transform.matrix3.determinant().abs().cbrt()
-                    }),
-                });
+                self.material = glass;
             }
         }
         Ok(())
+    }
+}
+
+/// The glass parameters of `material` on a node with local-to-world `world`, or `None` when
+/// the material has none of the glass extensions.
+fn glass_material(material: &gltf::Material<'_>, world: Mat4) -> Option<GlassMaterial> {
+    let glass = material.ior().is_some()
+        || material.transmission().is_some()
+        || material.volume().is_some();
+    // KHR_materials_volume: lengths are in the mesh's units, and the node's transform applies.
+    let node_scale = Affine3A::from_mat4(world)
+        .matrix3
+        .determinant()
+        .abs()
+        .cbrt();
+    glass.then(|| GlassMaterial {
+        ior: material.ior(),
+        transmission: material.transmission().map(|t| t.transmission_factor()),
+        thickness: material.volume().map(|v| v.thickness_factor() * node_scale),
+        attenuation: material.volume().and_then(|v| {
+            v.attenuation_distance().is_finite().then(|| {
+                (
+                    Vec3::from(v.attenuation_color()),
+                    v.attenuation_distance() * node_scale,
+                )
+            })
+        }),
+    })
+}
+
+/// One triangle primitive's vertices in world space (`None` for points, lines and strips,
+/// which are not surfaces to refract through): positions, normals through the inverse
+/// transpose, texture coordinates 0, and triangles indexing these vertices from 0, their
+/// winding turned where the transform mirrors.
+struct PrimitiveData {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn read_primitive(
+    mesh: &gltf::Mesh<'_>,
+    primitive: &gltf::Primitive<'_>,
+    world: Mat4,
+    buffers: &[gltf::buffer::Data],
+    error: &impl Fn(String) -> GeometryError,
+) -> Result<Option<PrimitiveData>, GeometryError> {
+    if primitive.mode() != Mode::Triangles {
+        return Ok(None);
+    }
+    let transform = Affine3A::from_mat4(world);
+    let normal_matrix = transform.matrix3.inverse().transpose();
+    let mirrored = transform.matrix3.determinant() < 0.0;
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
+    let Some(positions) = reader.read_positions() else {
+        return Err(error(format!(
+            "mesh `{}` has a primitive without POSITION",
+            mesh.name().unwrap_or("?")
+        )));
+    };
+    let positions: Vec<Vec3> = positions
+        .map(|p| transform.transform_point3(Vec3::from(p)))
+        .collect();
+    let count = positions.len();
+    let normals = reader.read_normals().map(|normals| {
+        normals
+            .map(|n| Vec3::from(normal_matrix * glam::Vec3A::from(Vec3::from(n))))
+            .collect()
+    });
+    let uvs = reader
+        .read_tex_coords(0)
+        .map(|uvs| uvs.into_f32().map(Vec2::from).collect());
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(indices) => indices.into_u32().collect(),
+        None => (0..count as u32).collect(),
+    };
+    if let Some(&index) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(error(format!(
+            "mesh `{}`: index {index} out of range for a primitive of {count} vertices",
+            mesh.name().unwrap_or("?")
+        )));
+    }
+    if !indices.len().is_multiple_of(3) {
+        return Err(error(format!(
+            "{} indices is not a whole number of triangles",
+            indices.len()
+        )));
+    }
+    let triangles = indices
+        .chunks_exact(3)
+        .map(|t| {
+            if mirrored {
+                [t[0], t[2], t[1]]
+            } else {
+                [t[0], t[1], t[2]]
+            }
+        })
+        .collect();
+    Ok(Some(PrimitiveData {
+        positions,
+        normals,
+        uvs,
+        triangles,
+    }))
+}
+
+/// The scene's node trees, depth first with an explicit stack (no recursion: a chain of
+/// 50,000 nodes is fine), `visit` called with each node and its local-to-world transform
+/// (its own composed with its parent's). A node reached twice (a cycle, or a child shared by
+/// two parents, both invalid glTF) is an error.
+fn for_each_node<'a>(
+    document: &'a gltf::Document,
+    scene: gltf::Scene<'a>,
+    error: &impl Fn(String) -> GeometryError,
+    mut visit: impl FnMut(gltf::Node<'a>, Mat4) -> Result<(), GeometryError>,
+) -> Result<(), GeometryError> {
+    let mut seen = vec![false; document.nodes().len()];
+    let mut stack: Vec<(gltf::Node<'_>, Mat4)> =
+        scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    stack.reverse();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(error(format!(
+                "node {} is reached twice: node hierarchies must be trees (a cycle or a shared child)",
+                node.index()
+            )));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let children: Vec<_> = node.children().collect();
+        visit(node, world)?;
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    Ok(())
+}
+
+/// A glTF file read as a scene ([`read_scene`]).
+pub(crate) struct GltfScene {
+    /// One part per node and material, in the order of the scene's nodes (depth first) and of
+    /// each node's primitives.
+    pub parts: Vec<ScenePart>,
+    /// The first node with a perspective camera, if any.
+    pub camera: Option<GltfCamera>,
+    /// What was read but is not modelled, one line each.
+    pub notes: Vec<String>,
+}
+
+/// The triangle primitives of one node that share one material.
+pub(crate) struct ScenePart {
+    /// `` node `name` (node 3), material `glass` (material 1) ``, for messages.
+    pub label: String,
+    pub raw: RawMesh,
+    /// The glass parameters when the material transmits (`KHR_materials_transmission` with a
+    /// factor above 0): the part is a refractor. `None`: an opaque object.
+    pub glass: Option<GlassMaterial>,
+    /// The material's `baseColorFactor` (linear RGB), which an opaque part is shaded with.
+    pub base_color: Vec3,
+}
+
+/// A glTF perspective camera placed by its node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfCamera {
+    /// The node's local-to-world transform: the camera looks down its −z with +y up.
+    pub camera_to_world: Mat4,
+    /// `yfov` in radians.
+    pub fov_y: f32,
+    /// `znear`.
+    pub near: f32,
+    /// `zfar`; `None`: an infinite projection.
+    pub far: Option<f32>,
+}
+
+/// Reads `path` as a scene: every node's triangle primitives grouped by material, each group a
+/// [`ScenePart`] (a refractor when its material transmits, an opaque object otherwise), and
+/// the first perspective camera.
+pub(super) fn read_scene(path: &Path) -> Result<GltfScene, GeometryError> {
+    let error = |message: String| GeometryError::Gltf {
+        path: path.to_owned(),
+        message,
+    };
+    let (document, buffers) = open(path)?;
+    let mut parts = Vec::new();
+    let mut camera = None;
+    let mut notes = std::collections::BTreeSet::new();
+    let mut visit = |node: gltf::Node<'_>, world: Mat4| -> Result<(), GeometryError> {
+        if let (None, Some(node_camera)) = (&camera, node.camera())
+            && let gltf::camera::Projection::Perspective(p) = node_camera.projection()
+        {
+            camera = Some(GltfCamera {
+                camera_to_world: world,
+                fov_y: p.yfov(),
+                near: p.znear(),
+                far: p.zfar(),
+            });
+        }
+        let Some(mesh) = node.mesh() else {
+            return Ok(());
+        };
+        // Material index (None: the default material) to the part it fills, for this node.
+        let mut groups: Vec<(Option<usize>, usize)> = Vec::new();
+        for primitive in mesh.primitives() {
+            let Some(data) = read_primitive(&mesh, &primitive, world, &buffers, &error)? else {
+                continue;
+            };
+            let material = primitive.material();
+            let part = match groups.iter().find(|(m, _)| *m == material.index()) {
+                Some(&(_, part)) => part,
+                None => {
+                    let transmits = material
+                        .transmission()
+                        .is_some_and(|t| t.transmission_factor() > 0.0);
+                    let glass = transmits
+                        .then(|| glass_material(&material, world))
+                        .flatten();
+                    if glass.is_some() {
+                        notes.extend(unmodelled(&material));
+                    } else if material
+                        .pbr_metallic_roughness()
+                        .base_color_texture()
+                        .is_some()
+                    {
+                        notes.insert(format!(
+                            "{}: its baseColorTexture is not read (the factor is)",
+                            material_label(&material)
+                        ));
+                    }
+                    let node_label = match node.name() {
+                        Some(name) => format!("node `{name}` (node {})", node.index()),
+                        None => format!("node {}", node.index()),
+                    };
+                    let [r, g, b, _] = material.pbr_metallic_roughness().base_color_factor();
+                    parts.push(PartBuilder {
+                        label: format!("{node_label}, {}", material_label(&material)),
+                        mesh_name: format!("{}: {node_label}", path.display()),
+                        collector: Collector::default(),
+                        glass,
+                        base_color: Vec3::new(r, g, b),
+                    });
+                    groups.push((material.index(), parts.len() - 1));
+                    parts.len() - 1
+                }
+            };
+            parts[part].collector.push(data);
+        }
+        Ok(())
+    };
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => for_each_node(&document, scene, &error, &mut visit)?,
+        None => {
+            return Err(error(
+                "it has no scene: a glTF read as a scene needs one (its nodes place the meshes)"
+                    .to_owned(),
+            ));
+        }
+    }
+    let parts = parts
+        .into_iter()
+        .filter(|p| !p.collector.triangles.is_empty())
+        .map(PartBuilder::finish)
+        .collect::<Result<_, _>>()?;
+    Ok(GltfScene {
+        parts,
+        camera,
+        notes: notes.into_iter().collect(),
+    })
+}
+
+/// A [`ScenePart`] being read: its primitives' vertices in a [`Collector`].
+struct PartBuilder {
+    label: String,
+    mesh_name: String,
+    collector: Collector,
+    glass: Option<GlassMaterial>,
+    base_color: Vec3,
+}
+
+impl PartBuilder {
+    fn finish(self) -> Result<ScenePart, GeometryError> {
+        let Collector {
+            positions,
+            normals,
+            uvs,
+            triangles,
+            all_have_normals,
+            all_have_uvs,
+            ..
+        } = self.collector;
+        let non_unit_normals = if all_have_normals {
+            super::count_non_unit(&normals)
+        } else {
+            0
+        };
+        let mesh = Mesh::new(
+            self.mesh_name,
+            positions,
+            all_have_normals.then_some(normals),
+            if all_have_uvs { uvs } else { vec![] },
+            triangles,
+        )?;
+        Ok(ScenePart {
+            label: self.label,
+            raw: RawMesh {
+                mesh,
+                has_file_normals: all_have_normals,
+                non_unit_normals,
+                notes: vec![],
+            },
+            glass: self.glass,
+            base_color: self.base_color,
+        })
     }
 }

@@ -11,7 +11,7 @@ use glam::Affine3A;
 use refract_geometry::GeometryError;
 use refract_geometry::Mesh;
 
-pub use gltf_file::GlassMaterial;
+pub use gltf_file::{GlassMaterial, GltfCamera};
 
 /// How to prepare a loaded mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,6 +109,64 @@ pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh, Geome
         mesh,
         material,
         report,
+    })
+}
+
+/// One part of a glTF scene ([`load_gltf_scene`]): the triangles of one node that share a
+/// material, in the file's world space, cleaned up like every loaded mesh (not normalised).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedPart {
+    /// `` node `name` (node 3), material `glass` (material 1) ``, for messages.
+    pub label: String,
+    /// The cleaned-up mesh.
+    pub mesh: Mesh,
+    /// The glass parameters when the material transmits (`KHR_materials_transmission` above 0):
+    /// the part is a refractor. `None`: an opaque object.
+    pub glass: Option<GlassMaterial>,
+    /// The material's `baseColorFactor` (linear RGB).
+    pub base_color: glam::Vec3,
+    /// What loading did.
+    pub report: LoadReport,
+}
+
+/// A glTF file read as a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedGltfScene {
+    /// One part per node and material, in the order of the scene's nodes (depth first).
+    pub parts: Vec<LoadedPart>,
+    /// The first perspective camera of the scene's nodes, if any.
+    pub camera: Option<GltfCamera>,
+    /// Material properties read but not modelled, one line each.
+    pub notes: Vec<String>,
+}
+
+/// Reads a `.gltf` or `.glb` file as a scene: every node's triangle primitives grouped by
+/// material, a refractor part where the material transmits (`KHR_materials_transmission`,
+/// with `_ior` and `_volume`), an opaque part otherwise, each cleaned up like [`load_mesh`]
+/// does (never normalised: the parts keep their places), and the first perspective camera.
+pub fn load_gltf_scene(path: &Path) -> Result<LoadedGltfScene, GeometryError> {
+    let scene = gltf_file::read_scene(path)?;
+    let mut parts = Vec::with_capacity(scene.parts.len());
+    for part in scene.parts {
+        let (mesh, report) = prepare(
+            part.raw,
+            &LoadOptions {
+                normalize: false,
+                weld_relative_epsilon: None,
+            },
+        )?;
+        parts.push(LoadedPart {
+            label: part.label,
+            mesh,
+            glass: part.glass,
+            base_color: part.base_color,
+            report,
+        });
+    }
+    Ok(LoadedGltfScene {
+        parts,
+        camera: scene.camera,
+        notes: scene.notes,
     })
 }
 
