@@ -143,6 +143,9 @@ fn gpu_reference_matches_the_cpu_reference_on_every_built_in_scene() {
         "adjacent-mirrors",
         "mirror-stack",
         "spectacles",
+        "glass-behind-glass",
+        "vessel",
+        "liquid",
     ] {
         let scene = Arc::new(load_scene(name).expect("built-in").scene);
         let Agreement {
@@ -209,6 +212,8 @@ fn full_mode_and_supersampling_match_the_cpu_reference() {
         ("torus", &[("mode", "full"), ("depth", "12")][..]),
         ("glass-room", &[("mode", "full")][..]),
         ("mirror-stack", &[("mode", "full")][..]),
+        ("vessel", &[("mode", "full")][..]),
+        ("liquid", &[("mode", "full")][..]),
         (
             "spectacles",
             &[("mode", "full"), ("interface", "geometric")][..],

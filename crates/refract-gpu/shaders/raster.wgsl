@@ -46,12 +46,13 @@ struct FrontOut {
     @location(1) n1_covered: vec4<f32>,
 }
 
-// Front faces: (P1, d_N) and (normalised N1, 1). Empty texels are cleared to 0 (w = 0).
+// Front faces: (P1, d_N) and (normalised N1, 1 + the refractor's index, the vertices' `object`:
+// 1 for the first refractor). Empty texels are cleared to 0 (w = 0).
 @fragment
 fn fs_front(in: VertexOut) -> FrontOut {
     var out: FrontOut;
     out.p1_dn = vec4<f32>(in.p_ws, in.d_n);
-    out.n1_covered = vec4<f32>(try_normalize(in.n_ws).xyz, 1.0);
+    out.n1_covered = vec4<f32>(try_normalize(in.n_ws).xyz, 1.0 + f32(in.object));
     return out;
 }
 

@@ -18,7 +18,8 @@ pub(crate) struct Vertex {
     pub scalar: f32,
     /// Texture coordinates (0 for meshes without).
     pub uv: [f32; 2],
-    /// Which mesh of the scene: 0 the refractor, `1 + k` opaque object `k`.
+    /// Which mesh of the scene: 0 the refractor, `1 + k` opaque object `k`; for the other
+    /// refractors ([`GpuScene::other_refractors`]), their index `k ≥ 1` among the refractors.
     pub object: u32,
 }
 
@@ -134,6 +135,9 @@ impl GpuMaterial {
 /// A scene on the GPU: the refractor (with `d_N`), every opaque object, the environment.
 pub(crate) struct GpuScene {
     pub refractor: GpuMesh,
+    /// Refractors 1.. (with their `d_N`; `object` = their index), drawn by the engine family's
+    /// front-face pass beside [`Self::refractor`].
+    pub other_refractors: Vec<GpuMesh>,
     pub objects: Vec<GpuMesh>,
     /// One [`GpuMaterial`] per object (one zeroed entry when there is none: bindings cannot be
     /// empty).
@@ -146,6 +150,21 @@ impl GpuScene {
     pub(crate) fn new(device: &wgpu::Device, scene: &Scene) -> Self {
         let refractor = &scene.refractor;
         let refractor = GpuMesh::new(device, "refractor", refractor.mesh(), refractor.d_n(), 0);
+        let other_refractors = scene
+            .other_refractors
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let index = 1 + k as u32;
+                GpuMesh::new(
+                    device,
+                    &format!("refractor {index}"),
+                    r.mesh(),
+                    r.d_n(),
+                    index,
+                )
+            })
+            .collect();
         let objects = scene
             .objects
             .iter()
@@ -203,6 +222,7 @@ impl GpuScene {
         });
         Self {
             refractor,
+            other_refractors,
             objects,
             materials,
             environment_texels,

@@ -83,6 +83,10 @@ impl ShaderModule {
             .collect();
         source.push_str(&wgsl_constants());
         source.push_str(&color_chart_constant());
+        source.push_str(&format!(
+            "const MAX_REFRACTORS: u32 = {}u;\n",
+            refract_scene::MAX_REFRACTORS
+        ));
         for (name, text) in self.files {
             source.push_str(&format!("\n// ---- {name} ----\n"));
             for line in text.lines().filter(|line| !is_directive(line)) {

@@ -431,7 +431,7 @@ pub const REGISTRY: [MethodInfo; row_count(FAMILY_ROWS)] = concat(FAMILY_ROWS);
 
 /// Whether `method` can render `scene`, and why not: a row that does not render conductors
 /// (the image-space and nearby-geometry families) refracts through glass among diffuse objects
-/// only; the others (the reference, `distance-map`, `pvrr`) render mirrors and metals too.
+/// only (the engine family draws every refractor, so all of them must be glass); the others (the reference, `distance-map`, `pvrr`) render mirrors and metals too.
 pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), String> {
     if method.info().renders_conductors {
         Ok(())
@@ -440,6 +440,15 @@ pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), Strin
             "method `{method}` refracts through glass; the specular object of scene `{}` is a conductor ({})",
             scene.name,
             crate::scene::conductor_name(&c)
+        ))
+    } else if let Some(k) = (method.info().family == Family::Engine)
+        .then(|| scene.refractors().position(|r| r.conductor().is_some()))
+        .flatten()
+    {
+        // The engine methods draw every refractor as glass (the engines' second glass).
+        Err(format!(
+            "method `{method}` draws every refractor as glass; refractor {k} of scene `{}` is a conductor",
+            scene.name
         ))
     } else if let Some(k) = scene.objects.iter().position(|o| o.conductor().is_some()) {
         Err(format!(

@@ -5,8 +5,12 @@
 //! refractor's front faces — then per pixel [`refract_core::engine::engine_path`] and the
 //! colour of the texel it reads. No back faces: no engine renders them.
 //!
-//! Every pixel is one of: the refractor in front of the objects (the engine's refraction), an
-//! object seen directly (its texel), or the environment.
+//! Every pixel is one of: a refractor in front of the objects (the engine's refraction), an
+//! object seen directly (its texel), or the environment. A scene with several refractors is
+//! drawn as the engines draw several transmissive objects: each refractor's front faces, the
+//! nearest one per pixel refracting with its own IOR and thickness, every one reading the
+//! screen texture of the opaque objects only, so no glass is seen through another
+//! (three.js's transmission pass, Filament's and Bevy's single layer).
 
 use std::sync::Arc;
 
@@ -80,7 +84,10 @@ impl OpaqueDepth for ScreenDepth<'_> {
 #[derive(Default)]
 pub struct EnginePasses {
     meshes: NearbyMeshes,
-    front: SurfaceBuffer,
+    /// Refractor `k`'s nearest front faces in `fronts[k]`.
+    fronts: Vec<SurfaceBuffer>,
+    /// Refractor `k`'s model and IOR.
+    refractors: Vec<(EngineModel, f32)>,
     screen: NearbyTexture,
     aovs: Vec<EngineAov>,
 }
@@ -99,21 +106,27 @@ impl CpuFamily for EnginePasses {
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
-        let model = params.model(&scene.refractor);
+        self.refractors.clear();
+        self.refractors
+            .extend(scene.refractors().map(|r| (params.model(r), r.ior())));
         // Without opaque objects the screen texture is the environment everywhere: not drawn.
         let screen = (!scene.objects.is_empty()).then(|| {
             self.screen.render_into(scene, &self.meshes, camera);
             &self.screen
         });
-        front_faces_into(&scene.refractor, camera, &mut self.front);
+        self.fronts
+            .resize_with(scene.refractor_count(), SurfaceBuffer::default);
+        for (refractor, front) in scene.refractors().zip(&mut self.fronts) {
+            front_faces_into(refractor, camera, front);
+        }
         let (width, height) = (camera.width(), camera.height());
         let n = (width * height) as usize;
         frame.resize_for_overwrite(width, height);
         let pixels = PixelContext {
             scene,
             camera,
-            model,
-            front: &self.front,
+            refractors: &self.refractors,
+            fronts: &self.fronts,
             screen,
         };
         let rows = frame.color.par_chunks_mut(width as usize).enumerate();
@@ -135,62 +148,102 @@ impl CpuFamily for EnginePasses {
 struct PixelContext<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
-    model: EngineModel,
-    front: &'a SurfaceBuffer,
+    /// Refractor `k`'s model and IOR.
+    refractors: &'a [(EngineModel, f32)],
+    /// Refractor `k`'s front faces.
+    fronts: &'a [SurfaceBuffer],
     /// The opaque objects' screen texture; `None` for a scene without objects.
     screen: Option<&'a NearbyTexture>,
 }
 
 impl PixelContext<'_> {
-    /// Row `y`: pixels that see an object or the environment directly at once, the
+    /// Row `y`: pixels that see an object or the environment directly at once, each
     /// refractor's pixels eight at a time through [`engine_path_x8`] (bit-identical to the
     /// scalar path), the environment lookups eight at a time ([`EnvironmentLanes`]).
     fn row(&self, y: u32, colors: &mut [Vec3], mut aovs: Option<&mut [EngineAov]>) {
         let mut lanes = EnvironmentLanes::new(&self.scene.environment, self.camera);
         let mut group = PixelGroup::new();
+        // The refractor of the pixels in `group`.
+        let mut group_refractor = 0;
         for x in 0..colors.len() as u32 {
             colors[x as usize] = Vec3::ZERO;
             let index = (y * self.camera.width() + x) as usize;
             let texel = UVec2::new(x, y);
-            // The refractor where it is drawn in front of any object there: its surface is
-            // reconstructed here only for that depth test, else eight at a time below.
-            let refractor = self.front.is_covered(index)
-                && self.object(texel).is_none_or(|o| {
-                    self.front
-                        .texel(index)
-                        .is_some_and(|f| view_depth(self.camera, f.p_ws) < o.surface.depth)
-                });
-            if refractor {
-                if group.push(x) {
-                    self.refractor(&group, y, colors, &mut lanes, aovs.as_deref_mut());
-                    group.len = 0;
+            match self.refractor_at(index, texel) {
+                Some(k) => {
+                    if group.len > 0 && k != group_refractor {
+                        group.pad();
+                        self.refractor(
+                            &group,
+                            group_refractor,
+                            y,
+                            colors,
+                            &mut lanes,
+                            aovs.as_deref_mut(),
+                        );
+                        group.len = 0;
+                    }
+                    group_refractor = k;
+                    if group.push(x) {
+                        self.refractor(&group, k, y, colors, &mut lanes, aovs.as_deref_mut());
+                        group.len = 0;
+                    }
                 }
-            } else {
-                self.screen(x, texel, 1.0, colors, &mut lanes);
-                if let Some(aovs) = aovs.as_deref_mut() {
-                    aovs[x as usize] = EngineAov::NONE;
+                None => {
+                    self.screen(x, texel, 1.0, colors, &mut lanes);
+                    if let Some(aovs) = aovs.as_deref_mut() {
+                        aovs[x as usize] = EngineAov::NONE;
+                    }
                 }
             }
         }
         if group.len > 0 {
             group.pad();
-            self.refractor(&group, y, colors, &mut lanes, aovs);
+            self.refractor(&group, group_refractor, y, colors, &mut lanes, aovs);
         }
         lanes.flush(colors);
     }
 
-    /// Eight refractor pixels of row `y` (all covered; padding repeats lane 0): their front
-    /// surfaces eight at a time (bit-identical to one at a time), the engine's path, then its
-    /// reads.
+    /// The refractor drawn at pixel `index` (texel `texel`): the nearest of those covering it,
+    /// where it is in front of any object there. Surfaces are reconstructed here only for these
+    /// depth tests (else eight at a time in [`Self::refractor`]).
+    #[inline]
+    fn refractor_at(&self, index: usize, texel: UVec2) -> Option<usize> {
+        let depth = |front: &SurfaceBuffer| {
+            front
+                .texel(index)
+                .map_or(f32::INFINITY, |f| view_depth(self.camera, f.p_ws))
+        };
+        let nearest = match self.fronts {
+            [front] => front.is_covered(index).then_some(0),
+            fronts => fronts
+                .iter()
+                .enumerate()
+                .filter(|(_, f)| f.is_covered(index))
+                .map(|(k, f)| (k, depth(f)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(k, _)| k),
+        }?;
+        let in_front = self
+            .object(texel)
+            .is_none_or(|o| depth(&self.fronts[nearest]) < o.surface.depth);
+        in_front.then_some(nearest)
+    }
+
+    /// Eight pixels of row `y` where refractor `k` is drawn (padding repeats lane 0): their
+    /// front surfaces eight at a time (bit-identical to one at a time), the engine's path with
+    /// refractor `k`'s model and IOR, then its reads.
     fn refractor(
         &self,
         group: &PixelGroup,
+        k: usize,
         y: u32,
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
         mut aovs: Option<&mut [EngineAov]>,
     ) {
-        let fronts = self.front.texels_x8(&group.x, y);
+        let fronts = self.fronts[k].texels_x8(&group.x, y);
+        let (model, ior) = self.refractors[k];
         let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
         for (i, f) in fronts.iter().enumerate() {
             p1[i] = f.p_ws;
@@ -204,8 +257,8 @@ impl PixelContext<'_> {
             &uv,
             p1,
             n1,
-            self.scene.refractor.ior(),
-            self.model,
+            ior,
+            model,
         );
         for (&x, path) in group.x.iter().zip(&paths).take(group.len) {
             let mut aov = EngineAov {

@@ -2,12 +2,15 @@
 //! `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`): the opaque objects' surface
 //! pass from the eye (the nearby-geometry family's NG targets without a guard band), the
 //! refractor's front faces (no back faces), then `shade_engine` of `engine.wgsl` (beside this module) as a
-//! compute pass, one pipeline per method (`ENGINE_MODEL` fixed per pipeline).
+//! compute pass, one pipeline per method (`ENGINE_MODEL` fixed per pipeline). Every refractor's
+//! front faces are drawn, each pixel refracting with its nearest refractor's IOR and amount
+//! (binding 17, [`refractor_table`]), as on the CPU.
 
 use glam::Vec3;
 use refract_core::engine::EngineUniforms;
 use refract_scene::{
-    Aov, EngineParams, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, RenderError,
+    Aov, EngineParams, Frame, FrameOutputs, LayerValue, MAX_REFRACTORS, MethodId, PixelLayers,
+    RenderError,
 };
 
 use crate::bindings::{bind_group, uniform_entry};
@@ -76,6 +79,7 @@ impl EnginePipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let mut entries = nearby_layout();
         entries.push(uniform_entry(16, wgpu::ShaderStages::COMPUTE));
+        entries.push(uniform_entry(17, wgpu::ShaderStages::COMPUTE));
         Self(MethodPipelines::new(
             device,
             &SHADER,
@@ -115,6 +119,10 @@ impl GpuFamily for EnginePipelines {
         let model = params.model(&cx.scene.refractor);
         let has_objects = !cx.scene.objects.is_empty();
         let uniforms = EngineUniforms::new(cx.camera, &model, has_objects);
+        let table = refractor_table(cx.scene, params, cx.camera);
+        cx.context
+            .queue
+            .write_buffer(&targets.refractor_table, 0, bytemuck::cast_slice(&table));
         targets.encode(cx, self, &uniforms, encoder);
         Ok(())
     }
@@ -133,6 +141,21 @@ impl GpuFamily for EnginePipelines {
     }
 }
 
+/// Refractor `k`'s `(IOR, amount, 0, 0)` in entry `k` (`engine.wgsl`'s `engine_refractors`):
+/// the IOR and the model's `amount` ([`EngineUniforms::amount`]) of `params` on that refractor.
+fn refractor_table(
+    scene: &refract_scene::Scene,
+    params: &EngineParams,
+    camera: &refract_core::Camera,
+) -> [[f32; 4]; MAX_REFRACTORS] {
+    let mut table = [[0.0; 4]; MAX_REFRACTORS];
+    for (entry, refractor) in table.iter_mut().zip(scene.refractors()) {
+        let amount = EngineUniforms::new(camera, &params.model(refractor), false).amount;
+        *entry = [refractor.ior(), amount, 0.0, 0.0];
+    }
+    table
+}
+
 /// The targets of engine frames at one resolution.
 pub(crate) struct EngineTargets {
     size: (u32, u32),
@@ -140,6 +163,8 @@ pub(crate) struct EngineTargets {
     screen: SurfaceTargets,
     nearby_uniforms: wgpu::Buffer,
     engine_uniforms: wgpu::Buffer,
+    /// [`refractor_table`] (binding 17).
+    refractor_table: wgpu::Buffer,
     group: wgpu::BindGroup,
     /// Colour, T2, P2, flags (off screen, screen weight), P_geom (w: hit), texel (x, y, object).
     outputs: OutputBuffers,
@@ -169,6 +194,10 @@ impl EngineTargets {
             );
             let engine_uniforms =
                 uniform_buffer("engine uniforms", std::mem::size_of::<EngineUniforms>());
+            let refractor_table = uniform_buffer(
+                "engine refractors",
+                std::mem::size_of::<[[f32; 4]; MAX_REFRACTORS]>(),
+            );
             let outputs = OutputBuffers::new(
                 device,
                 &["colour", "T2", "P2", "flags", "P_geom", "texel"],
@@ -177,6 +206,7 @@ impl EngineTargets {
             let mut resources =
                 nearby_resources(&refractor, scene, &outputs, &screen, &nearby_uniforms);
             resources.push(engine_uniforms.as_entire_binding());
+            resources.push(refractor_table.as_entire_binding());
             let group = bind_group(device, "engine", &pipelines.0.layout, &resources);
             Self {
                 size: (width, height),
@@ -184,6 +214,7 @@ impl EngineTargets {
                 screen,
                 nearby_uniforms,
                 engine_uniforms,
+                refractor_table,
                 group,
                 outputs,
             }
@@ -224,7 +255,7 @@ impl EngineTargets {
         context
             .queue
             .write_buffer(&self.engine_uniforms, 0, bytemuck::bytes_of(engine));
-        self.refractor.encode(cx, &uniforms, None, encoder);
+        self.refractor.encode(cx, &uniforms, None, true, encoder);
         // Without opaque objects the shader never reads the screen texture.
         if engine.has_objects != 0 {
             let objects: Vec<_> = scene.objects.iter().collect();

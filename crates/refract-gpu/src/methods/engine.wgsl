@@ -4,6 +4,14 @@
 // also holds image_space.wgsl (front faces, environment) and object_surfaces.wgsl (the opaque
 // objects' surface pass from the eye: ng_surface, ng_color), whose bindings it shares; the
 // engine writes its flags (off screen, screen weight) in the N2 slot.
+//
+// Several refractors: the front-face pass draws them all (the nearest wins; front_n1.w is
+// 1 + its index, raster.wgsl), and each pixel refracts with its refractor's IOR and amount
+// from `engine_refractors`, over the screen texture of the opaque objects only, as the engines
+// draw several transmissive objects.
+
+// Refractor k's (IOR, amount, 0, 0): crates/refract-gpu/src/methods/engine.rs.
+@group(0) @binding(17) var<uniform> engine_refractors: array<vec4<f32>, MAX_REFRACTORS>;
 
 // The screen texel: xyz = P, w = 1 where it holds an object.
 fn screen_surface(texel: vec2<i32>) -> vec4<f32> {
@@ -76,7 +84,9 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let n4 = robust_normalize(px.n1);
     let n1 = select(px.n1, n4.xyz, n4.w > 0.5);
-    let path = engine_path(px.uv, px.p1, n1);
+    let k = min(u32(round(textureLoad(front_n1, texel, 0).w)) - 1u, MAX_REFRACTORS - 1u);
+    let refractor = engine_refractors[k];
+    let path = engine_path(px.uv, px.p1, n1, refractor.x, refractor.y);
     var color = vec3<f32>(0.0);
     if path.screen_weight > 0.0 {
         color += path.screen_weight * screen_color(path.texel);

@@ -23,7 +23,7 @@ fn row_path(i: u32) -> EnginePath {
     let packed = in_b[i].w;
     let v = floor(packed / 4096.0);
     let uv = vec2<f32>(packed - 4096.0 * v, v) + vec2<f32>(0.5);
-    return engine_path(uv, in_a[i].xyz, in_b[i].xyz);
+    return engine_path(uv, in_a[i].xyz, in_b[i].xyz, frame.ior, engine.amount);
 }
 
 // -> (texel.x, texel.y, screen weight, 1 off screen + 2 has an exit)

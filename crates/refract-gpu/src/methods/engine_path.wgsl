@@ -53,8 +53,9 @@ struct EnginePath {
     has_exit: bool,
 }
 
-// engine.rs: engine_path.
-fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePath {
+// engine.rs: engine_path, through a refractor of index `ior` whose model reads `amount` (the
+// thickness `d`, or the screen offset's scale).
+fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>, ior: f32, amount: f32) -> EnginePath {
     var path: EnginePath;
     path.screen_weight = 1.0;
     path.environment_dir = vec3<f32>(0.0);
@@ -65,7 +66,7 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
     let own = clamp_to_screen(uv_px);
     if ENGINE_MODEL == ENGINE_SCREEN_OFFSET {
         let n_view = (engine.world_to_view * vec4<f32>(n1_ws, 0.0)).xyz;
-        let offset = uv_px + screen_offset_px(n_view, engine.amount, size);
+        let offset = uv_px + screen_offset_px(n_view, amount, size);
         let shifted = clamp_to_screen(offset);
         path.texel = shifted.xy;
         path.off_screen = shifted.z == 1;
@@ -76,7 +77,7 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
         return path;
     }
     if ENGINE_MODEL == ENGINE_VOLUME_THICKNESS {
-        let e = volume_exit(p1_ws, n1_ws, incident, frame.ior, engine.amount);
+        let e = volume_exit(p1_ws, n1_ws, incident, ior, amount);
         path.p2 = e.p;
         path.t2 = e.dir;
         let c = projected_texel(e.p, own.xy);
@@ -84,17 +85,17 @@ fn engine_path(uv_px: vec2<f32>, p1_ws: vec3<f32>, n1_ws: vec3<f32>) -> EnginePa
         path.off_screen = c.z == 1;
         if engine.depth_test != 0u && screen_depth(path.texel) < fragment_depth {
             path.screen_weight = 0.0;
-            path.environment_dir = bevy_fallback_dir(incident, e.dir, engine.amount);
+            path.environment_dir = bevy_fallback_dir(incident, e.dir, amount);
         }
         return path;
     }
     var e: EngineExit;
     if ENGINE_MODEL == ENGINE_PROXY_SPHERE {
-        e = proxy_sphere_exit(p1_ws, n1_ws, incident, frame.ior, engine.amount);
+        e = proxy_sphere_exit(p1_ws, n1_ws, incident, ior, amount);
     } else if ENGINE_MODEL == ENGINE_PROXY_BOX {
-        e = proxy_box_exit(p1_ws, n1_ws, incident, frame.ior, engine.amount);
+        e = proxy_box_exit(p1_ws, n1_ws, incident, ior, amount);
     } else {
-        e = proxy_box_exit(p1_ws, n1_ws, incident, frame.ior, THIN_THICKNESS);
+        e = proxy_box_exit(p1_ws, n1_ws, incident, ior, THIN_THICKNESS);
     }
     path.p2 = e.p;
     path.t2 = e.dir;

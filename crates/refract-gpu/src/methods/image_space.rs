@@ -233,7 +233,7 @@ impl ImageSpaceTargets {
             ImageSpaceMethod::TwoInterface(p) => Some(p.back),
             ImageSpaceMethod::Single => None,
         };
-        self.refractor.encode(cx, uniforms, back, encoder);
+        self.refractor.encode(cx, uniforms, back, false, encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("image-space kernel"),

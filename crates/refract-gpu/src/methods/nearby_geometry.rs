@@ -252,7 +252,8 @@ impl NearbyTargets {
             0,
             bytemuck::bytes_of(&nearby_uniforms(nearby)),
         );
-        self.refractor.encode(cx, uniforms, Some(back), encoder);
+        self.refractor
+            .encode(cx, uniforms, Some(back), false, encoder);
         let objects: Vec<_> = scene.objects.iter().collect();
         self.ng.encode(
             &context.queue,

@@ -56,12 +56,15 @@ impl RefractorTargets {
     }
 
     /// Writes the uniforms and encodes the back faces (when `back` is given) and the front
-    /// faces; the first pass writes the frame's start timestamp.
+    /// faces of the first refractor, or of every refractor with `all_refractors` (the nearest
+    /// per pixel; `front_n1.w` = 1 + its index); the first pass writes the frame's start
+    /// timestamp.
     pub(crate) fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
         uniforms: &FrameUniforms,
         back: Option<BackSurface>,
+        all_refractors: bool,
         encoder: &mut wgpu::CommandEncoder,
     ) {
         let GpuFrameCx {
@@ -90,6 +93,10 @@ impl RefractorTargets {
                 timestamps.and_then(|t| t.render_pass("back faces")),
             );
         }
+        let mut meshes = vec![&scene.refractor];
+        if all_refractors {
+            meshes.extend(&scene.other_refractors);
+        }
         raster.encode(
             encoder,
             &RasterPass {
@@ -97,7 +104,7 @@ impl RefractorTargets {
                 camera,
                 uniforms: &self.raster_group,
                 peel: None,
-                meshes: &[&scene.refractor],
+                meshes: &meshes,
                 targets: &[&self.front_p1, &self.front_n1],
                 depth: &self.depth,
             },
