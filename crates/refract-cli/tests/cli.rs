@@ -835,7 +835,7 @@ fn export_gltf_writes_the_files_the_engines_load() {
 }
 
 /// `refract claims` measures the claims and writes them with verdicts, and a coverage table
-/// with a row for each of the 64 inventory claims and the 3 beyond the papers; with fewer
+/// with a row for each of the 64 inventory claims and the 5 beyond the papers; with fewer
 /// timing rounds than a claim states, its verdict is inconclusive; against the GPU reference
 /// (`--reference-backend gpu`) every verdict is the same.
 #[test]
@@ -879,7 +879,7 @@ fn claims_are_measured_and_written() {
     };
     assert_eq!(
         (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
-        (13, 16, 14, 21, 4)
+        (13, 16, 14, 21, 5)
     );
     // One timing round of the five U12 states: inconclusive, whatever the speed-up.
     assert!(

@@ -1100,7 +1100,7 @@ fn warn_of_d_n(label: &str, refractor: &Refractor, warnings: &mut Vec<String>) {
     // d_N serves refraction only: a conductor (an open mirror) has no use for it.
     if d_n.misses > 0 && refractor.is_dielectric() {
         warnings.push(format!(
-            "{label}d_N: {} of {} vertices missed (open mesh); they use {:.4}",
+            "{label}d_N: {} of {} vertices missed (an open mesh, or a ray along an edge); they use {:.4}",
             d_n.misses,
             d_n.values.len(),
             d_n.fallback

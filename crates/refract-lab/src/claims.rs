@@ -25,6 +25,7 @@ use refract_scene::{
 mod distance_map;
 mod engine;
 mod inventory;
+mod layers;
 mod nearby;
 mod pvrr;
 
@@ -219,6 +220,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     )?);
     md.push_str(&pvrr::section(args, &inventory, &mut ledger)?);
     md.push_str(&engine::section(args, &inventory, &mut ledger, progress)?);
+    md.push_str(&layers::section(args, &inventory, &mut ledger)?);
     md.push_str(&ledger.coverage(&inventory));
     write_text_atomically(&args.out, &md)?;
     Ok(md)
@@ -285,6 +287,16 @@ impl Bench {
         truth: &Truth,
         params: &MethodParams,
     ) -> crate::Result<(Frame, MetricsRecord)> {
+        self.measure_maps(truth, params)
+            .map(|(frame, record, _)| (frame, record))
+    }
+
+    /// [`Self::measure`] with the per-pixel error maps.
+    pub fn measure_maps(
+        &mut self,
+        truth: &Truth,
+        params: &MethodParams,
+    ) -> crate::Result<(Frame, MetricsRecord, refract_eval::metrics::ErrorMaps)> {
         let mut frame = Frame::default();
         self.cpu.render(
             &truth.camera,
@@ -292,14 +304,14 @@ impl Bench {
             FrameOutputs::ColorAndAovs,
             &mut frame,
         )?;
-        let (record, _) = refract_eval::metrics::evaluate_method(
+        let (record, maps) = refract_eval::metrics::evaluate_method(
             &truth.frame,
             &frame,
             &truth.camera,
             &truth.scene,
             params,
         );
-        Ok((frame, record))
+        Ok((frame, record, maps))
     }
 }
 
