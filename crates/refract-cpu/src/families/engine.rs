@@ -214,19 +214,22 @@ impl PixelContext<'_> {
                 .texel(index)
                 .map_or(f32::INFINITY, |f| view_depth(self.camera, f.p_ws))
         };
-        let nearest = match self.fronts {
-            [front] => front.is_covered(index).then_some(0),
-            fronts => fronts
-                .iter()
-                .enumerate()
-                .filter(|(_, f)| f.is_covered(index))
-                .map(|(k, f)| (k, depth(f)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(k, _)| k),
-        }?;
-        let in_front = self
-            .object(texel)
-            .is_none_or(|o| depth(&self.fronts[nearest]) < o.surface.depth);
+        // One refractor: its depth only where an object is there to test against.
+        let (nearest, nearest_depth) = match self.fronts {
+            [front] => (front.is_covered(index).then_some(0)?, None),
+            fronts => {
+                let (k, d) = fronts
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, f)| f.is_covered(index))
+                    .map(|(k, f)| (k, depth(f)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))?;
+                (k, Some(d))
+            }
+        };
+        let in_front = self.object(texel).is_none_or(|o| {
+            nearest_depth.unwrap_or_else(|| depth(&self.fronts[nearest])) < o.surface.depth
+        });
         in_front.then_some(nearest)
     }
 

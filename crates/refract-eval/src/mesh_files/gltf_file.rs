@@ -92,46 +92,20 @@ pub(super) fn read(path: &Path) -> Result<(RawMesh, Option<GlassMaterial>), Geom
             degenerate: 0,
         });
     }
-    let Collector {
-        positions,
-        normals,
-        uvs,
-        triangles,
-        all_have_normals,
-        all_have_uvs,
-        material,
-        material_index: _,
-        other_glass,
-        mut dropped,
-    } = collector;
-    if !other_glass.is_empty() {
+    let material = collector.material;
+    let mut dropped = std::mem::take(&mut collector.dropped);
+    if !collector.other_glass.is_empty() {
         dropped.push(format!(
             "glass: {} also transmissive; refract reads the first glass material for the whole \
              mesh",
-            other_glass.into_iter().collect::<Vec<_>>().join(", ")
+            std::mem::take(&mut collector.other_glass)
+                .into_iter()
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
     }
-    let non_unit_normals = if all_have_normals {
-        super::count_non_unit(&normals)
-    } else {
-        0
-    };
-    let mesh = Mesh::new(
-        path.display().to_string(),
-        positions,
-        all_have_normals.then_some(normals),
-        if all_have_uvs { uvs } else { vec![] },
-        triangles,
-    )?;
-    Ok((
-        RawMesh {
-            mesh,
-            has_file_normals: all_have_normals,
-            non_unit_normals,
-            notes: dropped,
-        },
-        material,
-    ))
+    let raw = collector.into_raw_mesh(path.display().to_string(), dropped)?;
+    Ok((raw, material))
 }
 
 struct Collector {
@@ -317,6 +291,29 @@ fn check_accessor_bounds(
 }
 
 impl Collector {
+    /// The collected vertices and triangles as a mesh named `name`, with `notes`: normals and
+    /// texture coordinates only where every primitive had them.
+    fn into_raw_mesh(self, name: String, notes: Vec<String>) -> Result<RawMesh, GeometryError> {
+        let non_unit_normals = if self.all_have_normals {
+            super::count_non_unit(&self.normals)
+        } else {
+            0
+        };
+        let mesh = Mesh::new(
+            name,
+            self.positions,
+            self.all_have_normals.then_some(self.normals),
+            if self.all_have_uvs { self.uvs } else { vec![] },
+            self.triangles,
+        )?;
+        Ok(RawMesh {
+            mesh,
+            has_file_normals: self.all_have_normals,
+            non_unit_normals,
+            notes,
+        })
+    }
+
     /// Appends one primitive's vertices and triangles; normals and texture coordinates are kept
     /// only while every primitive has them.
     fn push(&mut self, data: PrimitiveData) {
@@ -645,35 +642,10 @@ struct PartBuilder {
 
 impl PartBuilder {
     fn finish(self) -> Result<ScenePart, GeometryError> {
-        let Collector {
-            positions,
-            normals,
-            uvs,
-            triangles,
-            all_have_normals,
-            all_have_uvs,
-            ..
-        } = self.collector;
-        let non_unit_normals = if all_have_normals {
-            super::count_non_unit(&normals)
-        } else {
-            0
-        };
-        let mesh = Mesh::new(
-            self.mesh_name,
-            positions,
-            all_have_normals.then_some(normals),
-            if all_have_uvs { uvs } else { vec![] },
-            triangles,
-        )?;
+        let raw = self.collector.into_raw_mesh(self.mesh_name, vec![])?;
         Ok(ScenePart {
             label: self.label,
-            raw: RawMesh {
-                mesh,
-                has_file_normals: all_have_normals,
-                non_unit_normals,
-                notes: vec![],
-            },
+            raw,
             glass: self.glass,
             base_color: self.base_color,
         })
