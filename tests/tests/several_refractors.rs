@@ -6,6 +6,9 @@
 //! * the image-space, nearby-geometry, distance-map and PVRR families follow refractor 0 and
 //!   draw no other: their frames equal, bit for bit, the frames of the scene without the
 //!   other refractors;
+//! * `depth-peel` follows each ray through every refractor it crosses: the refractors its paths
+//!   meet are the exact reference's on nearly every pixel (and with one layer, only the
+//!   nearest refractor is ever met);
 //! * the engine family draws every refractor as the engines draw several transmissive objects:
 //!   each pixel is the one-refractor frame of the refractor nearest there (refractor 0 where
 //!   both cover a pixel), so no glass is seen through another.
@@ -17,6 +20,7 @@ use refract_eval::load_scene;
 use refract_gpu::GpuRenderer;
 use refract_scene::{Aov, BackendId, Family, Frame, REGISTRY, Renderer, Scene};
 use refract_tests::scenes::{method, render};
+use refract_trace::ReferenceRenderer;
 
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 72;
@@ -61,6 +65,10 @@ fn check(backend: &str, renderer: &mut dyn Renderer, id: BackendId) {
             .map(|s| render(renderer, s, &camera, &params))
             .collect();
         let name = info.name;
+        if info.family == Family::DepthPeel {
+            check_depth_peel(backend, renderer, &scene, &camera, &both);
+            continue;
+        }
         if info.family != Family::Engine {
             assert!(
                 bits(&both) == bits(&single[0]),
@@ -96,6 +104,59 @@ fn check(backend: &str, renderer: &mut dyn Renderer, id: BackendId) {
         let drawn = both_covered.iter().filter(|c| **c).count();
         assert_eq!(drawn, union, "{backend} {name}: covered pixels");
     }
+}
+
+/// `depth-peel`'s `refractors_met` against the reference's: the same mask on at least 95 % of
+/// the pixels both cover, and among them both refractors on the overlap; with one layer, no
+/// path meets more than the refractor it starts on.
+fn check_depth_peel(
+    backend: &str,
+    renderer: &mut dyn Renderer,
+    scene: &Arc<Scene>,
+    camera: &refract_core::Camera,
+    frame: &Frame,
+) {
+    let reference = render(
+        &mut ReferenceRenderer::new(),
+        scene,
+        camera,
+        &method(refract_scene::MethodId::Reference),
+    );
+    let met = |f: &Frame| {
+        f.count(Aov::RefractorsMet)
+            .expect("refractors met")
+            .to_vec()
+    };
+    let covered = |f: &Frame| f.flag(Aov::Covered).expect("covered").to_vec();
+    let (peel_met, exact_met) = (met(frame), met(&reference));
+    let (peel_covered, exact_covered) = (covered(frame), covered(&reference));
+    let (mut both, mut same, mut two) = (0, 0, 0);
+    for i in 0..peel_met.len() {
+        if peel_covered[i] && exact_covered[i] {
+            both += 1;
+            same += usize::from(peel_met[i] == exact_met[i]);
+            two += usize::from(exact_met[i] == 0b11 && peel_met[i] == 0b11);
+        }
+    }
+    println!(
+        "{backend} depth-peel: {same} of {both} pixels meet the reference's refractors, {two} both"
+    );
+    assert!(
+        both > 1000 && two > 50,
+        "{backend}: {both} covered, {two} meeting both"
+    );
+    assert!(
+        same * 100 >= both * 95,
+        "{backend}: {same} of {both} pixels agree"
+    );
+    let mut one_layer = method(refract_scene::MethodId::DepthPeel);
+    one_layer.set("layers", "1", "test").expect("layers");
+    let single = render(renderer, scene, camera, &one_layer);
+    let single_met = met(&single);
+    assert!(
+        single_met.iter().all(|m| m.count_ones() <= 1),
+        "{backend}: one layer met two refractors"
+    );
 }
 
 #[test]

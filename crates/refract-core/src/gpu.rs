@@ -226,6 +226,30 @@ pub fn wgsl_constants() -> String {
             crate::distance_map::MAX_LAYERS
         ),
         format!(
+            "const MAX_PEEL_LAYERS: u32 = {}u;",
+            crate::depth_peel::MAX_PEEL_LAYERS
+        ),
+        format!(
+            "const PEEL_REFINE_STEPS: u32 = {}u;",
+            crate::depth_peel::REFINE_STEPS
+        ),
+        format!(
+            "const PEEL_END_LEFT: u32 = {}u;",
+            crate::depth_peel::PeelEnd::Left.code()
+        ),
+        format!(
+            "const PEEL_END_LOST: u32 = {}u;",
+            crate::depth_peel::PeelEnd::Lost.code()
+        ),
+        format!(
+            "const PEEL_END_OFF_SCREEN: u32 = {}u;",
+            crate::depth_peel::PeelEnd::OffScreen.code()
+        ),
+        format!(
+            "const PEEL_END_BUDGET: u32 = {}u;",
+            crate::depth_peel::PeelEnd::Budget.code()
+        ),
+        format!(
             "const DM_FRESNEL_IGNORE: u32 = {}u;",
             crate::distance_map::fresnel_code(crate::distance_map::DielectricFresnel::Ignore)
         ),

@@ -16,6 +16,7 @@
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
 //! * [`engine`]: the refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament): exit models and screen lookups.
+//! * [`depth_peel`]: refraction through any number of interfaces in depth-peeled layers (glass behind glass, nested media).
 //! * [`pvrr`]: Kakimoto et al. 2007, per-vertex reflection and refraction (virtual viewpoint, view volume, texture coordinates, map lookup).
 //! * [`back_surface`]: which back surface the back-face pass keeps (Wyman 2005a §3.2).
 //! * [`camera`]: world ↔ view ↔ clip ↔ pixel transforms and pixel-centre rays.
@@ -52,6 +53,7 @@ compile_error!("refract-core needs its `std` feature (the default) or, without s
 pub mod arctangent;
 pub mod back_surface;
 pub mod camera;
+pub mod depth_peel;
 pub mod distance_map;
 pub mod engine;
 pub mod environment;

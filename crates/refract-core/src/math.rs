@@ -32,6 +32,10 @@ mod imp {
     pub fn atan2(y: f32, x: f32) -> f32 {
         y.atan2(x)
     }
+    #[inline]
+    pub fn exp(x: f32) -> f32 {
+        x.exp()
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -64,6 +68,10 @@ mod imp {
     pub fn atan2(y: f32, x: f32) -> f32 {
         libm::atan2f(y, x)
     }
+    #[inline]
+    pub fn exp(x: f32) -> f32 {
+        libm::expf(x)
+    }
 }
 
-pub(crate) use imp::{atan2, floor, sin, sin_cos, sqrt, tan, trunc};
+pub(crate) use imp::{atan2, exp, floor, sin, sin_cos, sqrt, tan, trunc};

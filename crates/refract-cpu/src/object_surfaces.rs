@@ -116,6 +116,15 @@ impl NearbyTexture {
         })
     }
 
+    /// The unit normal of every texel's surface of the last [`Self::render_into`] (row-major;
+    /// `+z` where empty) into `normals`.
+    pub(crate) fn normals_into(&self, normals: &mut Vec<Vec3>) {
+        normals.resize(self.surfaces.len(), Vec3::Z);
+        normals.par_iter_mut().enumerate().for_each(|(i, n)| {
+            *n = self.scratch.texel(i).map_or(Vec3::Z, |t| t.n_ws);
+        });
+    }
+
     /// Renders the objects of `scene` (as `meshes`, [`SceneMeshes::objects`] of the same scene)
     /// seen by `camera` into this texture: front faces, nearest by depth (the first object wins
     /// ties). Colours use the object's material under the scene's light

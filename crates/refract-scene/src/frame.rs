@@ -60,7 +60,8 @@ pub enum Aov {
     SecantSteps,
     /// Secondary rays a distance-map path traced.
     Bounces,
-    /// A distance-map ray left every layer (the environment was read instead).
+    /// A distance-map ray left every layer, or a `depth-peel` path found no further crossing
+    /// while inside a medium (the environment was read instead).
     Miss,
     /// A `pvrr` pixel that was not looked up: its triangle has a vertex whose exact ray ends
     /// outside the map (the zooming region of concave mirrors and convex lenses, Kakimoto et al.

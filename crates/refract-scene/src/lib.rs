@@ -30,9 +30,9 @@ pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::{SceneError, full_message};
 pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, MAX_FRAME_SIZE, PixelLayers};
 pub use registry::{
-    BackendId, DistanceMapParams, EngineParams, Family, FamilyParams, ImageSpaceMethod,
-    InterfaceRule, MAX_SPP, MethodId, MethodInfo, MethodParams, NearbyParams, ParamValue,
-    PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
+    BackendId, DepthPeelParams, DistanceMapParams, EngineParams, Family, FamilyParams,
+    ImageSpaceMethod, InterfaceRule, MAX_SPP, MethodId, MethodInfo, MethodParams, NearbyParams,
+    ParamValue, PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

@@ -14,6 +14,7 @@ use core::fmt;
 use crate::error::SceneError;
 use crate::frame::Aov;
 
+mod depth_peel;
 mod distance_map;
 mod engine;
 mod image_space;
@@ -21,6 +22,9 @@ mod nearby_geometry;
 mod pvrr;
 mod reference;
 
+pub use depth_peel::{
+    DepthPeelParams, MAX_PEEL_INTERFACES, MAX_PEEL_STEPS, MAX_PEEL_THICKNESS_MILLI,
+};
 pub use distance_map::{
     DISTANCE_MAP_RESOLUTION, DistanceMapParams, MAX_LINEAR_STEPS, MAX_PATH_DEPTH, MAX_SECANT_STEPS,
 };
@@ -70,6 +74,8 @@ pub enum MethodId {
     ProxyBox,
     /// `proxy-thin`: Unity HDRP's thin model (a 5 mm slab).
     ProxyThin,
+    /// `depth-peel`: every refractor's surfaces depth-peeled, each ray followed through them.
+    DepthPeel,
 }
 
 /// The one list of families: each line declares a [`Family`] variant (its name in lists and
@@ -164,6 +170,10 @@ method_families! {
     /// proxy shape, then a lookup in the screen texture of the opaque objects:
     /// `screen-offset`, `volume-thickness`, `proxy-sphere`, `proxy-box`, `proxy-thin`.
     Engine(EngineParams) = "engine", rows: engine::ROWS;
+    /// Screen-space refraction through any number of interfaces: every refractor's surfaces
+    /// depth-peeled into layers, each eye ray refracted at every layer it crosses:
+    /// `depth-peel`.
+    DepthPeel(DepthPeelParams) = "depth-peel", rows: depth_peel::ROWS;
 }
 
 /// A renderer implementation.
@@ -431,7 +441,7 @@ pub const REGISTRY: [MethodInfo; row_count(FAMILY_ROWS)] = concat(FAMILY_ROWS);
 
 /// Whether `method` can render `scene`, and why not: a row that does not render conductors
 /// (the image-space and nearby-geometry families) refracts through glass among diffuse objects
-/// only (the engine family draws every refractor, so all of them must be glass); the others (the reference, `distance-map`, `pvrr`) render mirrors and metals too.
+/// only (the engine family and `depth-peel` draw every refractor, so all of them must be glass); the others (the reference, `distance-map`, `pvrr`) render mirrors and metals too.
 pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), String> {
     if method.info().renders_conductors {
         Ok(())
@@ -441,11 +451,11 @@ pub fn scene_support(method: MethodId, scene: &crate::Scene) -> Result<(), Strin
             scene.name,
             crate::scene::conductor_name(&c)
         ))
-    } else if let Some(k) = (method.info().family == Family::Engine)
+    } else if let Some(k) = matches!(method.info().family, Family::Engine | Family::DepthPeel)
         .then(|| scene.refractors().position(|r| r.conductor().is_some()))
         .flatten()
     {
-        // The engine methods draw every refractor as glass (the engines' second glass).
+        // The engine methods and depth-peel draw every refractor as glass.
         Err(format!(
             "method `{method}` draws every refractor as glass; refractor {k} of scene `{}` is a conductor",
             scene.name

@@ -3,6 +3,7 @@
 //! renders it, both generated from one list (`cpu_families!`). A new family is its module here
 //! and its line in that list.
 
+pub mod depth_peel;
 pub mod distance_map;
 pub mod engine;
 pub mod image_space;
@@ -69,4 +70,6 @@ cpu_families! {
     pvrr: pvrr::PvrrPasses => Pvrr,
     /// Today's engines (Godot, three.js, Bevy, Unity HDRP, Filament).
     engine: engine::EnginePasses => Engine,
+    /// Glass behind glass: every refractor's surfaces depth-peeled.
+    depth_peel: depth_peel::DepthPeelPasses => DepthPeel,
 }

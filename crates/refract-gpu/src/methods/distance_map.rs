@@ -48,7 +48,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
 
 /// Depth peeling keeps surfaces farther than the previous layer by this relative margin (the
 /// CPU backend's `PEEL_MARGIN`).
-const PEEL_MARGIN: f32 = 1e-3;
+pub(crate) const PEEL_MARGIN: f32 = 1e-3;
 
 /// The uniform block of `distance_map.wgsl` (beside this module) (`DmUniforms`, field for field).
 #[repr(C)]
@@ -75,15 +75,15 @@ const _: () = assert!(core::mem::size_of::<DmUniforms>() == 112);
 /// `PeelUniforms` of `shaders/raster.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct PeelUniforms {
-    center: [f32; 4],
-    margin: f32,
-    _padding: [f32; 3],
+pub(crate) struct PeelUniforms {
+    pub center: [f32; 4],
+    pub margin: f32,
+    pub _padding: [f32; 3],
 }
 
 const _: () = assert!(core::mem::size_of::<PeelUniforms>() == 32);
 
-fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },

@@ -4,6 +4,7 @@
 //! both generated from one list (`gpu_families!`). A new family is its module here and its line
 //! in that list.
 
+pub(crate) mod depth_peel;
 pub(crate) mod distance_map;
 pub(crate) mod engine;
 pub(crate) mod image_space;
@@ -106,6 +107,8 @@ gpu_families! {
     pvrr: pvrr::PvrrFamily => Pvrr,
     /// Today's engines.
     engine: engine::EnginePipelines => Engine,
+    /// Glass behind glass: every refractor's surfaces depth-peeled.
+    depth_peel: depth_peel::DepthPeelPipelines => DepthPeel,
     /// The exact reference (`crate::reference`).
     reference: reference::ReferenceFamily => Reference,
 }
