@@ -109,7 +109,10 @@ fn compare_writes_metrics_images_and_reports() {
     }
     // Every method of the registry but the reference, on each backend, plus the reference.
     let methods = refract_scene::REGISTRY.len() - 1;
-    assert_eq!(methods, 15, "10 methods of the papers, 5 of the engines");
+    assert_eq!(
+        methods, 16,
+        "10 methods of the papers, 5 of the engines, depth-peel"
+    );
     assert_eq!(
         records.len(),
         2 * (1 + methods * backends.len()),
@@ -879,7 +882,7 @@ fn claims_are_measured_and_written() {
     };
     assert_eq!(
         (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
-        (13, 16, 14, 21, 5)
+        (13, 16, 14, 21, 7)
     );
     // One timing round of the five U12 states: inconclusive, whatever the speed-up.
     assert!(

@@ -1,7 +1,8 @@
 //! `refract bench`: the papers' timing tables on this machine, each beside the paper's
 //! figures: Wyman 2005a Table 1 ([`image_space`]), Wyman 2005b Table 1 ([`nearby`]), Umenhoffer
 //! et al. 2007 §17.4 ([`distance_map`]), Kakimoto et al. 2007 §5 ([`pvrr`]), the engine methods
-//! beside `wyman` ([`engine`]) and the exact reference on both backends ([`reference`]).
+//! beside `wyman` ([`engine`]), `depth-peel` at 2, 4 and 8 layers beside `wyman` ([`layers`])
+//! and the exact reference on both backends ([`reference`]).
 //! `--table all` runs every one and writes them as one file with the machine, the commit and
 //! the date ([`all`]); `--update` splices that file into `docs/performance.md`.
 
@@ -25,6 +26,7 @@ mod all;
 mod distance_map;
 mod engine;
 mod image_space;
+mod layers;
 mod nearby;
 mod pvrr;
 mod reference;
@@ -75,6 +77,8 @@ pub struct BenchArgs {
     /// `iterative-seeded` on the paper's four scenes, our models mapped by size, at 1024² and
     /// 512²; `--scenes`, `--methods` and `--res` do not apply), `distance-map` (Umenhoffer et al.
     /// §17.4), `pvrr` (Kakimoto et al. §5), `engine` (the engine methods beside `wyman`),
+    /// `layers` (`depth-peel` at 2, 4, 8 layers beside `wyman` on the scenes with several
+    /// refractors),
     /// `reference` (the exact reference on the CPU tracer and the GPU at 512² and 1024²,
     /// transmission and full, rays per second; `--scenes` applies) or `all` (every table in
     /// turn, into `bench-all.md` and `bench-all.json` with the CPU, the GPU adapter and driver,
@@ -103,6 +107,9 @@ pub enum Table {
     Pvrr,
     /// The engine methods beside `wyman` on the sphere and the cow at 1024², both backends.
     Engine,
+    /// `depth-peel` at 2, 4 and 8 layers beside `wyman` on the scenes with several refractors
+    /// at 1024², both backends.
+    Layers,
     /// The exact reference on the CPU tracer and on the GPU: the Table 1 models at 512² and
     /// 1024², transmission and `full`, seconds a frame and rays per second.
     Reference,
@@ -112,12 +119,13 @@ pub enum Table {
 
 impl Table {
     /// Every table `all` runs, in its order.
-    pub const EACH: [Table; 6] = [
+    pub const EACH: [Table; 7] = [
         Table::ImageSpace,
         Table::Nearby,
         Table::DistanceMap,
         Table::Pvrr,
         Table::Engine,
+        Table::Layers,
         Table::Reference,
     ];
 
@@ -129,6 +137,7 @@ impl Table {
             Table::DistanceMap => "distance-map",
             Table::Pvrr => "pvrr",
             Table::Engine => "engine",
+            Table::Layers => "layers",
             Table::Reference => "reference",
             Table::All => "all",
         }
@@ -142,6 +151,7 @@ impl Table {
             Table::DistanceMap => "bench-distance-map",
             Table::Pvrr => "bench-pvrr",
             Table::Engine => "bench-engine",
+            Table::Layers => "bench-layers",
             Table::Reference => "bench-reference",
             Table::All => "bench-all",
         }
@@ -191,6 +201,7 @@ fn run_table(
         Table::DistanceMap => distance_map::run(args, progress)?,
         Table::Pvrr => pvrr::run(args, progress)?,
         Table::Engine => engine::run(args, progress)?,
+        Table::Layers => layers::run(args, progress)?,
         Table::Reference => reference::run(args, progress)?,
         Table::All => crate::bail!("--table all runs the other tables one by one"),
     };
