@@ -40,14 +40,26 @@ pub const OPAQUE_LAYER: u32 = u32::MAX;
 /// The peeled layers and the opaque objects' screen texture as the march reads them; texels
 /// are those of the eye's camera.
 pub trait PeeledLayers {
-    /// Layer `layer` (`0..K`, nearest first) at `texel`: the world position of its fragment
-    /// at the texel's centre and its unit shading normal, `None` where the layer is empty.
-    fn layer_surface(&self, texel: UVec2, layer: u32) -> Option<(Vec3, Vec3)>;
+    /// The plane of layer `layer`'s fragment (`0..K`, nearest first) at `texel`, facing away
+    /// from the eye ([`facing_plane`] of its position at the texel's centre and its shading
+    /// normal), all NaN where the layer is empty there.
+    fn layer_plane(&self, texel: UVec2, layer: u32) -> Vec4;
+    /// The unit shading normal of layer `layer` at `texel` (a covered texel).
+    fn layer_normal(&self, texel: UVec2, layer: u32) -> Vec3;
     /// The index of the refractor of layer `layer` at `texel` (a covered texel).
     fn layer_refractor(&self, texel: UVec2, layer: u32) -> u32;
-    /// The opaque objects at `texel`: the world position of the surface drawn there and its
-    /// unit normal, `None` where none is drawn.
-    fn opaque_surface(&self, texel: UVec2) -> Option<(Vec3, Vec3)>;
+    /// The plane of the opaque objects' surface drawn at `texel` ([`facing_plane`]), all NaN
+    /// where none is drawn.
+    fn opaque_plane(&self, texel: UVec2) -> Vec4;
+}
+
+/// The plane through `p` with unit normal `±n`, oriented away from `eye`: `(N', w)` with
+/// `N' = n` where `(p − eye)·n > 0`, else `−n`, and `w = −N'·p`, so that `N'·q + w` is the
+/// signed distance of `q` from the plane, negative on the eye's side.
+#[inline]
+pub fn facing_plane(p: Vec3, n: Vec3, eye: Vec3) -> Vec4 {
+    let n = if (p - eye).dot(n) > 0.0 { n } else { -n };
+    n.extend(-n.dot(p))
 }
 
 /// The medium of one refractor, as the march reads it: its IOR, the IOR of the medium around
@@ -220,7 +232,6 @@ struct MarchRay {
     clip: ClipRay,
     origin: Vec3,
     dir: Vec3,
-    eye: Vec3,
 }
 
 impl MarchRay {
@@ -229,7 +240,6 @@ impl MarchRay {
             clip: ClipRay::new(camera, origin, dir),
             origin,
             dir,
-            eye: camera.eye(),
         }
     }
 
@@ -245,25 +255,18 @@ impl MarchRay {
 
 /// Which side of layer `layer` (or [`OPAQUE_LAYER`]) the ray point `s` is on, as a signed
 /// distance, negative in front (toward the eye), NaN where the layer is empty at its texel.
-/// A layer is the plane of its fragment at the texel (position `P`, normal `N`): `(q − P)·N`,
-/// negated for a plane that faces the eye, so that a surface sampled once per texel is still
-/// crossed where the ray crosses it inside the texel (a view-depth difference per texel, as
-/// McGuire and Mara 2014 compare, steps at every texel edge of a steep surface). The opaque
-/// objects' surface is such a plane too.
+/// A layer is the plane of its fragment at the texel ([`facing_plane`]), so that a surface
+/// sampled once per texel is still crossed where the ray crosses it inside the texel (a
+/// view-depth difference per texel, as McGuire and Mara 2014 compare, steps at every texel edge
+/// of a steep surface). The opaque objects' surface is such a plane too.
 #[inline]
-fn layer_offset<L: PeeledLayers>(layers: &L, eye: Vec3, s: &Sample, layer: u32) -> f32 {
-    let surface = if layer == OPAQUE_LAYER {
-        layers.opaque_surface(s.texel)
+fn layer_offset<L: PeeledLayers>(layers: &L, s: &Sample, layer: u32) -> f32 {
+    let plane = if layer == OPAQUE_LAYER {
+        layers.opaque_plane(s.texel)
     } else {
-        layers.layer_surface(s.texel, layer)
+        layers.layer_plane(s.texel, layer)
     };
-    match surface {
-        Some((p, n)) => {
-            let d = (s.q - p).dot(n);
-            if (p - eye).dot(n) > 0.0 { d } else { -d }
-        }
-        None => f32::NAN,
-    }
+    plane.truncate().dot(s.q) + plane.w
 }
 
 /// Narrows a sign change of `f_layer` in `[a, b]` by bisection and accepts it where both ends
@@ -281,7 +284,7 @@ fn refine<L: PeeledLayers>(
     for _ in 0..REFINE_STEPS {
         let m = 0.5 * (a + b);
         let s = ray.sample(m)?;
-        let f_m = layer_offset(layers, ray.eye, &s, layer);
+        let f_m = layer_offset(layers, &s, layer);
         if f_m.is_nan() {
             return None;
         }
@@ -321,11 +324,11 @@ pub fn march<L: PeeledLayers>(
     let mut f_a = [f32::NAN; MAX_PEEL_LAYERS as usize];
     for (j, f) in f_a.iter_mut().enumerate().take(count) {
         if exclude != Some(j as u32) {
-            *f = layer_offset(layers, ray.eye, &s_a, j as u32);
+            *f = layer_offset(layers, &s_a, j as u32);
         }
     }
     let mut f_opaque_a = if opaque {
-        layer_offset(layers, ray.eye, &s_a, OPAQUE_LAYER)
+        layer_offset(layers, &s_a, OPAQUE_LAYER)
     } else {
         f32::NAN
     };
@@ -339,7 +342,7 @@ pub fn march<L: PeeledLayers>(
         };
         let mut best: Option<(f32, UVec2, u32)> = None;
         for (j, f_a) in f_a.iter_mut().enumerate().take(count) {
-            let f_b = layer_offset(layers, ray.eye, &s_b, j as u32);
+            let f_b = layer_offset(layers, &s_b, j as u32);
             if (*f_a < 0.0) != (f_b < 0.0) && !f_a.is_nan() && !f_b.is_nan() {
                 let hit = refine(
                     &ray,
@@ -358,7 +361,7 @@ pub fn march<L: PeeledLayers>(
             *f_a = f_b;
         }
         if opaque {
-            let f_b = layer_offset(layers, ray.eye, &s_b, OPAQUE_LAYER);
+            let f_b = layer_offset(layers, &s_b, OPAQUE_LAYER);
             if f_opaque_a < 0.0 && f_b >= 0.0 {
                 let hit = refine(
                     &ray,
@@ -477,7 +480,7 @@ pub fn peel_path<L: PeeledLayers>(
                 }
                 path.origin += t * path.dir;
                 // The far end of a kept bracket is covered by the layer.
-                n = layers.layer_surface(texel, crossed).map_or(n, |(_, n)| n);
+                n = layers.layer_normal(texel, crossed);
                 r = layers.layer_refractor(texel, crossed);
                 layer = crossed;
             }
@@ -573,22 +576,35 @@ mod tests {
     }
 
     impl PeeledLayers for Spheres<'_> {
-        fn layer_surface(&self, texel: UVec2, layer: u32) -> Option<(Vec3, Vec3)> {
+        fn layer_plane(&self, texel: UVec2, layer: u32) -> Vec4 {
             let (depth, n, k) = self.hits(texel).0[layer as usize];
             // Concentric about the origin: the point is the normal times the radius.
-            depth.is_finite().then(|| (n * self.radii[k as usize], n))
+            if depth.is_finite() {
+                facing_plane(n * self.radii[k as usize], n, self.camera.eye())
+            } else {
+                Vec4::NAN
+            }
+        }
+        fn layer_normal(&self, texel: UVec2, layer: u32) -> Vec3 {
+            self.hits(texel).0[layer as usize].1
         }
         fn layer_refractor(&self, texel: UVec2, layer: u32) -> u32 {
             self.hits(texel).0[layer as usize].2
         }
-        fn opaque_surface(&self, texel: UVec2) -> Option<(Vec3, Vec3)> {
+        fn opaque_plane(&self, texel: UVec2) -> Vec4 {
             // A wall z = wall facing the camera.
-            let z = self.wall?;
+            let Some(z) = self.wall else {
+                return Vec4::NAN;
+            };
             let ray = self
                 .camera
                 .pixel_ray(Camera::pixel_center(texel.x, texel.y));
             let t = (z - ray.origin.z) / ray.dir.z;
-            (t > 0.0).then(|| (ray.at(t), Vec3::Z))
+            if t > 0.0 {
+                facing_plane(ray.at(t), Vec3::Z, self.camera.eye())
+            } else {
+                Vec4::NAN
+            }
         }
     }
 

@@ -6,7 +6,9 @@
 
 use glam::{UVec2, Vec3, Vec4};
 use proptest::prelude::*;
-use refract_core::depth_peel::{PeelMedium, PeelSettings, PeelUniforms, PeeledLayers, peel_path};
+use refract_core::depth_peel::{
+    PeelMedium, PeelSettings, PeelUniforms, PeeledLayers, facing_plane, peel_path,
+};
 use refract_core::{Camera, CameraDesc};
 use refract_gpu::conformance::{FamilyEvaluation, evaluate_family};
 
@@ -53,23 +55,34 @@ impl AnalyticLayers<'_> {
 }
 
 impl PeeledLayers for AnalyticLayers<'_> {
-    fn layer_surface(&self, texel: UVec2, layer: u32) -> Option<(Vec3, Vec3)> {
+    fn layer_plane(&self, texel: UVec2, layer: u32) -> Vec4 {
         if layer >= self.layers.min(4) {
-            return None;
+            return Vec4::NAN;
         }
         let (depth, n, k) = self.hits(texel)[layer as usize];
         let s = SPHERES[k as usize];
-        depth.is_finite().then(|| (s.truncate() + s.w * n, n))
+        if depth.is_finite() {
+            facing_plane(s.truncate() + s.w * n, n, self.camera.eye())
+        } else {
+            Vec4::NAN
+        }
+    }
+    fn layer_normal(&self, texel: UVec2, layer: u32) -> Vec3 {
+        self.hits(texel)[layer.min(3) as usize].1
     }
     fn layer_refractor(&self, texel: UVec2, layer: u32) -> u32 {
         self.hits(texel)[layer.min(3) as usize].2
     }
-    fn opaque_surface(&self, texel: UVec2) -> Option<(Vec3, Vec3)> {
+    fn opaque_plane(&self, texel: UVec2) -> Vec4 {
         let ray = self
             .camera
             .pixel_ray(Camera::pixel_center(texel.x, texel.y));
         let t = (-4.0 - ray.origin.z) / ray.dir.z;
-        (t > 0.0).then(|| (ray.origin + t * ray.dir, Vec3::Z))
+        if t > 0.0 {
+            facing_plane(ray.origin + t * ray.dir, Vec3::Z, self.camera.eye())
+        } else {
+            Vec4::NAN
+        }
     }
 }
 

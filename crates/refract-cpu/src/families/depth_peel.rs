@@ -2,16 +2,20 @@
 //! objects from the eye into the screen texture (the engine family's), the surfaces of every
 //! refractor, both orientations, depth-peeled into `K` layers (Everitt 2001: layer `k` is the
 //! nearest fragment farther from the eye than layer `k − 1`'s by more than the relative
-//! [`PEEL_MARGIN`], the distance maps' rule), unpacked into view depth, normal and refractor
-//! per layer and texel; then per pixel [`refract_core::depth_peel::peel_path`] from the nearest
-//! layer and the colour it ends on, times its transmittance.
+//! [`PEEL_MARGIN`], the distance maps' rule), unpacked into view depth, normal, refractor and
+//! the fragment's plane facing away from the eye per layer and texel (the march's one read per
+//! layer and sample: a 16-byte load and a dot product; the opaque objects' texels likewise);
+//! then per pixel [`refract_core::depth_peel::peel_path`] from the nearest layer and the colour
+//! it ends on, times its transmittance.
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec3};
+use glam::{UVec2, Vec3, Vec4};
 use rayon::prelude::*;
 use refract_core::Camera;
-use refract_core::depth_peel::{PeelEnd, PeelMedium, PeelSettings, PeeledLayers, peel_path};
+use refract_core::depth_peel::{
+    PeelEnd, PeelMedium, PeelSettings, PeeledLayers, facing_plane, peel_path,
+};
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
 use refract_scene::{Aov, DepthPeelParams, Frame, LayerValue, PixelLayers, RenderError, Scene};
 
@@ -77,6 +81,8 @@ struct Layers {
     p_ws: Vec<Vec3>,
     /// Unit shading normal.
     n_ws: Vec<Vec3>,
+    /// The fragment's plane facing away from the eye (`facing_plane`), NaN where empty.
+    planes: Vec<Vec4>,
     refractor: Vec<u8>,
 }
 
@@ -84,8 +90,8 @@ struct Layers {
 struct LayerView<'a> {
     layers: &'a Layers,
     screen: Option<&'a NearbyTexture>,
-    /// The unit normal of each screen texel's surface.
-    screen_normals: &'a [Vec3],
+    /// The plane of each screen texel's surface facing away from the eye, NaN where empty.
+    screen_planes: &'a [Vec4],
 }
 
 impl LayerView<'_> {
@@ -97,14 +103,16 @@ impl LayerView<'_> {
 
 impl PeeledLayers for LayerView<'_> {
     #[inline]
-    fn layer_surface(&self, texel: UVec2, layer: u32) -> Option<(Vec3, Vec3)> {
+    fn layer_plane(&self, texel: UVec2, layer: u32) -> Vec4 {
         if layer >= self.layers.count {
-            return None;
+            return Vec4::NAN;
         }
-        let i = self.index(texel, layer);
-        self.layers.depth[i]
-            .is_finite()
-            .then(|| (self.layers.p_ws[i], self.layers.n_ws[i]))
+        self.layers.planes[self.index(texel, layer)]
+    }
+
+    #[inline]
+    fn layer_normal(&self, texel: UVec2, layer: u32) -> Vec3 {
+        self.layers.n_ws[self.index(texel, layer)]
     }
 
     #[inline]
@@ -113,10 +121,11 @@ impl PeeledLayers for LayerView<'_> {
     }
 
     #[inline]
-    fn opaque_surface(&self, texel: UVec2) -> Option<(Vec3, Vec3)> {
-        let surface = self.screen?.surface(texel)?;
-        let i = (texel.y * self.layers.width + texel.x) as usize;
-        Some((surface.p_ws, self.screen_normals[i]))
+    fn opaque_plane(&self, texel: UVec2) -> Vec4 {
+        if self.screen.is_none() {
+            return Vec4::NAN;
+        }
+        self.screen_planes[(texel.y * self.layers.width + texel.x) as usize]
     }
 }
 
@@ -185,6 +194,7 @@ pub struct DepthPeelPasses {
     objects: NearbyMeshes,
     screen: NearbyTexture,
     screen_normals: Vec<Vec3>,
+    screen_planes: Vec<Vec4>,
     peeled: Vec<SurfaceBuffer>,
     floor: Vec<f32>,
     layers: Layers,
@@ -207,6 +217,7 @@ impl DepthPeelPasses {
         layers.depth.resize(total, f32::INFINITY);
         layers.p_ws.resize(total, Vec3::ZERO);
         layers.n_ws.resize(total, Vec3::Z);
+        layers.planes.resize(total, Vec4::NAN);
         layers.refractor.resize(total, 0);
         let eye = camera.eye();
         for k in 0..count as usize {
@@ -238,16 +249,21 @@ impl DepthPeelPasses {
                 .par_iter_mut()
                 .zip(layers.p_ws[range.clone()].par_iter_mut())
                 .zip(layers.n_ws[range.clone()].par_iter_mut())
+                .zip(layers.planes[range.clone()].par_iter_mut())
                 .zip(layers.refractor[range].par_iter_mut())
                 .enumerate()
-                .for_each(|(i, (((depth, p), n), r))| match buffer.texel(i) {
+                .for_each(|(i, ((((depth, p), n), plane), r))| match buffer.texel(i) {
                     Some(t) => {
                         *depth = view_depth(camera, t.p_ws);
                         *p = t.p_ws;
                         *n = t.n_ws;
+                        *plane = facing_plane(t.p_ws, t.n_ws, eye);
                         *r = refractors.refractor_of(t.triangle) as u8;
                     }
-                    None => *depth = f32::INFINITY,
+                    None => {
+                        *depth = f32::INFINITY;
+                        *plane = Vec4::NAN;
+                    }
                 });
         }
     }
@@ -271,6 +287,19 @@ impl CpuFamily for DepthPeelPasses {
         let screen = (!scene.objects.is_empty()).then(|| {
             self.screen.render_into(scene, &self.objects, camera);
             self.screen.normals_into(&mut self.screen_normals);
+            let (screen, eye, width) = (&self.screen, camera.eye(), camera.width());
+            self.screen_planes
+                .resize(self.screen_normals.len(), Vec4::NAN);
+            self.screen_planes
+                .par_iter_mut()
+                .zip(&self.screen_normals)
+                .enumerate()
+                .for_each(|(i, (plane, n))| {
+                    let texel = UVec2::new(i as u32 % width, i as u32 / width);
+                    *plane = screen
+                        .surface(texel)
+                        .map_or(Vec4::NAN, |s| facing_plane(s.p_ws, *n, eye));
+                });
         });
         self.peel(camera, params.layers);
         let media = params.media(scene);
@@ -280,7 +309,7 @@ impl CpuFamily for DepthPeelPasses {
             view: LayerView {
                 layers: &self.layers,
                 screen: screen.map(|()| &self.screen),
-                screen_normals: &self.screen_normals,
+                screen_planes: &self.screen_planes,
             },
             media: &media,
             settings: params.settings(scene),

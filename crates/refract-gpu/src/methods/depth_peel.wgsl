@@ -93,6 +93,12 @@ fn peel_sample(ray: PeelRay, t: f32) -> PeelSample {
     return s;
 }
 
+// facing_plane.
+fn peel_facing_plane(p: vec3<f32>, n_in: vec3<f32>) -> vec4<f32> {
+    let n = select(-n_in, n_in, dot(p - frame.eye.xyz, n_in) > 0.0);
+    return vec4<f32>(n, -dot(n, p));
+}
+
 // layer_offset: the signed distance from the plane of the layer's (or the opaque objects')
 // surface at the texel, negative toward the eye.
 fn peel_offset(s: PeelSample, layer: u32) -> f32 {
@@ -108,8 +114,8 @@ fn peel_offset(s: PeelSample, layer: u32) -> f32 {
     if p.w < 0.5 {
         return PEEL_EMPTY;
     }
-    let d = dot(s.q - p.xyz, n);
-    return select(-d, d, dot(p.xyz - frame.eye.xyz, n) > 0.0);
+    let plane = peel_facing_plane(p.xyz, n);
+    return dot(plane.xyz, s.q) + plane.w;
 }
 
 struct PeelRefined {
