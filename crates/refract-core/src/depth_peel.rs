@@ -42,7 +42,8 @@ pub const OPAQUE_LAYER: u32 = u32::MAX;
 pub trait PeeledLayers {
     /// The plane of layer `layer`'s fragment (`0..K`, nearest first) at `texel`, facing away
     /// from the eye ([`facing_plane`] of its position at the texel's centre and its shading
-    /// normal), all NaN where the layer is empty there.
+    /// normal), all NaN where the layer is empty there. Layers are peeled in order: where
+    /// layer `j` is empty, so is every layer after it.
     fn layer_plane(&self, texel: UVec2, layer: u32) -> Vec4;
     /// The unit shading normal of layer `layer` at `texel` (a covered texel).
     fn layer_normal(&self, texel: UVec2, layer: u32) -> Vec3;
@@ -341,15 +342,20 @@ pub fn march<L: PeeledLayers>(
             return Crossing::OffScreen;
         };
         let mut best: Option<(f32, UVec2, u32)> = None;
-        for (j, f_a) in f_a.iter_mut().enumerate().take(count) {
+        for j in 0..count {
             let f_b = layer_offset(layers, &s_b, j as u32);
-            if (*f_a < 0.0) != (f_b < 0.0) && !f_a.is_nan() && !f_b.is_nan() {
+            if f_b.is_nan() {
+                // Layers are peeled in order: none after an empty one is covered here.
+                f_a[j..count].fill(f32::NAN);
+                break;
+            }
+            if (f_a[j] < 0.0) != (f_b < 0.0) && !f_a[j].is_nan() {
                 let hit = refine(
                     &ray,
                     layers,
                     j as u32,
                     settings.thickness,
-                    (t_a, *f_a),
+                    (t_a, f_a[j]),
                     (t_b, f_b, s_b.texel),
                 );
                 if let Some((t, texel)) = hit
@@ -358,7 +364,7 @@ pub fn march<L: PeeledLayers>(
                     best = Some((t, texel, j as u32));
                 }
             }
-            *f_a = f_b;
+            f_a[j] = f_b;
         }
         if opaque {
             let f_b = layer_offset(layers, &s_b, OPAQUE_LAYER);

@@ -69,11 +69,11 @@ impl RefractorMeshes {
     }
 }
 
-/// The peeled layers of one frame, unpacked: layer `k` of pixel `i` at `k · pixels + i`.
+/// The peeled layers of one frame, unpacked texel by texel: layer `k` of pixel `i` at
+/// `i · count + k`, so that the layers a march sample reads share a cache line.
 #[derive(Default)]
 struct Layers {
     width: u32,
-    pixels: usize,
     count: u32,
     /// View depth, `+∞` where the layer is empty.
     depth: Vec<f32>,
@@ -97,7 +97,8 @@ struct LayerView<'a> {
 impl LayerView<'_> {
     #[inline]
     fn index(&self, texel: UVec2, layer: u32) -> usize {
-        layer as usize * self.layers.pixels + (texel.y * self.layers.width + texel.x) as usize
+        (texel.y * self.layers.width + texel.x) as usize * self.layers.count as usize
+            + layer as usize
     }
 }
 
@@ -211,7 +212,6 @@ impl DepthPeelPasses {
             .resize_with(count as usize, SurfaceBuffer::default);
         let layers = &mut self.layers;
         layers.width = width;
-        layers.pixels = pixels;
         layers.count = count;
         let total = pixels * count as usize;
         layers.depth.resize(total, f32::INFINITY);
@@ -225,44 +225,43 @@ impl DepthPeelPasses {
             if k == 0 {
                 rasterize_into(&raster, camera, Faces::Both, DepthTest::Nearest, buffer);
             } else {
-                let previous = &layers.p_ws[(k - 1) * pixels..k * pixels];
-                let previous_depth = &layers.depth[(k - 1) * pixels..k * pixels];
+                let stride = count as usize;
+                let (previous, previous_depth) = (&layers.p_ws, &layers.depth);
                 self.floor.resize(pixels, f32::INFINITY);
-                self.floor
-                    .par_iter_mut()
-                    .zip(previous.par_iter().zip(previous_depth))
-                    .for_each(|(floor, (p, depth))| {
-                        *floor = if depth.is_finite() {
-                            camera
-                                .world_to_pixel(eye + (*p - eye) * (1.0 + PEEL_MARGIN))
-                                .map_or(f32::INFINITY, |q| q.z)
-                        } else {
-                            f32::INFINITY
-                        };
-                    });
+                self.floor.par_iter_mut().enumerate().for_each(|(i, floor)| {
+                    let at = i * stride + k - 1;
+                    *floor = if previous_depth[at].is_finite() {
+                        camera
+                            .world_to_pixel(eye + (previous[at] - eye) * (1.0 + PEEL_MARGIN))
+                            .map_or(f32::INFINITY, |q| q.z)
+                    } else {
+                        f32::INFINITY
+                    };
+                });
                 rasterize_peel_into(&raster, camera, Faces::Both, &self.floor, buffer);
             }
             let buffer = &self.peeled[k];
             let refractors = &self.refractors;
-            let range = k * pixels..(k + 1) * pixels;
-            layers.depth[range.clone()]
-                .par_iter_mut()
-                .zip(layers.p_ws[range.clone()].par_iter_mut())
-                .zip(layers.n_ws[range.clone()].par_iter_mut())
-                .zip(layers.planes[range.clone()].par_iter_mut())
-                .zip(layers.refractor[range].par_iter_mut())
+            let stride = count as usize;
+            layers
+                .depth
+                .par_chunks_mut(stride)
+                .zip(layers.p_ws.par_chunks_mut(stride))
+                .zip(layers.n_ws.par_chunks_mut(stride))
+                .zip(layers.planes.par_chunks_mut(stride))
+                .zip(layers.refractor.par_chunks_mut(stride))
                 .enumerate()
                 .for_each(|(i, ((((depth, p), n), plane), r))| match buffer.texel(i) {
                     Some(t) => {
-                        *depth = view_depth(camera, t.p_ws);
-                        *p = t.p_ws;
-                        *n = t.n_ws;
-                        *plane = facing_plane(t.p_ws, t.n_ws, eye);
-                        *r = refractors.refractor_of(t.triangle) as u8;
+                        depth[k] = view_depth(camera, t.p_ws);
+                        p[k] = t.p_ws;
+                        n[k] = t.n_ws;
+                        plane[k] = facing_plane(t.p_ws, t.n_ws, eye);
+                        r[k] = refractors.refractor_of(t.triangle) as u8;
                     }
                     None => {
-                        *depth = f32::INFINITY;
-                        *plane = Vec4::NAN;
+                        depth[k] = f32::INFINITY;
+                        plane[k] = Vec4::NAN;
                     }
                 });
         }
@@ -350,7 +349,8 @@ impl PixelContext<'_> {
     /// any object, else what the screen texture shows there.
     fn pixel(&self, texel: UVec2) -> (Vec3, PeelAov) {
         let layers = self.view.layers;
-        let i = (texel.y * layers.width + texel.x) as usize;
+        // Layer 0 of the pixel.
+        let i = self.view.index(texel, 0);
         let depth = layers.depth[i];
         // +∞ for an empty layer and where no object is drawn: never NaN.
         if depth >= self.view.opaque_depth(texel) {

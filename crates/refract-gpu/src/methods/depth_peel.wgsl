@@ -199,7 +199,14 @@ fn peel_march(origin: vec3<f32>, dir: vec3<f32>, t_end: f32, layer_count: u32, o
         var best = PeelCrossing(PEEL_SURFACE, 0.0, vec2<i32>(0), 0u);
         for (var j = 0u; j < count; j++) {
             let f_b = peel_offset(s, j);
-            if f_a[j] != PEEL_EMPTY && f_b != PEEL_EMPTY && (f_a[j] < 0.0) != (f_b < 0.0) {
+            if f_b == PEEL_EMPTY {
+                // Layers are peeled in order: none after an empty one is covered here.
+                for (var k = j; k < count; k++) {
+                    f_a[k] = PEEL_EMPTY;
+                }
+                break;
+            }
+            if f_a[j] != PEEL_EMPTY && (f_a[j] < 0.0) != (f_b < 0.0) {
                 let hit = peel_refine(ray, j, t_a, f_a[j], t_b, f_b, s.texel);
                 if hit.ok && (!found || hit.t < best.t) {
                     found = true;
