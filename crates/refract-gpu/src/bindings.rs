@@ -78,3 +78,16 @@ pub(crate) fn bind_group_at(
         entries: &entries,
     })
 }
+
+/// A compute-stage binding of a 2D texture array (layered targets: the distance maps' and
+/// `depth-peel`'s layers).
+pub(crate) fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        ..texture_entry(binding)
+    }
+}

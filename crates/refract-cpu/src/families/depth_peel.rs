@@ -19,11 +19,10 @@ use refract_core::depth_peel::{
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
 use refract_scene::{Aov, DepthPeelParams, Frame, LayerValue, PixelLayers, RenderError, Scene};
 
-use super::distance_map::PEEL_MARGIN;
 use crate::family::{CpuFamily, FrameCx};
 use crate::object_surfaces::{NearbyMeshes, NearbyTexture};
 use crate::raster::{
-    DepthInterpolation, DepthTest, Faces, RasterMesh, SurfaceBuffer, rasterize_into,
+    DepthInterpolation, DepthTest, Faces, PEEL_MARGIN, RasterMesh, SurfaceBuffer, rasterize_into,
     rasterize_peel_into,
 };
 use crate::scene_meshes::SceneMeshes;
@@ -228,16 +227,19 @@ impl DepthPeelPasses {
                 let stride = count as usize;
                 let (previous, previous_depth) = (&layers.p_ws, &layers.depth);
                 self.floor.resize(pixels, f32::INFINITY);
-                self.floor.par_iter_mut().enumerate().for_each(|(i, floor)| {
-                    let at = i * stride + k - 1;
-                    *floor = if previous_depth[at].is_finite() {
-                        camera
-                            .world_to_pixel(eye + (previous[at] - eye) * (1.0 + PEEL_MARGIN))
-                            .map_or(f32::INFINITY, |q| q.z)
-                    } else {
-                        f32::INFINITY
-                    };
-                });
+                self.floor
+                    .par_iter_mut()
+                    .enumerate()
+                    .for_each(|(i, floor)| {
+                        let at = i * stride + k - 1;
+                        *floor = if previous_depth[at].is_finite() {
+                            camera
+                                .world_to_pixel(eye + (previous[at] - eye) * (1.0 + PEEL_MARGIN))
+                                .map_or(f32::INFINITY, |q| q.z)
+                        } else {
+                            f32::INFINITY
+                        };
+                    });
                 rasterize_peel_into(&raster, camera, Faces::Both, &self.floor, buffer);
             }
             let buffer = &self.peeled[k];

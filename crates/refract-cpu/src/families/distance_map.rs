@@ -238,8 +238,7 @@ fn rasterize_peeled(
     });
 }
 
-/// Depth peeling keeps surfaces farther than the previous layer by this relative margin.
-pub const PEEL_MARGIN: f32 = 1e-3;
+pub use crate::raster::PEEL_MARGIN;
 
 fn range_of(distance: &[f32]) -> Option<(f32, f32)> {
     let (lo, hi) = distance

@@ -40,6 +40,11 @@ pub use resolve::TexelLanes;
 pub(crate) use resolve::at_most_three;
 pub use scan::{rasterize, rasterize_bands, rasterize_into, rasterize_peel_into};
 
+/// Depth peeling keeps surfaces farther from the reference point (a cube map's centre, the
+/// eye) than the previous layer by this relative margin: the distance maps' layers and
+/// `depth-peel`'s.
+pub const PEEL_MARGIN: f32 = 1e-3;
+
 /// Sub-pixel precision of vertex positions (8 bits, as Direct3D and Vulkan guarantee).
 const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;

@@ -15,16 +15,16 @@ use refract_scene::{
     RenderError,
 };
 
-use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
+use crate::bindings::{array_entry, bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
-use crate::methods::distance_map::{PEEL_MARGIN, PeelUniforms as RasterPeel, array_entry};
 use crate::passes::object_surfaces::{NearbyFrame, nearby_uniforms};
 use crate::passes::outputs::{OutputBuffers, check_limits};
 use crate::passes::pipelines::MethodPipelines;
 use crate::passes::raster::{
-    DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
+    DEPTH_FORMAT, PEEL_MARGIN, PeelUniforms as RasterPeel, RasterKind, RasterPass, RasterPipelines,
+    SurfaceTargets, TARGET_FORMAT, target,
 };
 use crate::shaders::{
     CORE, ENVIRONMENT, FRAME, MATERIALS, OBJECT_SURFACES, OBJECT_TEXTURE, PROCEDURAL_SKY,

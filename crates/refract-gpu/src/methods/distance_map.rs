@@ -14,14 +14,15 @@ use refract_scene::{
     Aov, DistanceMapParams, Frame, FrameOutputs, LayerValue, MethodId, PixelLayers, RenderError,
 };
 
-use crate::bindings::{bind_group, storage_entry, texture_entry, uniform_entry};
+use crate::bindings::{array_entry, bind_group, storage_entry, texture_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
 use crate::passes::outputs::{OutputBuffers, check_limits};
 use crate::passes::pipelines::MethodPipelines;
 use crate::passes::raster::{
-    DEPTH_FORMAT, RasterKind, RasterPass, RasterPipelines, SurfaceTargets, TARGET_FORMAT, target,
+    DEPTH_FORMAT, PEEL_MARGIN, PeelUniforms, RasterKind, RasterPass, RasterPipelines,
+    SurfaceTargets, TARGET_FORMAT, target,
 };
 use crate::scene_buffers::GpuScene;
 use crate::shaders::{
@@ -46,10 +47,6 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
     ],
 };
 
-/// Depth peeling keeps surfaces farther than the previous layer by this relative margin (the
-/// CPU backend's `PEEL_MARGIN`).
-pub(crate) const PEEL_MARGIN: f32 = 1e-3;
-
 /// The uniform block of `distance_map.wgsl` (beside this module) (`DmUniforms`, field for field).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -71,28 +68,6 @@ pub(crate) struct DmUniforms {
 }
 
 const _: () = assert!(core::mem::size_of::<DmUniforms>() == 112);
-
-/// `PeelUniforms` of `shaders/raster.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub(crate) struct PeelUniforms {
-    pub center: [f32; 4],
-    pub margin: f32,
-    pub _padding: [f32; 3],
-}
-
-const _: () = assert!(core::mem::size_of::<PeelUniforms>() == 32);
-
-pub(crate) fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
-        },
-        ..texture_entry(binding)
-    }
-}
 
 /// The per-pixel pipelines and the range reduction.
 pub(crate) struct DistanceMapPipelines {

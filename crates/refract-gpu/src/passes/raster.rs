@@ -14,6 +14,22 @@ pub(crate) const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba3
 /// The depth format.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
+/// Depth peeling keeps surfaces farther from the reference point than the previous layer by
+/// this relative margin (`fs_surface_peel`; the CPU backend's `refract_cpu::raster::PEEL_MARGIN`).
+pub(crate) const PEEL_MARGIN: f32 = 1e-3;
+
+/// `PeelUniforms` of `shaders/raster.wgsl`: the reference point peeling measures distances
+/// from (a cube map's centre, the eye) and [`PEEL_MARGIN`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct PeelUniforms {
+    pub center: [f32; 4],
+    pub margin: f32,
+    pub _padding: [f32; 3],
+}
+
+const _: () = assert!(core::mem::size_of::<PeelUniforms>() == 32);
+
 /// What a raster pass draws and keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum RasterKind {
