@@ -1,11 +1,11 @@
 //! Refraction through any number of interfaces in screen space (method `depth-peel`): the
 //! surfaces of every refractor depth-peeled into `K` layers seen from the eye (Everitt 2001),
 //! then each eye ray followed through them: refracted (or totally reflected) at the nearest
-//! layer, marched in 3D against the layers' view depths at the texels it projects to (the
+//! layer, marched in 3D against the layers' surfaces at the texels it projects to (the
 //! layered linear search of Krueger et al. 2006, refined by bisection), refracted again at the
 //! next crossing, up to a budget of interactions; then the opaque objects' screen texture
-//! (marched the same way, McGuire & Mara 2014's depth comparison with a thickness) or the
-//! environment. Davis & Wyman 2007 follow total internal reflection the same way.
+//! (marched the same way, with a thickness as McGuire & Mara 2014's screen-space tracing has)
+//! or the environment. Davis & Wyman 2007 follow total internal reflection the same way.
 //!
 //! A crossing of layer `j` between two samples of the ray is a change of sign of `f_j(t)`, the
 //! signed distance of the ray point `q(t)` from the plane of layer `j`'s fragment at the texel
