@@ -16,12 +16,18 @@ const CUBE_SIZE = 512;
 // The default skybox's edge: far behind every object of refract's scenes.
 const SKYBOX_EDGE = 1e4;
 
-window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
-  const canvas = document.createElement('canvas');
-  canvas.width = width;
-  canvas.height = height;
-  const engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, adaptToDeviceRatio: false });
-  engine.setHardwareScalingLevel(1);
+// One engine for every request of the page (render.mjs serves many scenes from one page), and
+// one Babylon scene per environment (render.mjs's `environmentKey`; `null`: none): the scene
+// keeps its prefiltered environment and its skybox, and each request loads its glTF into it
+// and disposes what it loaded when done.
+let engine = null;
+const stages = new Map();
+
+// The scene for an environment, with the environment prefiltered and the skybox made (before
+// any glTF: one made later is not drawn into the transmission helper's target, which the glass
+// reads; nor is one beyond the camera's far plane, see below).
+async function stage(environment, environmentKey) {
+  if (stages.has(environmentKey)) return stages.get(environmentKey);
   const scene = new BABYLON.Scene(engine);
   // glTF is right-handed; so is refract. A right-handed scene keeps the loader from mirroring
   // the asset under a `__root__` node.
@@ -32,25 +38,40 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   scene.imageProcessingConfiguration.applyByPostProcess = true;
   scene.imageProcessingConfiguration.toneMappingEnabled = false;
   scene.imageProcessingConfiguration.skipFinalColorClamp = true;
-
-  let environmentTexture = null;
   if (environment) {
-    environmentTexture = new BABYLON.HDRCubeTexture(environment, scene, CUBE_SIZE, false, true, false, true);
+    const environmentTexture = new BABYLON.HDRCubeTexture(environment, scene, CUBE_SIZE, false, true, false, true);
     environmentTexture.rotationY = ENVIRONMENT_ROTATION_Y;
     await new Promise((resolve, reject) => {
       environmentTexture.onLoadObservable.addOnce(resolve);
-      setTimeout(() => reject(new Error(`${environment}: not loaded in 60 s`)), 60000);
+      setTimeout(() => reject(new Error(`${environment}: not loaded in 120 s`)), 120000);
     });
     scene.environmentTexture = environmentTexture;
-    // The skybox samples a clone of the texture, which does not keep the rotation. It is made
-    // before the glTF is loaded: one made later is not drawn into the transmission helper's
-    // target, which the glass reads (nor is one beyond the camera's far plane: see below).
+    // The skybox samples a clone of the texture, which does not keep the rotation.
     const skybox = scene.createDefaultSkybox(environmentTexture, true, SKYBOX_EDGE, 0, false);
     skybox.material.reflectionTexture.rotationY = ENVIRONMENT_ROTATION_Y;
   }
+  stages.set(environmentKey, scene);
+  return scene;
+}
+
+// What a scene holds, by kind: what a request loaded is what it holds after minus before.
+const HOLDINGS = ['meshes', 'materials', 'textures', 'cameras', 'transformNodes', 'geometries', 'lights'];
+const holdings = (scene) => Object.fromEntries(HOLDINGS.map((kind) => [kind, new Set(scene[kind])]));
+
+window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor }) => {
+  if (engine === null) {
+    const canvas = document.createElement('canvas');
+    canvas.width = width;
+    canvas.height = height;
+    engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, adaptToDeviceRatio: false });
+  }
+  engine.setHardwareScalingLevel(1);
+  engine.setSize(width, height);
+  const scene = await stage(environment, environment ? environmentKey : null);
+  const before = holdings(scene);
 
   await BABYLON.AppendSceneAsync(sceneUrl, scene);
-  const camera = scene.cameras[0];
+  const camera = scene.cameras.find((c) => !before.cameras.has(c));
   if (!camera) throw new Error(`${sceneUrl} has no camera`);
   scene.activeCamera = camera;
   // The skybox's corners lie at 0.87 of its edge; the far plane goes beyond them (the export's is
@@ -76,8 +97,11 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
       >= scene.meshes.filter((mesh) => mesh.material).length;
     for (let tick = 0; tick < 100 && !sorted(); tick++) await new Promise((r) => setTimeout(r, 10));
     if (!sorted()) throw new Error('the transmission helper did not sort the meshes in 1 s');
+    // The helper takes any new `renderSize` object for a new size and remakes its target; kept
+    // when the size is the same, the target stays the one the scene's glass already reads.
+    const size = helper._options.renderSize;
     helper.updateOptions({
-      renderSize: { width, height },
+      renderSize: size?.width === width && size?.height === height ? size : { width, height },
       samples: 1,
       renderTargetTextureType: BABYLON.Constants.TEXTURETYPE_FLOAT,
     });
@@ -92,19 +116,33 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
   camera.outputRenderTarget = target;
   await scene.whenReadyAsync();
   // The first frame compiles the programs; the second is the one read back and timed.
+  // Chromium's `gl.finish()` returns before the GPU process has drawn, so a one-pixel read waits
+  // for each frame instead.
+  const waitForFrame = () => target.readPixels(0, 0, null, true, false, 0, 0, 1, 1);
   scene.render();
-  const gl = engine._gl;
-  gl.finish();
+  await waitForFrame();
   const start = performance.now();
   scene.render();
-  gl.finish();
+  await waitForFrame();
   const ms = performance.now() - start;
   const rows = await target.readPixels(0, 0, null, true, false);
   if (!(rows instanceof Float32Array) || rows.length !== width * height * 4) {
     throw new Error(`read back ${rows?.length} values, expected ${width * height * 4} floats`);
   }
+  const gl = engine._gl;
   const webgl = gl.getParameter(gl.VERSION);
-  engine.dispose();
+  // What this request loaded, in the order that leaves nothing pointing at a disposed object;
+  // the stage's environment, skybox, transmission helper (with its target) and the BRDF lookup
+  // texture the first PBR material made for the scene stay.
+  camera.outputRenderTarget = null;
+  target.dispose();
+  const loaded = (kind) => scene[kind].filter((item) => !before[kind].has(item));
+  const kept = new Set([helper?.getOpaqueTarget(), scene.environmentBRDFTexture]);
+  for (const mesh of loaded('meshes')) mesh.dispose(true, false);
+  for (const item of [...loaded('transformNodes'), ...loaded('cameras'), ...loaded('lights')]) item.dispose();
+  for (const material of loaded('materials')) material.dispose(false, false);
+  for (const texture of loaded('textures')) if (!kept.has(texture)) texture.dispose();
+  for (const geometry of loaded('geometries')) geometry.dispose();
   return {
     engine: 'babylon',
     version: BABYLON.Engine.Version,

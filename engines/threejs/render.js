@@ -12,11 +12,18 @@ import { topDownBase64 } from '../common.js';
 // crates/refract-engines/tests/engines.rs).
 const ENVIRONMENT_ROTATION_Y = -Math.PI / 2;
 
-window.refractRender = async ({ scene: sceneUrl, environment, variant, width, height, hideRefractor }) => {
-  const canvas = document.createElement('canvas');
-  canvas.width = width;
-  canvas.height = height;
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, alpha: false });
+// One renderer for every request of the page (render.mjs serves many scenes from one page):
+// three.js keeps the PMREM it prefilters from an environment texture for as long as both
+// live, and the environments below live as long as the page.
+let renderer = null;
+// The environment textures by the content of their file (render.mjs's `environmentKey`).
+const environments = new Map();
+
+window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor }) => {
+  if (renderer === null) {
+    const canvas = document.createElement('canvas');
+    renderer = new THREE.WebGLRenderer({ canvas, antialias: false, alpha: false });
+  }
   renderer.setPixelRatio(1);
   renderer.setSize(width, height, false);
   renderer.toneMapping = THREE.NoToneMapping;
@@ -40,8 +47,12 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
     for (const o of refractors) o.visible = false;
   }
   if (environment) {
-    const map = await new HDRLoader().setDataType(THREE.FloatType).loadAsync(environment);
-    map.mapping = THREE.EquirectangularReflectionMapping;
+    if (!environments.has(environmentKey)) {
+      const loaded = await new HDRLoader().setDataType(THREE.FloatType).loadAsync(environment);
+      loaded.mapping = THREE.EquirectangularReflectionMapping;
+      environments.set(environmentKey, loaded);
+    }
+    const map = environments.get(environmentKey);
     scene.background = map;
     scene.environment = map;
     scene.backgroundRotation.set(0, ENVIRONMENT_ROTATION_Y, 0);
@@ -58,20 +69,30 @@ window.refractRender = async ({ scene: sceneUrl, environment, variant, width, he
     magFilter: THREE.NearestFilter,
   });
   renderer.setRenderTarget(target);
-  // The first frame compiles the programs and builds the PMREM of the environment; the second
-  // is the one read back and timed.
+  // The first frame compiles the programs and builds the PMREM of the environment (once per
+  // environment); the second is the one read back and timed. Chromium's `gl.finish()` returns
+  // before the GPU process has drawn, so a one-pixel read waits for each frame instead.
+  const pixel = new Float32Array(4);
   renderer.render(scene, camera);
-  const gl = renderer.getContext();
-  gl.finish();
+  renderer.readRenderTargetPixels(target, 0, 0, 1, 1, pixel);
   const start = performance.now();
   renderer.render(scene, camera);
-  gl.finish();
+  renderer.readRenderTargetPixels(target, 0, 0, 1, 1, pixel);
   const ms = performance.now() - start;
 
   const rows = new Float32Array(width * height * 4);
   renderer.readRenderTargetPixels(target, 0, 0, width, height, rows);
   const info = renderer.getContext().getParameter(renderer.getContext().VERSION);
-  renderer.dispose();
+  // What this request made; the renderer and the environments stay for the next one.
+  renderer.setRenderTarget(null);
+  target.dispose();
+  gltf.scene.traverse((object) => {
+    object.geometry?.dispose();
+    for (const material of [object.material ?? []].flat()) {
+      for (const value of Object.values(material)) if (value?.isTexture) value.dispose();
+      material.dispose();
+    }
+  });
   return {
     engine: 'threejs',
     version: `0.${THREE.REVISION}.0`,

@@ -12,8 +12,9 @@
 //! What is needed and missing (Node, Chromium, `engines/node_modules`) is one
 //! [`EngineError::Unavailable`] line, which callers report as a skip, as a missing GPU is.
 
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 
 use glam::Vec3;
 use refract_eval::gltf_export::position_from_code;
@@ -202,10 +203,80 @@ impl EngineDriver {
     }
 
     /// Renders the frames of `request` of the export in `export_dir` (what
-    /// [`refract_eval::gltf_export`] wrote) with `engine`, one per variant, in order.
+    /// [`refract_eval::gltf_export`] wrote) with `engine`, one per variant, in order, in a
+    /// browser started for this one request. Several scenes: [`EngineDriver::session`].
     pub fn render(
         &self,
         engine: Engine,
+        export_dir: &Path,
+        request: &EngineRequest,
+    ) -> Result<Vec<EngineFrame>, EngineError> {
+        self.session(engine)?.render(export_dir, request)
+    }
+
+    /// Starts `engine`'s page in headless Chromium (`engines/render.mjs --serve`) for as many
+    /// requests as [`EngineSession::render`] is given; the browser closes when the session is
+    /// dropped.
+    pub fn session(&self, engine: Engine) -> Result<EngineSession, EngineError> {
+        let driver_error = |message: String| EngineError::Driver {
+            engine: engine.id(),
+            message,
+        };
+        let io_error = |source| EngineError::Io {
+            path: std::env::temp_dir(),
+            source,
+        };
+        // What Node and the page print goes to a file, read back when a request fails (a pipe
+        // nobody reads would stall the browser once full).
+        let log = tempfile::tempfile().map_err(io_error)?;
+        let mut child = Command::new(&self.node)
+            .arg(self.engines_dir.join("render.mjs"))
+            .args(["--engine", engine.id(), "--serve", "--browser"])
+            .arg(&self.browser)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(log.try_clone().map_err(io_error)?)
+            .spawn()
+            .map_err(|err| driver_error(format!("cannot run {}: {err}", self.node.display())))?;
+        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+            let _ = child.kill();
+            return Err(driver_error("no pipes to engines/render.mjs".into()));
+        };
+        Ok(EngineSession {
+            engine,
+            child,
+            stdin: Some(stdin),
+            replies: BufReader::new(stdout),
+            log,
+        })
+    }
+}
+
+/// One engine's page in one headless Chromium, kept open across requests
+/// (`engines/render.mjs --serve`): the engine prefilters an environment once for every scene
+/// that shares it (three.js's PMREM, Babylon's cube: 10-50 s each on SwiftShader) and
+/// compiles its programs once. A scene rendered after others gives the same bits as rendered
+/// alone (`tests/engines.rs`).
+#[derive(Debug)]
+pub struct EngineSession {
+    engine: Engine,
+    child: Child,
+    /// `None` once closed, which ends the serving loop.
+    stdin: Option<ChildStdin>,
+    replies: BufReader<ChildStdout>,
+    log: std::fs::File,
+}
+
+impl EngineSession {
+    /// The engine this session renders with.
+    pub fn engine(&self) -> Engine {
+        self.engine
+    }
+
+    /// Renders the frames of `request` of the export in `export_dir` (what
+    /// [`refract_eval::gltf_export`] wrote), one per variant, in order.
+    pub fn render(
+        &mut self,
         export_dir: &Path,
         request: &EngineRequest,
     ) -> Result<Vec<EngineFrame>, EngineError> {
@@ -216,6 +287,7 @@ impl EngineDriver {
                 )));
             }
         }
+        let engine = self.engine;
         let driver_error = |message: String| EngineError::Driver {
             engine: engine.id(),
             message,
@@ -224,36 +296,32 @@ impl EngineDriver {
             path: std::env::temp_dir(),
             source,
         })?;
-        let variants: Vec<&str> = request.variants.iter().map(|v| v.id()).collect();
-        let mut command = Command::new(&self.node);
-        command
-            .arg(self.engines_dir.join("render.mjs"))
-            .args(["--engine", engine.id(), "--variants", &variants.join(",")])
-            .arg("--scene")
-            .arg(export_dir)
-            .args(["--width", &request.width.to_string()])
-            .args(["--height", &request.height.to_string()])
-            .arg("--out")
-            .arg(scratch.path())
-            .arg("--browser")
-            .arg(&self.browser);
-        if request.hide_refractor {
-            command.arg("--hide-refractor");
+        let utf8 = |path: &Path| {
+            path.to_str().map(str::to_owned).ok_or_else(|| {
+                EngineError::Request(format!(
+                    "{}: the engine driver takes UTF-8 paths only",
+                    path.display()
+                ))
+            })
+        };
+        let line = serde_json::json!({
+            "scene": utf8(export_dir)?,
+            "variants": request.variants.iter().map(|v| v.id()).collect::<Vec<_>>(),
+            "width": request.width,
+            "height": request.height,
+            "out": utf8(scratch.path())?,
+            "hideRefractor": request.hide_refractor,
+        });
+        let answer = self.exchange(&line.to_string()).map_err(|why| {
+            driver_error(format!("engines/render.mjs {why}: {}", self.log_text()))
+        })?;
+        let answer: serde_json::Value = serde_json::from_str(&answer).map_err(|err| {
+            driver_error(format!("unreadable reply from engines/render.mjs: {err}"))
+        })?;
+        if let Some(error) = answer["error"].as_str() {
+            return Err(driver_error(error.to_owned()));
         }
-        let output = command
-            .output()
-            .map_err(|err| driver_error(format!("cannot run {}: {err}", self.node.display())))?;
-        if !output.status.success() {
-            return Err(driver_error(format!(
-                "engines/render.mjs failed ({}): {}",
-                output.status,
-                String::from_utf8_lossy(&output.stderr).trim()
-            )));
-        }
-        let replies: Vec<serde_json::Value> =
-            serde_json::from_slice(&output.stdout).map_err(|err| {
-                driver_error(format!("unreadable reply from engines/render.mjs: {err}"))
-            })?;
+        let replies = answer["frames"].as_array().cloned().unwrap_or_default();
         if replies.len() != request.variants.len() {
             return Err(driver_error(format!(
                 "{} frames for {} variants",
@@ -287,6 +355,51 @@ impl EngineDriver {
                 })
             })
             .collect()
+    }
+
+    /// Sends one request line and reads the answer line; the error says what went wrong
+    /// ("exited (status)", "is closed", ...) for a message that goes on with the log.
+    fn exchange(&mut self, line: &str) -> Result<String, String> {
+        let stdin = self.stdin.as_mut().ok_or("is closed")?;
+        let sent = writeln!(stdin, "{line}").and_then(|()| stdin.flush());
+        let mut answer = String::new();
+        let read = sent.and_then(|()| self.replies.read_line(&mut answer));
+        match read {
+            Ok(n) if n > 0 => Ok(answer),
+            _ => {
+                self.stdin = None;
+                let status = self
+                    .child
+                    .wait()
+                    .map_or_else(|e| e.to_string(), |s| s.to_string());
+                Err(format!("exited ({status})"))
+            }
+        }
+    }
+
+    /// What Node and the page printed, trimmed.
+    fn log_text(&mut self) -> String {
+        let mut text = String::new();
+        let _ = self.log.seek(SeekFrom::Start(0));
+        let _ = self.log.read_to_string(&mut text);
+        text.trim().to_owned()
+    }
+}
+
+impl Drop for EngineSession {
+    /// Closes the input, which makes `render.mjs` close the browser and exit; kills it if it
+    /// has not within 10 s.
+    fn drop(&mut self) {
+        self.stdin = None;
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while std::time::Instant::now() < deadline {
+            match self.child.try_wait() {
+                Ok(Some(_)) | Err(_) => return,
+                Ok(None) => std::thread::sleep(std::time::Duration::from_millis(20)),
+            }
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
     }
 }
 

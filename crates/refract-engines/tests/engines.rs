@@ -348,14 +348,15 @@ fn glass_shows_the_environment_and_positions_after_colour() {
     };
     let luminance = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
     for engine in Engine::ALL {
+        // One browser for both scenes, as `compare` runs them.
+        let mut session = driver.session(engine).expect("session");
         for name in ["sphere", "chart"] {
             let scene = Arc::new(builtin(name));
             let dir = tempfile::tempdir().expect("tempdir");
             export(&scene, dir.path());
             let (width, height) = (64, 64);
-            let mut frames = driver
+            let mut frames = session
                 .render(
-                    engine,
                     dir.path(),
                     &EngineRequest {
                         variants: vec![Variant::Color, Variant::Position],
@@ -401,6 +402,66 @@ fn glass_shows_the_environment_and_positions_after_colour() {
                     "{} on {name}: {shown} of {} glass pixels decode to a position",
                     position.label,
                     glass.len()
+                );
+            }
+        }
+    }
+}
+
+/// A scene rendered in a session after other scenes, at other sizes, gives the bits it gives as
+/// the session's first request, as in a browser of its own: what a page keeps between requests
+/// (three.js's renderer and PMREM, Babylon's engine, scene, environment and transmission
+/// helper) changes no pixel. Before the pages disposed what each request loaded and kept the
+/// BRDF lookup texture, Babylon's second position-coded frame never became ready.
+#[test]
+fn a_session_renders_each_scene_as_its_first_request() {
+    let Some(driver) = driver() else {
+        return;
+    };
+    let exports: Vec<_> = ["sphere", "liquid", "chart"]
+        .into_iter()
+        .map(|name| {
+            let dir = tempfile::tempdir().expect("tempdir");
+            export(&builtin(name), dir.path());
+            (name, dir)
+        })
+        .collect();
+    let request = |width, height| EngineRequest {
+        variants: vec![Variant::Color, Variant::Position],
+        width,
+        height,
+        hide_refractor: false,
+    };
+    for engine in Engine::ALL {
+        let mut session = driver.session(engine).expect("session");
+        let mut render = |k: usize, (width, height): (u32, u32)| {
+            session
+                .render(exports[k].1.path(), &request(width, height))
+                .unwrap_or_else(|err| panic!("{} on {}: {err}", engine.id(), exports[k].0))
+        };
+        let sphere_first = render(0, (48, 40));
+        let liquid_second = render(1, (48, 40));
+        render(2, (64, 64));
+        let sphere_again = render(0, (48, 40));
+        let liquid_again = render(1, (48, 40));
+        for ((name, first), again) in [("sphere", sphere_first), ("liquid", liquid_second)]
+            .into_iter()
+            .zip([sphere_again, liquid_again])
+        {
+            for (variant, (a, b)) in ["colour", "position"].iter().zip(first.iter().zip(&again)) {
+                let differ = a
+                    .frame
+                    .color
+                    .iter()
+                    .zip(&b.frame.color)
+                    .filter(|(x, y)| {
+                        x.to_array().map(f32::to_bits) != y.to_array().map(f32::to_bits)
+                    })
+                    .count();
+                assert_eq!(
+                    differ, 0,
+                    "{}: {name}'s {variant} frame: {differ} pixels differ",
+                    a.label
                 );
             }
         }

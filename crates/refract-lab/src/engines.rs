@@ -6,8 +6,10 @@
 //! there, NaN where it shows none).
 
 use glam::Vec3;
+use std::sync::Mutex;
+
 use refract_engines::{
-    Engine, EngineDriver, EngineError, EngineRequest, Variant, decode_positions,
+    Engine, EngineDriver, EngineError, EngineRequest, EngineSession, Variant, decode_positions,
 };
 use refract_eval::gltf_export::{export_gltf, position_code_bounds};
 use refract_eval::metrics::MetricsRecord;
@@ -37,10 +39,13 @@ pub fn parse_engines(names: &[String]) -> crate::Result<Vec<Engine>> {
     Ok(engines)
 }
 
-/// The engines a command runs and the driver that runs them.
+/// The engines a command runs and the driver that runs them: one browser session per engine,
+/// started at its first scene and kept for the others (so an environment the scenes share is
+/// prefiltered once), closed when this is dropped.
 pub struct EngineRenderers {
     driver: EngineDriver,
     engines: Vec<Engine>,
+    sessions: Mutex<Vec<EngineSession>>,
 }
 
 /// One engine's frame of a scene, ready for the metrics.
@@ -68,6 +73,7 @@ impl EngineRenderers {
             Ok(driver) => Ok(Some(Self {
                 driver,
                 engines: engines.to_vec(),
+                sessions: Mutex::new(Vec::new()),
             })),
             Err(EngineError::Unavailable(why)) if policy == GpuPolicy::IfAvailable => {
                 progress.note(Note::Skipped(format!(
@@ -127,11 +133,29 @@ impl EngineRenderers {
             .map(<[bool]>::to_vec)
             .unwrap_or_else(|| vec![false; truth.pixel_count()]);
         let mut frames = Vec::new();
+        let mut sessions = self
+            .sessions
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         for &engine in engines {
-            let mut rendered = self
-                .driver
-                .render(engine, export.path(), &request)
-                .map_err(|err| crate::LabError::invalid(err.to_string()))?;
+            let index = match sessions.iter().position(|s| s.engine() == engine) {
+                Some(index) => index,
+                None => {
+                    let session = self
+                        .driver
+                        .session(engine)
+                        .map_err(|err| crate::LabError::invalid(err.to_string()))?;
+                    sessions.push(session);
+                    sessions.len() - 1
+                }
+            };
+            let rendered = sessions[index].render(export.path(), &request);
+            if rendered.is_err() {
+                // A failed request may have left the page in any state: the next scene starts
+                // a fresh browser.
+                sessions.swap_remove(index);
+            }
+            let mut rendered = rendered.map_err(|err| crate::LabError::invalid(err.to_string()))?;
             let position = rendered.pop().expect("two variants requested");
             let color = rendered.pop().expect("two variants requested");
             let mut frame = color.frame;
