@@ -126,7 +126,7 @@ struct CompareArgs {
     /// docs/reference.md).
     #[arg(long, value_enum, default_value = "cpu")]
     reference_backend: ReferenceBackendArg,
-    /// Timed frames per method (median reported, after 2 warm-up frames).
+    /// Timed frames per method (median reported, after 1 warm-up frame).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
     frames: u32,
     /// Second-interface TIR policy (two-interface methods).

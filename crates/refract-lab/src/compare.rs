@@ -6,6 +6,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use crate::error::Context;
 use refract_core::TirPolicy;
 use refract_eval::metrics::{ErrorMaps, MetricsRecord, evaluate_method, reference_record};
@@ -58,7 +60,8 @@ pub fn method_params(
 /// The default job (`cargo run --release`, `refract` without a command): every method but the
 /// reference on both backends (the CPU only without an adapter) and every engine's own
 /// renderer (skipped with a note where Node, Chromium or the npm packages are missing) on
-/// every built-in scene at 512², 1 reference sample per pixel, 5 timed frames, into `out/`.
+/// every built-in scene at 512², 1 reference sample per pixel, 3 timed frames after one warm-up
+/// (a median for the report's time column; `refract bench` is the measurement), into `out/`.
 pub fn default_options() -> crate::Result<CompareOptions> {
     let ids: Vec<MethodId> = MethodId::approximations().collect();
     Ok(CompareOptions {
@@ -69,7 +72,7 @@ pub fn default_options() -> crate::Result<CompareOptions> {
         res: 512,
         spp: 1,
         reference_backend: BackendId::Trace,
-        frames: 5,
+        frames: 3,
         engines: refract_engines::Engine::ALL.to_vec(),
         engine_policy: GpuPolicy::IfAvailable,
         out: PathBuf::from("out"),
@@ -189,47 +192,51 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 renderer.render(&camera, method, FrameOutputs::ColorAndAovs, &mut frame)?;
                 // Timed frames write the colour only, as a real-time renderer displays it.
                 let mut scratch = Frame::default();
-                let times = time_frames(2, options.frames, || {
+                let times = time_frames(1, options.frames, || {
                     Ok(renderer
                         .render(&camera, method, FrameOutputs::Color, &mut scratch)?
                         .ms)
                 })?;
-                let (mut record, maps) = evaluate_method(&truth, &frame, &camera, scene, method);
                 let (id, backend) = (method.id(), renderer.backend());
+                let written = MethodImages {
+                    stem: format!("{id}-{backend}"),
+                    has_p2: id.info().aovs.contains(&Aov::P2),
+                    // Methods that look up nearby geometry get a map of where they missed it.
+                    has_miss: id.info().aovs.contains(&Aov::NgTexel),
+                };
+                let (mut record, maps) =
+                    evaluate_and_write(&dir, &written, (&truth, &frame), || {
+                        evaluate_method(&truth, &frame, &camera, scene, method)
+                    })?;
                 record.scene.clone_from(&scene.name);
                 record.method = id.name().to_owned();
                 record.backend = backend.id().to_owned();
                 record.params = method.describe();
                 record.ms_per_frame = Some(times.median);
                 records.push(record);
-                // Methods that look up nearby geometry get a map of where they missed it.
-                images.push(write_images(
-                    &dir,
-                    format!("{id}-{backend}"),
-                    (&truth, &frame),
-                    &maps,
-                    id.info().aovs.contains(&Aov::P2),
-                    id.info().aovs.contains(&Aov::NgTexel),
-                )?);
+                write_error_maps(&dir, &written, (w, h), &maps)?;
+                images.push(written);
                 progress.advance(STAGE_COMPARE, 1);
             }
         }
         if let Some(engines) = &engines {
             if scene.refractor.is_dielectric() {
                 for engine in engines.render(scene, &truth, w, h)? {
-                    let (mut record, maps) = engine_record(&truth, &engine.frame, scene, &camera);
+                    let written = MethodImages {
+                        stem: format!("{}-{ENGINE_BACKEND}", engine.label),
+                        has_p2: false,
+                        has_miss: true,
+                    };
+                    let (mut record, maps) =
+                        evaluate_and_write(&dir, &written, (&truth, &engine.frame), || {
+                            engine_record(&truth, &engine.frame, scene, &camera)
+                        })?;
                     record.scene.clone_from(&scene.name);
                     record.method.clone_from(&engine.label);
                     record.backend = ENGINE_BACKEND.to_owned();
                     records.push(record);
-                    images.push(write_images(
-                        &dir,
-                        format!("{}-{ENGINE_BACKEND}", engine.label),
-                        (&truth, &engine.frame),
-                        &maps,
-                        false,
-                        true,
-                    )?);
+                    write_error_maps(&dir, &written, (w, h), &maps)?;
+                    images.push(written);
                 }
             }
             progress.advance(STAGE_COMPARE, engines.len() as u64);
@@ -244,72 +251,96 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
     Ok(records)
 }
 
-/// The frame's TIR flags (all false when it has no `tir` layer).
-/// Writes a frame's images into `dir` as `<stem>.png` (and its HDR script), its FLIP and T2
-/// error maps, its exit-point error map (`has_p2`), its TIR mask and, for lookups of nearby
-/// geometry (`has_miss`), the map of where it missed the objects the reference's path meets.
-fn write_images(
+/// Runs `evaluate` (the metrics against the reference: FLIP and the rest) on this thread while
+/// the frame's own images, which need no metric, are written on another
+/// ([`write_frame_images`]): nothing is timed while they run.
+fn evaluate_and_write<T: Send>(
     dir: &Path,
-    stem: String,
+    written: &MethodImages,
+    frames: (&Frame, &Frame),
+    evaluate: impl FnOnce() -> T + Send,
+) -> crate::Result<T> {
+    let (evaluated, images) = rayon::join(evaluate, || write_frame_images(dir, written, frames));
+    images?;
+    Ok(evaluated)
+}
+
+/// Writes a frame's images into `dir`, in parallel: `<stem>.png` and its HDR script, its TIR
+/// mask and, for lookups of nearby geometry (`has_miss`), the map of where it missed the
+/// objects the reference's path meets.
+fn write_frame_images(
+    dir: &Path,
+    written: &MethodImages,
     (truth, frame): (&Frame, &Frame),
-    maps: &ErrorMaps,
-    has_p2: bool,
-    has_miss: bool,
-) -> crate::Result<MethodImages> {
+) -> crate::Result<()> {
     let (w, h) = (frame.width, frame.height);
-    if has_miss {
-        write_mask(
-            &dir.join(format!("miss-{stem}.png")),
-            w,
-            h,
-            &refract_eval::metrics::missed_geometry(truth, frame),
-            &frame.color,
-        )?;
-    }
-    write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color)?;
+    let stem = &written.stem;
     let scene = dir
         .file_name()
         .map(|n| n.to_string_lossy())
         .unwrap_or_default();
     let key = format!("{scene}/{stem}.hdr.js");
-    write_hdr_script(
-        &dir.join(format!("{stem}.hdr.js")),
-        &key,
-        w,
-        h,
-        &frame.color,
-    )?;
-    write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0)?;
-    write_error_map(
-        &dir.join(format!("t2err-{stem}.png")),
-        w,
-        h,
-        &maps.t2_deg,
-        T2_SCALE_DEG,
-    )?;
-    if has_p2 {
-        write_error_map(
-            &dir.join(format!("p2err-{stem}.png")),
-            w,
-            h,
-            &maps.p2_rel,
-            P2_SCALE,
-        )?;
-    }
-    write_mask(
-        &dir.join(format!("tir-{stem}.png")),
-        w,
-        h,
-        &tir_mask(frame),
-        &frame.color,
-    )?;
-    Ok(MethodImages {
-        stem,
-        has_p2,
-        has_miss,
-    })
+    let jobs: [&(dyn Fn() -> Result<(), refract_scene::SceneError> + Sync); 4] = [
+        &|| write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color),
+        &|| {
+            write_hdr_script(
+                &dir.join(format!("{stem}.hdr.js")),
+                &key,
+                w,
+                h,
+                &frame.color,
+            )
+        },
+        &|| {
+            let path = dir.join(format!("tir-{stem}.png"));
+            write_mask(&path, w, h, &tir_mask(frame), &frame.color)
+        },
+        &|| {
+            if !written.has_miss {
+                return Ok(());
+            }
+            let missed = refract_eval::metrics::missed_geometry(truth, frame);
+            write_mask(
+                &dir.join(format!("miss-{stem}.png")),
+                w,
+                h,
+                &missed,
+                &frame.color,
+            )
+        },
+    ];
+    jobs.par_iter().try_for_each(|job| job())?;
+    Ok(())
 }
 
+/// Writes a frame's error maps into `dir`, in parallel: FLIP, T2 and, with `has_p2`, the
+/// exit-point error.
+fn write_error_maps(
+    dir: &Path,
+    written: &MethodImages,
+    (w, h): (u32, u32),
+    maps: &ErrorMaps,
+) -> crate::Result<()> {
+    let stem = &written.stem;
+    let jobs: [&(dyn Fn() -> Result<(), refract_scene::SceneError> + Sync); 3] = [
+        &|| write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0),
+        &|| {
+            let path = dir.join(format!("t2err-{stem}.png"));
+            write_error_map(&path, w, h, &maps.t2_deg, T2_SCALE_DEG)
+        },
+        &|| {
+            if !written.has_p2 {
+                return Ok(());
+            }
+            let path = dir.join(format!("p2err-{stem}.png"));
+            write_error_map(&path, w, h, &maps.p2_rel, P2_SCALE)
+        },
+    ];
+    jobs.par_iter().try_for_each(|job| job())?;
+    Ok(())
+}
+
+/// The frame's TIR flags (all false when it has no `tir` layer).
 fn tir_mask(frame: &Frame) -> Vec<bool> {
     frame
         .flag(Aov::Tir)

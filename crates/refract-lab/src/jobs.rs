@@ -28,7 +28,7 @@ pub struct CompareOptions {
     /// Where the reference is traced: [`BackendId::Trace`] (the CPU tracer, the default) or
     /// [`BackendId::Gpu`] (`refract_gpu::reference`, every mode and sample count).
     pub reference_backend: BackendId,
-    /// Timed frames per method (after 2 warm-up frames).
+    /// Timed frames per method (after 1 warm-up frame).
     pub frames: u32,
     /// The engines whose own renderers run beside the methods (`crate::engines`): their
     /// colour and `P_geom` against the same reference.
