@@ -93,7 +93,8 @@ proptest! {
     /// of depth differences read at texels (floors of projected points), so a row whose sample
     /// lands within rounding of a texel edge or of a layer may take another branch: at most
     /// 3 % of the rows may differ; the others must end the same way, with the same counts,
-    /// the last ray's origin and direction, the opaque hit and the transmittance within 1e-3.
+    /// the last ray's origin and direction, the opaque hit, the transmittance and the first
+    /// exit (`P2`, `T2`: whether there is one, and where) within 1e-3.
     #[test]
     fn peel_path_agrees(
         ior0 in prop::sample::select(vec![1.5f32, 1.33, 2.0]),
@@ -153,6 +154,7 @@ proptest! {
             eval("test_peel_opaque"),
             eval("test_peel_transmittance"),
         );
+        let (p2, t2) = (eval("test_peel_p2"), eval("test_peel_t2"));
         let mut mismatches = Vec::new();
         let mut searched = 0usize;
         for (k, &texel) in texels.iter().enumerate() {
@@ -170,7 +172,9 @@ proptest! {
                 && (opaque[k].w > 0.5) == hit.is_some()
                 && hit.is_none_or(|p| close3(opaque[k], p, 1e-3))
                 && close3(transmittance[k], path.transmittance, 1e-3)
-                && close(transmittance[k].w, path.refractors_met as f32, 0.0);
+                && close(transmittance[k].w, path.refractors_met as f32, 0.0)
+                && (p2[k].w > 0.5) == path.first_exit.is_some()
+                && path.first_exit.is_none_or(|(p, t)| close3(p2[k], p, 1e-3) && close3(t2[k], t, 1e-3));
             if !same {
                 mismatches.push(k);
             }

@@ -140,3 +140,21 @@ fn test_peel_transmittance(@builtin(global_invocation_id) id: vec3<u32>) {
     let path = row_path(i);
     out_v[i] = vec4<f32>(path.transmittance, f32(path.refractors_met));
 }
+
+// -> (the first exit's point P2, 1 where the path has one)
+@compute @workgroup_size(64)
+fn test_peel_p2(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let path = row_path(i);
+    out_v[i] = vec4<f32>(path.p2, select(0.0, 1.0, path.has_exit));
+}
+
+// -> (the first exit's direction T2, 0)
+@compute @workgroup_size(64)
+fn test_peel_t2(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let path = row_path(i);
+    out_v[i] = vec4<f32>(path.t2, 0.0);
+}
