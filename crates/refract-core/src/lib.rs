@@ -12,6 +12,7 @@
 //!   the eight-lane types of [`lanes`]).
 //! * [`kernel_x8`], [`lanes`]: the kernels on eight pixels at once (SIMD) through the same
 //!   leaves, bit-identical.
+//! * [`microfacet`]: rough interfaces: GGX, Smith masking, visible-normal sampling (Walter et al. 2007, Heitz 2018).
 //! * [`shading`]: the opaque objects' albedos and directional light.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
@@ -65,6 +66,7 @@ pub mod kernel;
 pub mod kernel_x8;
 pub mod lanes;
 mod math;
+pub mod microfacet;
 pub mod nearby_geometry;
 pub mod nearby_geometry_x8;
 pub mod optics;

@@ -299,3 +299,113 @@ fn hdrp_edge_fade(uv: vec2<f32>) -> f32 {
     let fy = smoothstep01(clamp((1.0 - abs(2.0 * uv.y - 1.0)) / HDRP_EDGE_FADE, 0.0, 1.0));
     return fx * fy;
 }
+
+// microfacet.rs: orthonormal_basis (Duff et al. 2017): (t, b) with (t, b, n) right-handed.
+fn orthonormal_basis(n: vec3<f32>) -> array<vec3<f32>, 2> {
+    var sign = -1.0;
+    if n.z >= 0.0 {
+        sign = 1.0;
+    }
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return array<vec3<f32>, 2>(
+        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
+// microfacet.rs: ggx_d, D(m) = 1 / (π α² ((m_x² + m_y²)/α² + m_z²)²), 0 below the surface.
+fn ggx_d(m: vec3<f32>, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let s = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+    let d = 1.0 / (PI * a2 * s * s);
+    if d * m.z > 1e-20 {
+        return d;
+    }
+    return 0.0;
+}
+
+// microfacet.rs: smith_g1, G1(v, m) = 2 / (1 + √(1 + α² tan²θv)), 0 on the back of m.
+fn smith_g1(v: vec3<f32>, m: vec3<f32>, alpha: f32) -> f32 {
+    if dot(v, m) * v.z <= 0.0 {
+        return 0.0;
+    }
+    let xy = alpha * alpha * (v.x * v.x + v.y * v.y);
+    if xy == 0.0 {
+        return 1.0;
+    }
+    return 2.0 / (1.0 + sqrt(1.0 + xy / (v.z * v.z)));
+}
+
+// microfacet.rs: sample_visible_normal (Heitz 2018, listing 1).
+fn sample_visible_normal(wi: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(alpha * wi.x, alpha * wi.y, wi.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) * (1.0 / sqrt(lensq));
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = TAU * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(1.0 - p1 * p1) + s * (r * sin(phi));
+    let nh = t1 * p1 + t2 * p2 + vh * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+    return normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+}
+
+// microfacet.rs: visible_normal_pdf, D_wi(m) = G1(wi, m) max(0, wi·m) D(m) / cos θi.
+fn visible_normal_pdf(wi: vec3<f32>, m: vec3<f32>, alpha: f32) -> f32 {
+    if wi.z <= 0.0 {
+        return 0.0;
+    }
+    return smith_g1(wi, m, alpha) * max(dot(wi, m), 0.0) * ggx_d(m, alpha) / wi.z;
+}
+
+// microfacet.rs: MicrofacetSample.
+struct MicrofacetSample {
+    m: vec3<f32>,
+    fresnel: f32,
+    reflected: vec3<f32>,
+    reflected_masking: f32,
+    refracted: vec3<f32>,
+    refracted_masking: f32,
+}
+
+// microfacet.rs: sample_rough_interface: one visible microfacet normal of the interface seen
+// along `dir` with macro normal `facing` (toward the ray), both lobes about it.
+fn sample_rough_interface(dir: vec3<f32>, facing: vec3<f32>, eta: f32, alpha: f32, u: vec2<f32>) -> MicrofacetSample {
+    let basis = orthonormal_basis(facing);
+    let t = basis[0];
+    let b = basis[1];
+    let wi = vec3<f32>(dot(-dir, t), dot(-dir, b), dot(-dir, facing));
+    var s: MicrofacetSample;
+    if wi.z <= 0.0 {
+        s.m = facing;
+        s.fresnel = 1.0;
+        s.reflected = reflect_dir(dir, facing);
+        return s;
+    }
+    let m_local = sample_visible_normal(wi, alpha, u);
+    let m = normalize(t * m_local.x + b * m_local.y + facing * m_local.z);
+    s.m = m;
+    s.reflected = normalize(reflect_dir(dir, m));
+    let refracted = refract_dir(dir, m, eta);
+    let tir = all(refracted == vec3<f32>(0.0));
+    s.fresnel = 1.0;
+    if !tir {
+        s.refracted = normalize(refracted);
+        s.fresnel = fresnel_dielectric(-dot(dir, m), eta);
+    }
+    let ml = vec3<f32>(dot(m, t), dot(m, b), dot(m, facing));
+    let rl = vec3<f32>(dot(s.reflected, t), dot(s.reflected, b), dot(s.reflected, facing));
+    if rl.z > 0.0 {
+        s.reflected_masking = smith_g1(rl, ml, alpha);
+    }
+    let tl = vec3<f32>(dot(s.refracted, t), dot(s.refracted, b), dot(s.refracted, facing));
+    if !tir && tl.z < 0.0 {
+        s.refracted_masking = smith_g1(tl, ml, alpha);
+    }
+    return s;
+}

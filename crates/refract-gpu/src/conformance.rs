@@ -40,7 +40,7 @@ pub const CONFORMANCE_KERNELS_MODULE: ShaderModule = ShaderModule {
 };
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 16] = [
+pub const ENTRY_POINTS: [&str; 20] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
@@ -57,6 +57,10 @@ pub const ENTRY_POINTS: [&str; 16] = [
     "test_dm_texel",
     "test_dm_hit",
     "test_dm_path",
+    "test_ggx",
+    "test_rough_normal",
+    "test_rough_reflected",
+    "test_rough_refracted",
 ];
 
 /// The entry points of the whole-kernel module (`src/conformance_kernels.wgsl`).

@@ -204,3 +204,47 @@ fn test_dm_path(@builtin(global_invocation_id) id: vec3<u32>) {
     let path = dm_trace_path(x, in_b[i].xyz, normalize(x), vec3<f32>(0.9), -1.0, 0, search, u32(in_a[i].w), DM_FRESNEL_IGNORE);
     out_v[i] = vec4<f32>(path.radiance, f32(path.bounces));
 }
+
+// ---- microfacet.rs ----
+
+// a = (v_local, alpha), b = (m_local, _) -> (ggx_d(m), smith_g1(v, m), visible_normal_pdf(v, m), _)
+@compute @workgroup_size(64)
+fn test_ggx(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let a = in_a[i];
+    let m = in_b[i].xyz;
+    out_v[i] = vec4<f32>(ggx_d(m, a.w), smith_g1(a.xyz, m, a.w), visible_normal_pdf(a.xyz, m, a.w), 0.0);
+}
+
+// The sample point of row k: fract((k + ½) (0.7548777, 0.5698403)) (refract-gpu's test).
+fn row_sample(k: u32) -> vec2<f32> {
+    return fract((f32(k) + 0.5) * vec2<f32>(0.7548777, 0.5698403));
+}
+
+// a = (dir, eta), b = (facing, alpha) -> (m, fresnel) of sample_rough_interface at row_sample
+@compute @workgroup_size(64)
+fn test_rough_normal(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let s = sample_rough_interface(in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w, row_sample(i));
+    out_v[i] = vec4<f32>(s.m, s.fresnel);
+}
+
+// as test_rough_normal -> (reflected, reflected_masking)
+@compute @workgroup_size(64)
+fn test_rough_reflected(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let s = sample_rough_interface(in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w, row_sample(i));
+    out_v[i] = vec4<f32>(s.reflected, s.reflected_masking);
+}
+
+// as test_rough_normal -> (refracted, refracted_masking)
+@compute @workgroup_size(64)
+fn test_rough_refracted(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let s = sample_rough_interface(in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w, row_sample(i));
+    out_v[i] = vec4<f32>(s.refracted, s.refracted_masking);
+}

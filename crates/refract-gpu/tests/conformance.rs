@@ -13,6 +13,7 @@ use refract_core::fresnel::{
 };
 use refract_core::gpu::{distance_mode_code, tir_policy_code};
 use refract_core::interpolated_distance::{DistanceMode, angle_ratio, approximate_distance};
+use refract_core::microfacet::{ggx_d, sample_rough_interface, smith_g1, visible_normal_pdf};
 use refract_core::nearby_geometry::{Plane, screen_fraction_to_segment};
 use refract_core::optics::{critical_angle, face_forward_shading_normal, reflect, refract};
 use refract_core::procedural_sky::procedural_radiance;
@@ -153,6 +154,56 @@ proptest! {
         // The sky has hard edges (checker squares, stripes, sun): a direction within rounding of
         // an edge may land on the other side. Allow one such row per batch.
         prop_assert!(sky_mismatch <= 1, "{} sky mismatches", sky_mismatch);
+    }
+
+    /// GGX's distribution, Smith's masking and the visible normals' density (microfacet.rs).
+    #[test]
+    fn ggx_terms_agree(rows in prop::collection::vec((unit(), unit(), 0.01f32..=1.0), ROWS)) {
+        let context = gpu_or_skip!();
+        let a: Vec<Vec4> = rows.iter().map(|(v, _, alpha)| v.extend(*alpha)).collect();
+        let b: Vec<Vec4> = rows.iter().map(|(_, m, _)| m.extend(0.0)).collect();
+        let out = evaluate(context, "test_ggx", &a, &b).expect("gpu");
+        for (k, (v, m, alpha)) in rows.iter().enumerate() {
+            let d = ggx_d(*m, *alpha);
+            // D spans decades (1/(πα²) at the pole): relative to its own size.
+            prop_assert!((out[k].x - d).abs() <= 1e-5 * d.max(1.0), "D {} vs {}", out[k].x, d);
+            prop_assert!(close(out[k].y, smith_g1(*v, *m, *alpha), 1e-5));
+            let pdf = visible_normal_pdf(*v, *m, *alpha);
+            prop_assert!((out[k].z - pdf).abs() <= 1e-5 * pdf.max(1.0), "pdf {} vs {}", out[k].z, pdf);
+        }
+    }
+
+    /// One sample of a rough interface (microfacet.rs's sample_rough_interface): the normal,
+    /// Fresnel, both directions and their masking, at the sample point both sides derive from
+    /// the row index.
+    #[test]
+    fn rough_interface_samples_agree(rows in prop::collection::vec((unit(), unit(), 0.4f32..2.5, 0.02f32..=1.0), ROWS)) {
+        let context = gpu_or_skip!();
+        // The ray goes toward the side the facing normal is on.
+        let rows: Vec<_> = rows.into_iter().map(|(d, n, eta, alpha)| if d.dot(n) > 0.0 { (-d, n, eta, alpha) } else { (d, n, eta, alpha) }).collect();
+        let a: Vec<Vec4> = rows.iter().map(|(d, _, eta, _)| d.extend(*eta)).collect();
+        let b: Vec<Vec4> = rows.iter().map(|(_, n, _, alpha)| n.extend(*alpha)).collect();
+        let normal = evaluate(context, "test_rough_normal", &a, &b).expect("gpu");
+        let reflected = evaluate(context, "test_rough_reflected", &a, &b).expect("gpu");
+        let refracted = evaluate(context, "test_rough_refracted", &a, &b).expect("gpu");
+        let mut compared = 0;
+        for (k, (d, n, eta, alpha)) in rows.iter().enumerate() {
+            let u = ((k as f32 + 0.5) * Vec2::new(0.754_877_7, 0.569_840_3)).fract();
+            let s = sample_rough_interface(*d, *n, *eta, *alpha, u);
+            // Rows near grazing or near TIR about m may take the other branch by rounding.
+            let k_tir = 1.0 - eta * eta * (1.0 - d.dot(s.m).powi(2));
+            if d.dot(*n).abs() < 1e-3 || k_tir.abs() < 1e-3 {
+                continue;
+            }
+            compared += 1;
+            prop_assert!(close3(normal[k], s.m, 2e-4), "m {} vs {}", normal[k], s.m);
+            prop_assert!(close(normal[k].w, s.fresnel, 2e-4), "F {} vs {}", normal[k].w, s.fresnel);
+            prop_assert!(close3(reflected[k], s.reflected, 5e-4) && close(reflected[k].w, s.reflected_masking, 5e-4),
+                "reflected {} vs {} {}", reflected[k], s.reflected, s.reflected_masking);
+            prop_assert!(close3(refracted[k], s.refracted, 5e-4) && close(refracted[k].w, s.refracted_masking, 5e-4),
+                "refracted {} vs {} {}", refracted[k], s.refracted, s.refracted_masking);
+        }
+        prop_assert!(compared > ROWS / 2);
     }
 
     /// Wyman 2005b §4.2–4.3 helpers: ray-plane hits and the screen-spaced seed fraction.
