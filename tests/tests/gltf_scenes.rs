@@ -39,7 +39,7 @@ fn counts(frame: &Frame, aov: Aov) -> &[u32] {
 /// apart from the others changes hundreds of pixels.
 #[test]
 fn exported_many_refractor_scenes_read_back_as_the_same_refractors() {
-    for name in ["glass-behind-glass", "vessel", "liquid"] {
+    for name in ["glass-behind-glass", "vessel", "liquid", "rough-glass"] {
         let (original, loaded, warnings) = exported_and_read_back(name);
         assert_eq!(
             loaded.refractor_count(),
@@ -50,6 +50,12 @@ fn exported_many_refractor_scenes_read_back_as_the_same_refractors() {
         for (k, (a, b)) in original.refractors().zip(loaded.refractors()).enumerate() {
             assert_eq!(a.ior(), b.ior(), "{name} refractor {k}: IOR");
             assert_eq!(a.within(), b.within(), "{name} refractor {k}: nesting");
+            // pbrMetallicRoughness.roughnessFactor (issue 52).
+            assert_eq!(
+                a.roughness(),
+                b.roughness(),
+                "{name} refractor {k}: roughness"
+            );
             assert_eq!(
                 a.attenuation().is_some(),
                 b.attenuation().is_some(),
@@ -73,7 +79,7 @@ fn exported_many_refractor_scenes_read_back_as_the_same_refractors() {
             let differing = ca.iter().zip(cb).filter(|(x, y)| x != y).count();
             let met = ca.iter().filter(|&&x| x != 0).count();
             println!("{name} {aov:?}: {differing} of {met} pixels differ");
-            assert!(met > 500, "{name}: the refractors cover {met} pixels");
+            assert!(met > 400, "{name}: the refractors cover {met} pixels");
             assert!(
                 differing * 100 <= met,
                 "{name} {aov:?}: {differing} of {met} pixels differ"

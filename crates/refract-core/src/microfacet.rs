@@ -16,8 +16,16 @@ use crate::fresnel::fresnel_dielectric;
 use crate::math;
 use crate::optics::{reflect, refract};
 
-/// The largest roughness an interface takes (glTF's `roughnessFactor` range is `[0, 1]`).
-pub const ROUGHNESS_MAX: f32 = 1.0;
+/// The roughness of an interface, glTF's `roughnessFactor` range: 0 is a smooth (specular)
+/// interface, 1 the roughest.
+pub const ROUGHNESS_RANGE: core::ops::RangeInclusive<f32> = 0.0..=1.0;
+/// What an error about a roughness says was expected.
+pub const ROUGHNESS_EXPECTED: &str = "a roughness from 0 (smooth) to 1";
+
+/// Whether `roughness` is in [`ROUGHNESS_RANGE`] (NaN is not).
+pub fn roughness_in_range(roughness: f32) -> bool {
+    ROUGHNESS_RANGE.contains(&roughness)
+}
 
 /// GGX's `α` of a glTF roughness `r`: `α = r²` (glTF 2.0 Appendix B; Mitsuba's `alpha` is this
 /// `α` directly).

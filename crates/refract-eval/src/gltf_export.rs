@@ -7,7 +7,7 @@
 //!   the aspect ratio); every refractor (nodes `refractor`, `refractor-1`, …: [`refractor_name`])
 //!   as glass: `KHR_materials_transmission` 1, `KHR_materials_ior`, `KHR_materials_volume` with
 //!   the thickness the engine methods use by default (`thickness=auto`: the file's thickness or
-//!   the mean `d_N`, in world units, on a node of scale 1) and its attenuation, roughness 0,
+//!   the mean `d_N`, in world units, on a node of scale 1) and its attenuation, its roughness,
 //!   metalness 0, white. A conductor refractor is a metal of the conductor's normal-incidence
 //!   reflectance. glTF has no surrounding medium: a refractor inside another (water in a glass)
 //!   keeps its own IOR, which is what the engines refract with.
@@ -318,7 +318,7 @@ fn glass_material(name: &str, refractor: &Refractor, specular: f32) -> Value {
         "pbrMetallicRoughness": {
             "baseColorFactor": [1.0, 1.0, 1.0, 1.0],
             "metallicFactor": 0.0,
-            "roughnessFactor": 0.0,
+            "roughnessFactor": refractor.roughness(),
         },
         "extensions": extensions,
     })
@@ -330,13 +330,13 @@ fn conductor_f0(eta: Vec3, k: Vec3) -> Vec3 {
     ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2)
 }
 
-fn metal_material(name: &str, f0: Vec3) -> Value {
+fn metal_material(name: &str, f0: Vec3, roughness: f32) -> Value {
     json!({
         "name": name,
         "pbrMetallicRoughness": {
             "baseColorFactor": [f0.x, f0.y, f0.z, 1.0],
             "metallicFactor": 1.0,
-            "roughnessFactor": 0.0,
+            "roughnessFactor": roughness,
         },
     })
 }
@@ -415,7 +415,7 @@ pub fn export_gltf(scene: &Scene) -> Result<GltfExport, SceneError> {
         }));
         let (glass, coded_glass) = match refractor.conductor() {
             Some(c) => {
-                let metal = metal_material(&name, conductor_f0(c.eta, c.k));
+                let metal = metal_material(&name, conductor_f0(c.eta, c.k), refractor.roughness());
                 (metal.clone(), metal)
             }
             None => (
@@ -462,7 +462,11 @@ pub fn export_gltf(scene: &Scene) -> Result<GltfExport, SceneError> {
                 materials.push(unlit_material(&name, base_color, texture));
             }
             Material::Conductor(c) => {
-                materials.push(metal_material(&name, conductor_f0(c.eta, c.k)));
+                materials.push(metal_material(
+                    &name,
+                    conductor_f0(c.eta, c.k),
+                    object.roughness(),
+                ));
             }
         }
         let codes: Vec<Vec3> = mesh

@@ -126,7 +126,7 @@ translate = [0.6, -0.75, 2.6]
 }
 
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 15] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 16] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -305,6 +305,11 @@ translate = [0.5, -0.9, -1.0]
         "water (IOR 1.33) filling a round glass flask (IOR 1.5, walls 0.16 thick), before the colour chart",
         LIQUID_SCENE,
     ),
+    (
+        "rough-glass",
+        "four glass spheres (IOR 1.5) of roughness 0, 0.1, 0.3 and 0.6 side by side before the colour chart (after glTF's TransmissionRoughnessTest)",
+        ROUGH_GLASS_SCENE,
+    ),
 ];
 
 /// The chart stage of the many-refractor scenes (issue 49): `chart`'s camera, colour chart and
@@ -390,6 +395,40 @@ scale = 0.8
 mesh = "builtin:sphere"
 ior = 1.33
 scale = 0.64
+"#
+);
+
+/// `rough-glass`: four spheres of radius 0.32 resting on the floor, 0.75 apart, roughness
+/// rising from left (0, refractor 0) to right (0.6).
+const ROUGH_GLASS_SCENE: &str = concat!(
+    chart_stage!(),
+    r#"
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+scale = 0.32
+translate = [-1.125, -0.48, 0.0]
+
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+roughness = 0.1
+scale = 0.32
+translate = [-0.375, -0.48, 0.0]
+
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+roughness = 0.3
+scale = 0.32
+translate = [0.375, -0.48, 0.0]
+
+[[refractor]]
+mesh = "builtin:sphere"
+ior = 1.5
+roughness = 0.6
+scale = 0.32
+translate = [1.125, -0.48, 0.0]
 "#
 );
 
@@ -610,6 +649,9 @@ struct RefractorSection {
     attenuation_color: Option<[f32; 3]>,
     /// `attenuationDistance` in world units (> 0).
     attenuation_distance: Option<f32>,
+    /// The surface's roughness in [0, 1] (glTF's `roughnessFactor`; GGX α = roughness²); the
+    /// glTF material's when the mesh is a glTF file with one, else 0 (smooth).
+    roughness: Option<f32>,
 }
 
 fn default_ior() -> f32 {
@@ -636,6 +678,22 @@ struct ObjectSection {
     material: Option<String>,
     eta: Option<[f32; 3]>,
     k: Option<[f32; 3]>,
+    /// A conductor's roughness in [0, 1] (default 0: mirror-smooth); not for diffuse objects.
+    roughness: Option<f32>,
+}
+
+/// `roughness` of `section` in [`refract_scene::scene::ROUGHNESS_RANGE`], or an error naming it.
+fn check_roughness(origin: &str, section: &str, roughness: f32) -> Result<f32, SceneError> {
+    if refract_scene::scene::roughness_in_range(roughness) {
+        Ok(roughness)
+    } else {
+        Err(SceneError::field(
+            origin,
+            format!("{section} roughness"),
+            roughness,
+            refract_scene::scene::ROUGHNESS_EXPECTED,
+        ))
+    }
 }
 
 /// The largest real part `n` of a conductor's index in scene files.
@@ -970,7 +1028,21 @@ fn build(name: &str, text: &str, base: &Path, origin: &str) -> Result<LoadedScen
             Some(conductor) => Material::Conductor(conductor),
             None => Material::Diffuse(albedo),
         };
-        objects.push(Object::new(mesh, material)?);
+        let roughness = match object.roughness {
+            Some(r) if !matches!(material, Material::Conductor(_)) => {
+                return Err(SceneError::field(
+                    origin,
+                    format!("{section}.roughness"),
+                    r,
+                    "roughness only on a conductor (a diffuse surface has none)",
+                ));
+            }
+            Some(r) => check_roughness(origin, &section, r)?,
+            None => 0.0,
+        };
+        let mut object = Object::new(mesh, material)?;
+        object.set_roughness(roughness)?;
+        objects.push(object);
     }
 
     let c = &file.camera;
@@ -1057,8 +1129,10 @@ fn build_refractor(
         format!("{section}: ")
     };
     let ior = r.ior;
-    let (glass_ior, glass_thickness, glass_attenuation) =
-        glass.map_or((None, None, None), |g| (g.ior, g.thickness, g.attenuation));
+    let (glass_ior, glass_thickness, glass_attenuation, glass_roughness) = glass
+        .map_or((None, None, None, None), |g| {
+            (g.ior, g.thickness, g.attenuation, g.roughness)
+        });
     if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
         warnings.push(format!(
             "{label}the glTF material's IOR is {glass}; the scene's ior = {ior} is used"
@@ -1084,9 +1158,15 @@ fn build_refractor(
         )?),
         _ => None,
     };
+    // The section's roughness, else the glTF material's roughnessFactor.
+    let roughness = match r.roughness {
+        Some(value) => check_roughness(origin, section, value)?,
+        None => glass_roughness.unwrap_or(0.0),
+    };
     let mut refractor = Refractor::new(mesh, ior)?;
     refractor.set_conductor(conductor);
     refractor.set_attenuation(attenuation);
+    refractor.set_roughness(roughness)?;
     // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
     refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
     warn_of_d_n(&label, &refractor, warnings);
@@ -1125,6 +1205,8 @@ struct GlassFacts {
     thickness: Option<f32>,
     /// `attenuationColor` and `attenuationDistance` (normalised like the thickness).
     attenuation: Option<(Vec3, f32)>,
+    /// `roughnessFactor` (glTF's default 1 when the material does not give one).
+    roughness: Option<f32>,
 }
 
 /// A glTF material's `KHR_materials_volume` absorption as an [`refract_scene::Attenuation`],
@@ -1194,6 +1276,7 @@ fn load_mesh_spec(
         ior: m.ior,
         thickness: m.thickness.map(|d| d * scale),
         attenuation: m.attenuation.map(|(color, d)| (color, d * scale)),
+        roughness: Some(m.roughness),
     });
     Ok((loaded.mesh, glass))
 }
@@ -1279,6 +1362,14 @@ fn build_gltf(name: &str, path: &Path) -> Result<LoadedScene, SceneError> {
                 let mut refractor = Refractor::new(mesh, ior)?;
                 refractor.set_attenuation(attenuation);
                 refractor.set_volume_thickness(glass.thickness.map(|d| d * scale));
+                refractor.set_roughness(glass.roughness).map_err(|_| {
+                    SceneError::field(
+                        &origin,
+                        format!("{section}: pbrMetallicRoughness roughnessFactor"),
+                        glass.roughness,
+                        refract_scene::scene::ROUGHNESS_EXPECTED,
+                    )
+                })?;
                 let label = format!("{origin}: refractor[{}] ({section}): ", refractors.len());
                 warn_of_d_n(&label, &refractor, &mut warnings);
                 refractors.push(refractor);
@@ -1414,6 +1505,46 @@ mod tests {
             err.contains("refractor[1]") && err.contains("both"),
             "{err}"
         );
+    }
+
+    /// `roughness` (issue 52): read on refractors and conductor objects, in [0, 1], refused on
+    /// a diffuse object; `rough-glass` has the four roughnesses its description names.
+    #[test]
+    fn roughness_is_read_checked_and_refused_on_diffuse_objects() {
+        let load = |text: &str| load_scene_str("r", text, Path::new("."), "r.toml");
+        let glass = "[refractor]\nmesh = \"builtin:sphere\"\nroughness = 0.25\n";
+        assert_eq!(
+            load(glass)
+                .expect("rough glass")
+                .scene
+                .refractor
+                .roughness(),
+            0.25
+        );
+        for bad in ["-0.1", "1.5", "nan"] {
+            let err = load(&glass.replace("0.25", bad))
+                .expect_err("out of range")
+                .to_string();
+            assert!(
+                err.contains("r.toml") && err.contains("roughness") && err.contains("from 0"),
+                "{bad}: {err}"
+            );
+        }
+        let metal = "[refractor]\nmesh = \"builtin:sphere\"\n\n[[objects]]\nmesh = \"builtin:plane\"\nmaterial = \"gold\"\nroughness = 0.4\n";
+        let scene = load(metal).expect("rough gold").scene;
+        assert_eq!(scene.objects[0].roughness(), 0.4);
+        assert!(scene.has_roughness());
+        let err = load(&metal.replace("material = \"gold\"\n", ""))
+            .expect_err("a rough diffuse object")
+            .to_string();
+        assert!(
+            err.contains("objects[0].roughness") && err.contains("conductor"),
+            "{err}"
+        );
+        let rough = load_scene("rough-glass").expect("rough-glass").scene;
+        let roughness: Vec<f32> = rough.refractors().map(|r| r.roughness()).collect();
+        assert_eq!(roughness, [0.0, 0.1, 0.3, 0.6]);
+        assert!(!load_scene("chart").expect("chart").scene.has_roughness());
     }
 
     #[test]

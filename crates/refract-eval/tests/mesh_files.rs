@@ -497,27 +497,31 @@ fn gltf_required_extensions_that_are_read_are_accepted() {
     );
 }
 
-/// Glass properties refract reads but does not model are warned about, naming the material and
-/// the value (issue 54 #16: dropped without a word). The tetrahedron's material gives no
-/// roughness (glTF's default is 1); with `"roughnessFactor": 0` there is nothing to say, and
-/// absorption is named.
+/// A glass material's roughness is read, glTF's default 1 when it gives none (issue 52), and
+/// no longer warned about as unmodelled; `"roughnessFactor": 0` is smooth glass.
 #[test]
-fn gltf_glass_properties_that_are_not_modelled_are_warned_about() {
+fn gltf_glass_roughness_is_read_with_gltfs_default() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let warnings = |name: &str, material: &str| {
+    let load = |name: &str, material: &str| {
         let path = write(dir.path(), name, &tetrahedron_glb_with(None, &[], material));
-        load_mesh(&path, &raw()).expect("load").report.warnings
+        load_mesh(&path, &raw()).expect("load")
     };
-    let rough = warnings("rough.glb", "");
+    let rough = load("rough.glb", "");
+    assert_eq!(rough.material.map(|m| m.roughness), Some(1.0));
     assert!(
-        rough
-            .iter()
-            .any(|w| w.contains("glass material 0: roughnessFactor 1")),
-        "{rough:?}"
+        rough.report.warnings.iter().all(|w| !w.contains("rough")),
+        "{:?}",
+        rough.report.warnings
     );
-    let smooth = warnings(
+    let smooth = load(
         "smooth.glb",
         r#""pbrMetallicRoughness":{"roughnessFactor":0},"#,
     );
-    assert!(smooth.iter().all(|w| !w.contains("glass")), "{smooth:?}");
+    assert_eq!(smooth.material.map(|m| m.roughness), Some(0.0));
+    let half = load(
+        "half.glb",
+        r#""pbrMetallicRoughness":{"roughnessFactor":0.5},"#,
+    );
+    assert_eq!(half.material.map(|m| m.roughness), Some(0.5));
+    assert!(smooth.report.warnings.iter().all(|w| !w.contains("glass")));
 }

@@ -25,6 +25,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use refract_core::TirPolicy;
+use refract_core::microfacet::alpha_from_roughness;
 use refract_core::{Camera, gpu::FrameUniforms};
 use refract_geometry::{FlatBvh, Mesh};
 use refract_scene::{
@@ -109,7 +110,8 @@ struct TraceUniforms {
     sample_first: u32,
     sample_end: u32,
     throughput_cutoff: f32,
-    _padding: [u32; 2],
+    rough: u32,
+    _padding: u32,
 }
 
 /// `struct TraceSurface` of `src/reference.wgsl`, one per mesh: a conductor (`eta.w` = 1) or a
@@ -123,17 +125,19 @@ struct TraceSurface {
     ior: f32,
     outside_ior: f32,
     within: u32,
-    _padding: u32,
+    alpha: f32,
 }
 
 /// `NO_MEDIUM` of `src/reference.wgsl`: air.
 const NO_MEDIUM: u32 = u32::MAX;
 
 impl TraceSurface {
-    fn conductor(conductor: Option<refract_scene::Conductor>) -> Self {
+    /// A conductor of `roughness` (a diffuse object for `None`).
+    fn conductor(conductor: Option<refract_scene::Conductor>, roughness: f32) -> Self {
         conductor.map_or_else(Self::default, |c| Self {
             eta: c.eta.extend(1.0).to_array(),
             k: c.k.extend(0.0).to_array(),
+            alpha: alpha_from_roughness(roughness),
             ..Self::default()
         })
     }
@@ -150,7 +154,8 @@ impl TraceSurface {
                 .within()
                 .and_then(|w| u32::try_from(w).ok())
                 .unwrap_or(NO_MEDIUM),
-            ..Self::conductor(refractor.conductor())
+            alpha: alpha_from_roughness(refractor.roughness()),
+            ..Self::conductor(refractor.conductor(), refractor.roughness())
         }
     }
 }
@@ -498,7 +503,7 @@ impl GpuReference {
                 scene
                     .objects
                     .iter()
-                    .map(|o| TraceSurface::conductor(o.conductor())),
+                    .map(|o| TraceSurface::conductor(o.conductor(), o.roughness())),
             )
             .collect();
         let light = &scene.light;
@@ -516,7 +521,8 @@ impl GpuReference {
             sample_first: 0,
             sample_end: 1,
             throughput_cutoff: 0.0,
-            _padding: [0; 2],
+            rough: u32::from(scene.has_roughness()),
+            _padding: 0,
         };
         Ok(context.checked(|| Self {
             bvh_group,
@@ -618,6 +624,12 @@ impl GpuReference {
             ..self.uniforms
         };
         let batch = self.samples_per_dispatch.unwrap_or_else(|| {
+            if context.info.device_type == wgpu::DeviceType::Cpu {
+                // lavapipe ends every loop of an invocation after 65,535 iterations of all its
+                // loops together (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS), silently: the BVH
+                // steps of a few hundred rays. One sample a dispatch stays under it.
+                return 1;
+            }
             (DEFAULT_PIXEL_SAMPLES_PER_DISPATCH / pixels.max(1)).clamp(1, u64::from(spp)) as u32
         });
         let device = &context.device;
@@ -628,7 +640,7 @@ impl GpuReference {
         let mut first = 0;
         loop {
             trace.sample_first = first;
-            trace.sample_end = if trace.mode == 0 && spp == 1 {
+            trace.sample_end = if trace.mode == 0 && spp == 1 && trace.rough == 0 {
                 0
             } else {
                 (first + batch).min(spp)

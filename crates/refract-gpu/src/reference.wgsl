@@ -5,7 +5,9 @@
 // segment inside an absorbing medium (issue 49),
 // conductors reflect with the exact conductor Fresnel reflectance per channel, diffuse objects
 // are shaded under the scene light, rays that leave the scene read the environment (WGSL's atan2,
-// no polynomial). Both modes: `transmission` (the refracted path, TIR reflects:
+// no polynomial). Rough glass and conductors scatter about one GGX visible microfacet normal
+// per interaction (refract_core's sample_rough_interface), its u from the twin of
+// refract_trace::sampling::interface_sample at the same path-tree node. Both modes: `transmission` (the refracted path, TIR reflects:
 // Tracer::transmission_path) and `full` (deterministic Fresnel splitting at every interface:
 // Tracer::full_radiance, its recursion as an explicit stack). One pixel per invocation; the
 // samples of refract_trace::sampling::pixel_sample, a range of them per dispatch (the sum is
@@ -48,6 +50,9 @@ struct TraceUniforms {
     sample_end: u32,
     // Full mode drops branches whose throughput falls below this.
     throughput_cutoff: f32,
+    // 1: some surface is rough (the pixel-centre path is then not the colour).
+    rough: u32,
+    _padding: u32,
 }
 
 // What a mesh's surface is, one per mesh in mesh order: a conductor (eta.w = 1; exact Fresnel
@@ -61,7 +66,8 @@ struct TraceSurface {
     ior: f32,
     outside_ior: f32,
     within: u32,
-    _padding: u32,
+    // GGX α of the surface (0: smooth).
+    alpha: f32,
 }
 
 // The medium of air (no refractor).
@@ -220,9 +226,87 @@ fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
     return i;
 }
 
-// Tracer::transmission_path.
-fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
+// Tracer::conductor_bounce: the reflected direction and weight per channel at a conductor hit,
+// about the shading normal turned toward the ray or, on a rough one when sampled, about a
+// visible microfacet normal (weight times its masking G1).
+struct Bounce {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    rough: bool,
+}
+
+fn conductor_bounce(dir: vec3<f32>, h: SceneHit, sampled: bool, depth: u32, index: u32, key: u32) -> Bounce {
+    let c = trace_surfaces[h.mesh];
+    var oriented = -h.shading;
+    if dot(dir, h.geometric) < 0.0 {
+        oriented = h.shading;
+    }
+    let facing = face_forward_shading_normal(oriented, dir);
+    var b: Bounce;
+    var normal = facing;
+    var masking = 1.0;
+    b.rough = sampled && c.alpha > 0.0;
+    if b.rough {
+        let m = sample_rough_interface(dir, facing, 1.0, c.alpha, interface_sample(key, depth, index));
+        b.dir = m.reflected;
+        normal = m.m;
+        masking = m.reflected_masking;
+    } else {
+        b.dir = normalize(reflect_dir(dir, facing));
+    }
+    let cos_i = -dot(dir, normal);
+    b.weight = vec3<f32>(
+        fresnel_conductor(cos_i, c.eta.x, c.k.x),
+        fresnel_conductor(cos_i, c.eta.y, c.k.y),
+        fresnel_conductor(cos_i, c.eta.z, c.k.z),
+    ) * masking;
+    return b;
+}
+
+// refract_trace::sampling: the path tree's keys and the rough interfaces' samples.
+const REFLECTED: u32 = 0u;
+const TRANSMITTED: u32 = 1u;
+const STRATIFIED_DEPTHS: u32 = 4u;
+
+fn path_root(x: u32, y: u32) -> u32 {
+    return sample_hash(sample_hash(x ^ 0xA511E9B3u) + y);
+}
+
+fn path_child(key: u32, branch: u32) -> u32 {
+    return sample_hash(key ^ ((branch + 1u) * 0x9E3779B9u));
+}
+
+fn radical_inverse(base: u32, index: u32) -> f32 {
+    var i = index;
+    var reversed = 0u;
+    var denominator = 1u;
+    while i > 0u {
+        reversed = reversed * base + i % base;
+        denominator *= base;
+        i /= base;
+    }
+    return f32(reversed) / f32(denominator);
+}
+
+fn interface_sample(key: u32, depth: u32, index: u32) -> vec2<f32> {
+    if depth < STRATIFIED_DEPTHS {
+        let bases = array<vec2<u32>, 4>(vec2<u32>(3u, 5u), vec2<u32>(7u, 11u), vec2<u32>(13u, 17u), vec2<u32>(19u, 23u));
+        let b = bases[depth];
+        let h = sample_hash(key);
+        let shift = vec2<f32>(f32(h & 0xFFFFu) / 65536.0, f32(h >> 16u) / 65536.0);
+        return fract(vec2<f32>(radical_inverse(b.x, index), radical_inverse(b.y, index)) + shift);
+    }
+    let h1 = sample_hash(key ^ sample_hash(index));
+    let h2 = sample_hash(h1 ^ 0x85EBCA6Bu);
+    return vec2<f32>(f32(h1 >> 8u) / 16777216.0, f32(h2 >> 8u) / 16777216.0);
+}
+
+// Tracer::refracted_path: Tracer::transmission_path (`sampled` false: every surface as if
+// smooth) or Tracer::transmission_sample (rough surfaces sampled at sample `index`, from the
+// path-tree node `key_in`).
+fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>, sampled: bool, index: u32, key_in: u32) -> PathOut {
     var out: PathOut;
+    var key = key_in;
     var origin = origin_in;
     var dir = dir_in;
     var depth = 0u;
@@ -245,19 +329,11 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
                 out.radiance = vec3<f32>(0.0);
                 return out;
             }
+            let bounce = conductor_bounce(dir, h, sampled, depth, index, key);
             depth += 1u;
-            var oriented = -h.shading;
-            if dot(dir, h.geometric) < 0.0 {
-                oriented = h.shading;
-            }
-            let facing = face_forward_shading_normal(oriented, dir);
-            let next = normalize(reflect_dir(dir, facing));
-            let cos_i = -dot(dir, facing);
-            scale *= vec3<f32>(
-                fresnel_conductor(cos_i, conductor[1].x, conductor[2].x),
-                fresnel_conductor(cos_i, conductor[1].y, conductor[2].y),
-                fresnel_conductor(cos_i, conductor[1].z, conductor[2].z),
-            );
+            let next = bounce.dir;
+            scale *= bounce.weight;
+            key = path_child(key, REFLECTED);
             if h.mesh < trace.refractor_count {
                 out.refractors_met |= 1u << h.mesh;
                 if out.p1.w == 0.0 {
@@ -265,6 +341,10 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
                     out.n1 = vec4<f32>(h.shading, 1.0);
                     out.t1 = vec4<f32>(next, 1.0);
                 }
+            }
+            if bounce.rough && all(scale == vec3<f32>(0.0)) {
+                out.radiance = vec3<f32>(0.0);
+                return out;
             }
             origin = continue_origin(h, next);
             dir = next;
@@ -282,21 +362,42 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>) -> PathOut {
             out.radiance = vec3<f32>(0.0);
             return out;
         }
-        depth += 1u;
         let side = interface_at(dir, h);
         let entering = side.entering;
         let facing = side.facing;
         let eta = side.eta;
         let transmitted = side.transmitted_radiance;
-        let refracted = refract_dir(dir, facing, eta);
-        let tir = all(refracted == vec3<f32>(0.0));
+        let alpha = trace_surfaces[h.mesh].alpha;
         var next: vec3<f32>;
-        if tir {
-            next = normalize(reflect_dir(dir, facing));
+        var tir: bool;
+        if sampled && alpha > 0.0 {
+            let m = sample_rough_interface(dir, facing, eta, alpha, interface_sample(key, depth, index));
+            tir = all(m.refracted == vec3<f32>(0.0));
+            var weight = m.refracted_masking;
+            next = m.refracted;
+            if tir {
+                weight = m.reflected_masking;
+                next = m.reflected;
+            }
+            if weight == 0.0 {
+                out.radiance = vec3<f32>(0.0);
+                return out;
+            }
+            scale *= weight;
+            key = path_child(key, select(TRANSMITTED, REFLECTED, tir));
         } else {
+            let refracted = refract_dir(dir, facing, eta);
+            tir = all(refracted == vec3<f32>(0.0));
+            if tir {
+                next = normalize(reflect_dir(dir, facing));
+            } else {
+                next = normalize(refracted);
+            }
+        }
+        depth += 1u;
+        if !tir {
             scale *= transmitted;
             medium = medium_after(h.mesh, entering);
-            next = normalize(refracted);
         }
         if out.p1.w == 0.0 {
             out.p1 = vec4<f32>(h.p, 1.0);
@@ -353,6 +454,8 @@ struct Branch {
     weight: vec3<f32>,
     // The medium it travels in (NO_MEDIUM: air).
     medium: u32,
+    // Its node in the path tree (refract_trace's PathSampler::key).
+    key: u32,
 }
 
 // Pending branches never outnumber the depth limit (their depths strictly increase from the
@@ -362,13 +465,14 @@ const FULL_STACK: u32 = 64u;
 // Tracer::full_radiance: radiance along the ray with Fresnel splitting at every refractor
 // interface (the reflected branch pushed, the transmitted one followed), conductors reflecting
 // with their exact reflectance, branches under the throughput cutoff or past the depth limit
-// dropped. Returns the radiance and (w) the closest-hit queries traced.
-fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
+// dropped; rough surfaces split about one visible microfacet normal drawn at the branch's node
+// for sample `index`. Returns the radiance and (w) the closest-hit queries traced.
+fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec4<f32> {
     var stack: array<Branch, FULL_STACK>;
     var top = 0u;
     var radiance = vec3<f32>(0.0);
     var rays = 0u;
-    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0), NO_MEDIUM);
+    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0), NO_MEDIUM, key);
     let cutoff = trace.throughput_cutoff;
     loop {
         let h = scene_hit(b.origin, b.dir);
@@ -382,21 +486,12 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
             let conductor = conductor_of(h.mesh);
             if conductor[0].x != 0.0 {
                 if b.depth < trace.max_depth {
-                    var oriented = -h.shading;
-                    if dot(b.dir, h.geometric) < 0.0 {
-                        oriented = h.shading;
-                    }
-                    let facing = face_forward_shading_normal(oriented, b.dir);
-                    let next = normalize(reflect_dir(b.dir, facing));
-                    let cos_i = -dot(b.dir, facing);
-                    let reflectance = vec3<f32>(
-                        fresnel_conductor(cos_i, conductor[1].x, conductor[2].x),
-                        fresnel_conductor(cos_i, conductor[1].y, conductor[2].y),
-                        fresnel_conductor(cos_i, conductor[1].z, conductor[2].z),
-                    );
+                    let bounce = conductor_bounce(b.dir, h, true, b.depth, index, b.key);
+                    let next = bounce.dir;
+                    let reflectance = bounce.weight;
                     let throughput = b.throughput * max(max(reflectance.x, reflectance.y), reflectance.z);
                     if throughput > cutoff {
-                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance, b.medium);
+                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED));
                         ended = false;
                     }
                 }
@@ -404,18 +499,33 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
                 radiance += b.weight * shade_object(h.mesh, h);
             } else if b.depth < trace.max_depth {
                 let i = interface_at(b.dir, h);
-                let refracted = refract_dir(b.dir, i.facing, i.eta);
-                var reflectance = fresnel_dielectric(-dot(b.dir, i.facing), i.eta);
-                if all(refracted == vec3<f32>(0.0)) {
-                    reflectance = 1.0;
+                let alpha = trace_surfaces[h.mesh].alpha;
+                // The two lobes: direction and weight of each.
+                var reflected_dir: vec3<f32>;
+                var refracted: vec3<f32>;
+                var reflectance: f32;
+                var transmittance: f32;
+                if alpha > 0.0 {
+                    let m = sample_rough_interface(b.dir, i.facing, i.eta, alpha, interface_sample(b.key, b.depth, index));
+                    reflected_dir = m.reflected;
+                    refracted = m.refracted;
+                    reflectance = m.fresnel * m.reflected_masking;
+                    transmittance = (1.0 - m.fresnel) * m.refracted_masking;
+                } else {
+                    refracted = refract_dir(b.dir, i.facing, i.eta);
+                    reflectance = fresnel_dielectric(-dot(b.dir, i.facing), i.eta);
+                    if all(refracted == vec3<f32>(0.0)) {
+                        reflectance = 1.0;
+                    }
+                    transmittance = 1.0 - reflectance;
+                    reflected_dir = normalize(reflect_dir(b.dir, i.facing));
                 }
-                let transmittance = 1.0 - reflectance;
                 let reflected = reflectance * b.throughput > cutoff;
                 let transmitted = transmittance * b.throughput > cutoff;
                 let depth = b.depth + 1u;
                 if reflected {
-                    let next = normalize(reflect_dir(b.dir, i.facing));
-                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance, b.medium);
+                    let next = reflected_dir;
+                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED));
                     // (The stack cannot be full: see FULL_STACK.)
                     if transmitted && top < FULL_STACK {
                         stack[top] = branch;
@@ -434,6 +544,7 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
                         b.throughput * transmittance,
                         b.weight * (transmittance * i.transmitted_radiance),
                         medium_after(h.mesh, i.entering),
+                        path_child(b.key, TRANSMITTED),
                     );
                     ended = false;
                 }
@@ -462,9 +573,9 @@ fn trace_reference(@builtin(global_invocation_id) id: vec3<u32>) {
     if trace.sample_first > 0u {
         sum = out_color[i];
     } else {
-        let centre_is_colour = trace.mode == 0u && trace.spp == 1u;
+        let centre_is_colour = trace.mode == 0u && trace.spp == 1u && trace.rough == 0u;
         if centre_is_colour || trace.write_records != 0u {
-            let path = transmission_path(frame.eye.xyz, pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5)));
+            let path = transmission_path(frame.eye.xyz, pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5)), false, 0u, 0u);
             write_record(i, path);
             if centre_is_colour {
                 out_color[i] = vec4<f32>(path.radiance, f32(path.rays));
@@ -476,11 +587,12 @@ fn trace_reference(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var s = trace.sample_first; s < trace.sample_end; s++) {
         let offset = pixel_sample(id.x, id.y, s, trace.spp);
         let dir = pixel_ray_dir(vec2<f32>(f32(id.x), f32(id.y)) + offset);
+        let key = path_root(id.x, id.y);
         if trace.mode == 0u {
-            let path = transmission_path(frame.eye.xyz, dir);
+            let path = transmission_path(frame.eye.xyz, dir, true, s, key);
             sum += vec4<f32>(path.radiance, f32(path.rays));
         } else {
-            sum += full_radiance(frame.eye.xyz, dir);
+            sum += full_radiance(frame.eye.xyz, dir, s, key);
         }
     }
     if trace.sample_end == trace.spp {

@@ -60,7 +60,8 @@ pub fn method_params(
 /// The default job (`cargo run --release`, `refract` without a command): every method but the
 /// reference on both backends (the CPU only without an adapter) and every engine's own
 /// renderer (skipped with a note where Node, Chromium or the npm packages are missing) on
-/// every built-in scene at 512², 1 reference sample per pixel, 3 timed frames after one warm-up
+/// every built-in scene at 512², 1 reference sample per pixel (64 on scenes with rough surfaces,
+/// [`refract_scene::ROUGH_MIN_SPP`]), 3 timed frames after one warm-up
 /// (a median for the report's time column; `refract bench` is the measurement), into `out/`.
 pub fn default_options() -> crate::Result<CompareOptions> {
     let ids: Vec<MethodId> = MethodId::approximations().collect();
@@ -127,10 +128,10 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         BackendId::Gpu => Box::new(refract_gpu::GpuRenderer::new()?),
         _ => Box::new(ReferenceRenderer::new()),
     };
-    let settings = MethodParams::Reference(TraceSettings {
+    let trace = TraceSettings {
         spp: options.spp,
         ..TraceSettings::default()
-    });
+    };
 
     for note in skipped_pairs(&options.methods, &scenes) {
         progress.note(note);
@@ -152,6 +153,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
             return Err(crate::LabError::Cancelled);
         }
         reference.prepare(scene)?;
+        let settings = MethodParams::Reference(trace.for_scene(scene));
         let mut truth = Frame::default();
         let timing =
             reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;

@@ -844,10 +844,10 @@ fn run_job(
         engines,
     } = state;
     let key = (job.scene.clone(), job.ior.map(f32::to_bits), job.res);
-    let settings = MethodParams::Reference(TraceSettings {
+    let trace = TraceSettings {
         spp: sweep.spp,
         ..TraceSettings::default()
-    });
+    };
     let p = match prepared.entry(key.clone()) {
         Entry::Occupied(entry) => entry.into_mut(),
         Entry::Vacant(slot) => {
@@ -857,6 +857,7 @@ fn run_job(
             }
             let scene = Arc::new(scene);
             let camera = scene.camera(job.res, job.res)?;
+            let settings = MethodParams::Reference(trace.for_scene(&scene));
             let text = reference_key(sweep, job, &settings)?;
             let stem = format!(
                 "ref-{}-{:016x}",

@@ -32,7 +32,8 @@ pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, MAX_FRAME_SIZE, PixelLay
 pub use registry::{
     BackendId, DepthPeelParams, DistanceMapParams, EngineParams, Family, FamilyParams,
     ImageSpaceMethod, InterfaceRule, MAX_SPP, MethodId, MethodInfo, MethodParams, NearbyParams,
-    ParamValue, PvrrParams, REGISTRY, TraceMode, TraceSettings, TwoInterfaceParams, scene_support,
+    ParamValue, PvrrParams, REGISTRY, ROUGH_MIN_SPP, TraceMode, TraceSettings, TwoInterfaceParams,
+    scene_support,
 };
 pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
 pub use scene::{

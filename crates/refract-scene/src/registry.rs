@@ -37,7 +37,7 @@ pub use pvrr::{
     FOOTPRINT_TEXELS_PER_PIXEL, MAX_PVRR_DEPTH, MAX_PVRR_DISPERSION, MapSizing, PVRR_RESOLUTION,
     PvrrParams,
 };
-pub use reference::{InterfaceRule, MAX_SPP, TraceMode, TraceSettings};
+pub use reference::{InterfaceRule, MAX_SPP, ROUGH_MIN_SPP, TraceMode, TraceSettings};
 
 /// Every method, by its design.md id.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

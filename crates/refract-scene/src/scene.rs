@@ -38,6 +38,7 @@ pub struct Refractor {
     volume_thickness: Option<f32>,
     attenuation: Option<Attenuation>,
     within: Option<usize>,
+    roughness: f32,
 }
 
 /// The most refractors a scene holds (the GPU reference keeps one bit per refractor met).
@@ -100,7 +101,22 @@ impl Attenuation {
     }
 }
 
+pub use refract_core::microfacet::{ROUGHNESS_EXPECTED, ROUGHNESS_RANGE, roughness_in_range};
 pub use refract_core::optics::{IOR_EXPECTED, IOR_RANGE, MAX_IOR, MIN_IOR, ior_in_range};
+
+/// `roughness` in [`ROUGHNESS_RANGE`], or an error naming `origin`'s `roughness`.
+pub fn check_roughness(origin: &str, roughness: f32) -> Result<(), SceneError> {
+    if roughness_in_range(roughness) {
+        Ok(())
+    } else {
+        Err(SceneError::field(
+            origin,
+            "roughness",
+            roughness,
+            ROUGHNESS_EXPECTED,
+        ))
+    }
+}
 
 impl Refractor {
     /// A refractor of index `ior` (the outside is 1): builds the BVH and `d_N` (Wyman 2005a §3.1,
@@ -118,6 +134,7 @@ impl Refractor {
             volume_thickness: None,
             attenuation: None,
             within: None,
+            roughness: 0.0,
         })
     }
 
@@ -155,6 +172,7 @@ impl Refractor {
             volume_thickness: None,
             attenuation: None,
             within: None,
+            roughness: 0.0,
         })
     }
 
@@ -251,6 +269,20 @@ impl Refractor {
         Ok(())
     }
 
+    /// The roughness of its surface in [`ROUGHNESS_RANGE`] (glTF's `roughnessFactor`; GGX
+    /// `α = roughness²`, see [`refract_core::microfacet`]): 0, the default, is smooth glass or
+    /// a mirror-smooth conductor. The reference traces it; the approximate methods do not.
+    pub fn roughness(&self) -> f32 {
+        self.roughness
+    }
+
+    /// Sets [`Self::roughness`] (an error outside [`ROUGHNESS_RANGE`]).
+    pub fn set_roughness(&mut self, roughness: f32) -> Result<(), SceneError> {
+        check_roughness("refractor", roughness)?;
+        self.roughness = roughness;
+        Ok(())
+    }
+
     /// The absorption of its medium (`None`: clear).
     pub fn attenuation(&self) -> Option<Attenuation> {
         self.attenuation
@@ -328,6 +360,7 @@ pub struct Object {
     center: Vec3,
     /// Its surface.
     pub material: Material,
+    roughness: f32,
 }
 
 impl Object {
@@ -341,6 +374,7 @@ impl Object {
             mesh,
             bvh,
             material,
+            roughness: 0.0,
         })
     }
 
@@ -421,6 +455,19 @@ impl Object {
             Material::Diffuse(albedo) => light.shade(albedo.at(uv), n),
             Material::Conductor(_) => Vec3::ZERO,
         }
+    }
+
+    /// The roughness of a conductor's surface in [`ROUGHNESS_RANGE`] (0, the default: a
+    /// mirror-smooth one; a diffuse surface ignores it).
+    pub fn roughness(&self) -> f32 {
+        self.roughness
+    }
+
+    /// Sets [`Self::roughness`] (an error outside [`ROUGHNESS_RANGE`]).
+    pub fn set_roughness(&mut self, roughness: f32) -> Result<(), SceneError> {
+        check_roughness("object", roughness)?;
+        self.roughness = roughness;
+        Ok(())
     }
 
     /// The conductor the object is made of, `None` for a diffuse object.
@@ -690,6 +737,16 @@ impl Scene {
             }
         }
         best
+    }
+
+    /// Whether any surface is rough: a refractor (glass or conductor) or a conductor object
+    /// with roughness above 0. Only the reference traces roughness.
+    pub fn has_roughness(&self) -> bool {
+        self.refractors().any(|r| r.roughness() > 0.0)
+            || self
+                .objects
+                .iter()
+                .any(|o| o.conductor().is_some() && o.roughness() > 0.0)
     }
 
     /// Whether every surface is glass or diffuse (what the image-space and nearby-geometry

@@ -20,4 +20,4 @@ pub mod sampling;
 pub mod tracer;
 
 pub use renderer::ReferenceRenderer;
-pub use tracer::{PathRecord, Tracer, render, render_into};
+pub use tracer::{PathRecord, PathSampler, Tracer, render, render_into};

@@ -4,17 +4,61 @@
 //! [`refract_scene::scene`]), total internal reflection as internal reflection, Beer-Lambert
 //! absorption along every segment inside an absorbing medium, conductors (mirrors, metals:
 //! refractors or opaque objects) as reflection weighted by the exact conductor Fresnel
-//! reflectance per channel, a depth limit on specular interactions.
+//! reflectance per channel, a depth limit on specular interactions. Rough surfaces (glass and
+//! conductors of roughness above 0) scatter about one GGX microfacet normal per interaction,
+//! drawn from the normals visible to the ray ([`refract_core::microfacet`], Mitsuba 3's
+//! `roughdielectric`/`roughconductor` with `ggx` and visible-normal sampling), the normal's
+//! `u` from [`crate::sampling::interface_sample`].
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::fresnel::{Conductor, fresnel_dielectric};
+use refract_core::microfacet::{MicrofacetSample, alpha_from_roughness, sample_rough_interface};
 use refract_core::optics::{face_forward_shading_normal, reflect, refract};
 use refract_core::{Camera, Ray};
 use refract_geometry::Hit;
 use refract_scene::{Aov, Frame, InterfaceRule, Layer, Scene, TraceMode, TraceSettings};
 
-use crate::sampling::pixel_sample;
+use crate::sampling::{interface_sample, path_child, path_root, pixel_sample};
+
+/// Where a path's random numbers come from: the pixel's sample `index` and the node `key` of
+/// the path tree it has reached ([`crate::sampling`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathSampler {
+    /// The sample's index among the pixel's samples.
+    pub index: u32,
+    /// The current node of the path tree.
+    pub key: u32,
+}
+
+impl PathSampler {
+    /// Sample `index` of pixel `(x, y)`, at the root of its path tree.
+    pub fn new(x: u32, y: u32, index: u32) -> Self {
+        Self {
+            index,
+            key: path_root(x, y),
+        }
+    }
+
+    /// The node after the reflected (`0`) or transmitted (`1`) branch.
+    fn child(self, branch: u32) -> Self {
+        Self {
+            key: path_child(self.key, branch),
+            ..self
+        }
+    }
+
+    /// One visible microfacet normal of a rough interface at this node, `depth` interactions
+    /// into the path.
+    fn rough(self, depth: u32, dir: Vec3, facing: Vec3, eta: f32, alpha: f32) -> MicrofacetSample {
+        let u = interface_sample(self.key, depth, self.index);
+        sample_rough_interface(dir, facing, eta, alpha, u)
+    }
+}
+
+/// The branch codes of [`PathSampler::child`].
+const REFLECTED: u32 = 0;
+const TRANSMITTED: u32 = 1;
 
 /// Ground truth of one pixel, from the transmission path through its centre. Quantities that do
 /// not exist for a pixel (no refractor there, no exit, no nearby geometry hit) are NaN.
@@ -90,6 +134,20 @@ struct Medium {
     within: Option<usize>,
     /// Its absorption coefficient per world unit (`None`: clear).
     absorption: Option<Vec3>,
+    /// GGX `α` of its surface (0: smooth).
+    alpha: f32,
+}
+
+/// Where a branch of the full mode's splitting tree stands.
+#[derive(Clone, Copy, Debug)]
+struct Branch {
+    /// The medium it travels in (`None`: air).
+    medium: Option<usize>,
+    /// Specular interactions so far.
+    depth: u32,
+    /// The scalar throughput the cutoff tests.
+    throughput: f32,
+    sampler: PathSampler,
 }
 
 /// Bit `i` of [`PathRecord::refractors_met`] (none past the 32nd refractor; scenes hold at most
@@ -175,6 +233,8 @@ pub struct Tracer<'a> {
     settings: TraceSettings,
     /// Per refractor, in `Scene::refractors` order.
     media: Vec<Medium>,
+    /// Whether any surface is rough (the pixel-centre path then is not the colour).
+    rough: bool,
 }
 
 /// Secondary rays start this far off the surface, relative to the hit point's magnitude:
@@ -194,12 +254,22 @@ impl<'a> Tracer<'a> {
                 outside_ior: scene.outside_ior(i),
                 within: r.within(),
                 absorption: r.attenuation().map(|a| a.coefficient()),
+                alpha: alpha_from_roughness(r.roughness()),
             })
             .collect();
         Self {
             scene,
             settings,
             media,
+            rough: scene.has_roughness(),
+        }
+    }
+
+    /// GGX `α` of a surface (0: smooth).
+    fn alpha(&self, surface: Surface) -> f32 {
+        match surface {
+            Surface::Refractor(i) => self.media[i].alpha,
+            Surface::Object(k) => alpha_from_roughness(self.scene.objects[k].roughness()),
         }
     }
 
@@ -266,9 +336,16 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// Mirror reflection at a conductor: the reflected direction about the shading normal
-    /// turned toward the ray, and the exact reflectance per channel at that angle.
-    fn conductor_bounce(ray: &Ray, hit: &Hit, conductor: &Conductor) -> (Vec3, Vec3) {
+    /// Reflection at a conductor: about the shading normal turned toward the ray, or, on a rough
+    /// one (`alpha > 0` and a sampler), about a visible microfacet normal of it; the direction
+    /// and the weight per channel (the exact reflectance at the normal's angle, times the
+    /// masking `G1(wo, m)` on a rough one, which is 0 where `wo` goes below the surface).
+    fn conductor_bounce(
+        ray: &Ray,
+        hit: &Hit,
+        conductor: &Conductor,
+        rough: Option<(PathSampler, u32, f32)>,
+    ) -> (Vec3, Vec3) {
         let facing = face_forward_shading_normal(
             if ray.dir.dot(hit.geometric_normal) < 0.0 {
                 hit.shading_normal
@@ -277,8 +354,26 @@ impl<'a> Tracer<'a> {
             },
             ray.dir,
         );
+        if let Some((sampler, depth, alpha)) = rough {
+            // Only the reflected lobe of the sample is used (η 1: no refraction to compute
+            // anything from).
+            let s = sampler.rough(depth, ray.dir, facing, 1.0, alpha);
+            let weight = conductor.reflectance(-ray.dir.dot(s.m)) * s.reflected_masking;
+            return (s.reflected, weight);
+        }
         let dir = reflect(ray.dir, facing).normalize();
         (dir, conductor.reflectance(-ray.dir.dot(facing)))
+    }
+
+    /// `(sampler, depth, α)` when the surface is rough and the path is sampled.
+    fn rough_at(
+        &self,
+        surface: Surface,
+        sampler: Option<PathSampler>,
+        depth: u32,
+    ) -> Option<(PathSampler, u32, f32)> {
+        let alpha = self.alpha(surface);
+        sampler.filter(|_| alpha > 0.0).map(|s| (s, depth, alpha))
     }
 
     fn shade_object(&self, index: usize, ray: &Ray, hit: &Hit) -> Vec3 {
@@ -287,9 +382,28 @@ impl<'a> Tracer<'a> {
         object.shade(&self.scene.light, uv, hit.shading_normal)
     }
 
-    /// Follows the refracted path of `ray` (TIR reflects), recording the ground truth of
-    /// [`PathRecord`]; returns the radiance and the record. The camera is in air.
+    /// Follows the refracted path of `ray` (TIR reflects) through the surfaces as if they were
+    /// smooth, recording the ground truth of [`PathRecord`]; returns the radiance and the
+    /// record. The camera is in air. This is the pixel-centre path of the AOV layers: on rough
+    /// surfaces it is the path through the macro surface, the one roughness scatters about.
     pub fn transmission_path(&self, ray: Ray, rays: &mut u64) -> (Vec3, PathRecord) {
+        self.refracted_path(ray, None, rays)
+    }
+
+    /// [`Self::transmission_path`] with rough surfaces sampled by `sampler`: at a rough glass
+    /// interface the ray refracts through one visible microfacet normal `m` with weight
+    /// `G1(wo, m)` times the radiance factor `η²` (reflects about `m`, weight `G1`, under TIR
+    /// about `m`): the rough counterpart of the transmission mode's "refract where Snell allows".
+    pub fn transmission_sample(&self, ray: Ray, sampler: PathSampler, rays: &mut u64) -> Vec3 {
+        self.refracted_path(ray, Some(sampler), rays).0
+    }
+
+    fn refracted_path(
+        &self,
+        ray: Ray,
+        mut sampler: Option<PathSampler>,
+        rays: &mut u64,
+    ) -> (Vec3, PathRecord) {
         let mut aov = PathRecord::EMPTY;
         let mut ray = ray;
         let mut depth = 0;
@@ -311,9 +425,11 @@ impl<'a> Tracer<'a> {
                 if depth == self.settings.max_depth {
                     return (Vec3::ZERO, aov);
                 }
+                let rough = self.rough_at(surface, sampler, depth);
                 depth += 1;
-                let (next, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor);
+                let (next, reflectance) = Self::conductor_bounce(&ray, &hit, &conductor, rough);
                 scale *= reflectance;
+                sampler = sampler.map(|s| s.child(REFLECTED));
                 if let Surface::Refractor(i) = surface {
                     aov.refractors_met |= refractor_bit(i);
                     if !aov.covers_refractor() {
@@ -321,6 +437,9 @@ impl<'a> Tracer<'a> {
                         aov.n1 = hit.shading_normal;
                         aov.t1 = next;
                     }
+                }
+                if rough.is_some() && scale == Vec3::ZERO {
+                    return (Vec3::ZERO, aov);
                 }
                 ray = self.continue_ray(&ray, &hit, next);
                 continue;
@@ -338,18 +457,39 @@ impl<'a> Tracer<'a> {
             if depth == self.settings.max_depth {
                 return (Vec3::ZERO, aov);
             }
-            depth += 1;
             let interface = self.interface(refractor, ray.dir, &hit);
-            let refracted = refract(ray.dir, interface.facing, interface.eta);
-            let tir = refracted == Vec3::ZERO;
-            let next = if tir {
-                reflect(ray.dir, interface.facing)
-            } else {
+            let (next, tir) = match self.rough_at(surface, sampler, depth) {
+                Some((s, depth, alpha)) => {
+                    let m = s.rough(depth, ray.dir, interface.facing, interface.eta, alpha);
+                    let tir = m.refracted == Vec3::ZERO;
+                    let (next, weight, branch) = if tir {
+                        (m.reflected, m.reflected_masking, REFLECTED)
+                    } else {
+                        (m.refracted, m.refracted_masking, TRANSMITTED)
+                    };
+                    if weight == 0.0 {
+                        return (Vec3::ZERO, aov);
+                    }
+                    scale *= weight;
+                    sampler = Some(s.child(branch));
+                    (next, tir)
+                }
+                None => {
+                    let refracted = refract(ray.dir, interface.facing, interface.eta);
+                    let tir = refracted == Vec3::ZERO;
+                    let next = if tir {
+                        reflect(ray.dir, interface.facing)
+                    } else {
+                        refracted
+                    };
+                    (next.normalize(), tir)
+                }
+            };
+            depth += 1;
+            if !tir {
                 scale *= interface.transmitted_radiance;
                 medium = self.medium_after(refractor, interface.entering);
-                refracted
             }
-            .normalize();
             if !aov.covers_refractor() {
                 aov.p1 = p;
                 aov.n1 = hit.shading_normal;
@@ -368,20 +508,34 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance along `ray`, which travels in `medium` (`None`: air), with Fresnel splitting
-    /// at every refractor interface ([`TraceMode::Full`]).
+    /// at every refractor interface ([`TraceMode::Full`]): on a smooth one into the specular
+    /// reflection and refraction, on a rough one into the reflection and the refraction about
+    /// one visible microfacet normal drawn at `sampler`'s node, weighted `F G1(wo_r, m)` and
+    /// `(1 − F) G1(wo_t, m) η²` (an unbiased estimate of both lobes of Walter et al.'s BSDF).
     pub fn full_radiance(
         &self,
         ray: Ray,
         medium: Option<usize>,
         depth: u32,
         throughput: f32,
+        sampler: PathSampler,
         rays: &mut u64,
     ) -> Vec3 {
         let hit = self.closest_hit(&ray, rays);
         let absorbed = self
             .absorption(medium)
             .map(|sigma| beer_lambert(sigma, hit.map_or(f32::INFINITY, |(_, h)| h.t)));
-        let radiance = self.full_radiance_after(&ray, hit, medium, depth, throughput, rays);
+        let radiance = self.full_radiance_after(
+            &ray,
+            hit,
+            Branch {
+                medium,
+                depth,
+                throughput,
+                sampler,
+            },
+            rays,
+        );
         absorbed.map_or(radiance, |a| a * radiance)
     }
 
@@ -391,11 +545,15 @@ impl<'a> Tracer<'a> {
         &self,
         ray: &Ray,
         hit: Option<(Surface, Hit)>,
-        medium: Option<usize>,
-        depth: u32,
-        throughput: f32,
+        branch: Branch,
         rays: &mut u64,
     ) -> Vec3 {
+        let Branch {
+            medium,
+            depth,
+            throughput,
+            sampler,
+        } = branch;
         let Some((surface, hit)) = hit else {
             return self.scene.environment.radiance_exact(ray.dir);
         };
@@ -403,13 +561,22 @@ impl<'a> Tracer<'a> {
             if depth >= self.settings.max_depth {
                 return Vec3::ZERO;
             }
-            let (dir, reflectance) = Self::conductor_bounce(ray, &hit, &conductor);
+            let rough = self.rough_at(surface, Some(sampler), depth);
+            let (dir, reflectance) = Self::conductor_bounce(ray, &hit, &conductor, rough);
             let next = self.continue_ray(ray, &hit, dir);
             let weight = throughput * reflectance.max_element();
             if weight <= self.settings.throughput_cutoff {
                 return Vec3::ZERO;
             }
-            return reflectance * self.full_radiance(next, medium, depth + 1, weight, rays);
+            return reflectance
+                * self.full_radiance(
+                    next,
+                    medium,
+                    depth + 1,
+                    weight,
+                    sampler.child(REFLECTED),
+                    rays,
+                );
         }
         let refractor = match surface {
             Surface::Refractor(i) => i,
@@ -419,37 +586,73 @@ impl<'a> Tracer<'a> {
             return Vec3::ZERO;
         }
         let interface = self.interface(refractor, ray.dir, &hit);
-        let reflectance = fresnel_dielectric(-ray.dir.dot(interface.facing), interface.eta);
-        let refracted = refract(ray.dir, interface.facing, interface.eta);
-        let reflectance = if refracted == Vec3::ZERO {
-            1.0
-        } else {
-            reflectance
-        };
+        // The two lobes: direction and weight of each (a direction of weight 0 is not traced).
+        let (reflected, reflectance, refracted, transmittance) =
+            match self.rough_at(surface, Some(sampler), depth) {
+                Some((s, depth, alpha)) => {
+                    let m = s.rough(depth, ray.dir, interface.facing, interface.eta, alpha);
+                    (
+                        m.reflected,
+                        m.fresnel * m.reflected_masking,
+                        m.refracted,
+                        (1.0 - m.fresnel) * m.refracted_masking,
+                    )
+                }
+                None => {
+                    let reflectance =
+                        fresnel_dielectric(-ray.dir.dot(interface.facing), interface.eta);
+                    let refracted = refract(ray.dir, interface.facing, interface.eta);
+                    let tir = refracted == Vec3::ZERO;
+                    let reflectance = if tir { 1.0 } else { reflectance };
+                    (
+                        reflect(ray.dir, interface.facing).normalize(),
+                        reflectance,
+                        if tir {
+                            refracted
+                        } else {
+                            refracted.normalize()
+                        },
+                        1.0 - reflectance,
+                    )
+                }
+            };
         let cutoff = self.settings.throughput_cutoff;
         let mut radiance = Vec3::ZERO;
         if reflectance * throughput > cutoff {
-            let dir = reflect(ray.dir, interface.facing).normalize();
-            let next = self.continue_ray(ray, &hit, dir);
+            let next = self.continue_ray(ray, &hit, reflected);
             radiance += reflectance
-                * self.full_radiance(next, medium, depth + 1, throughput * reflectance, rays);
+                * self.full_radiance(
+                    next,
+                    medium,
+                    depth + 1,
+                    throughput * reflectance,
+                    sampler.child(REFLECTED),
+                    rays,
+                );
         }
-        let transmittance = 1.0 - reflectance;
         if transmittance * throughput > cutoff {
-            let next = self.continue_ray(ray, &hit, refracted.normalize());
+            let next = self.continue_ray(ray, &hit, refracted);
             let inside = self.medium_after(refractor, interface.entering);
             radiance += transmittance
                 * interface.transmitted_radiance
-                * self.full_radiance(next, inside, depth + 1, throughput * transmittance, rays);
+                * self.full_radiance(
+                    next,
+                    inside,
+                    depth + 1,
+                    throughput * transmittance,
+                    sampler.child(TRANSMITTED),
+                    rays,
+                );
         }
         radiance
     }
 
-    /// Radiance of one camera ray in the configured mode.
-    pub fn sample_radiance(&self, ray: Ray, rays: &mut u64) -> Vec3 {
+    /// Radiance of one camera ray in the configured mode, its rough surfaces sampled by
+    /// `sampler`.
+    pub fn sample_radiance(&self, ray: Ray, sampler: PathSampler, rays: &mut u64) -> Vec3 {
         match self.settings.mode {
-            TraceMode::Transmission => self.transmission_path(ray, rays).0,
-            TraceMode::Full => self.full_radiance(ray, None, 0, 1.0, rays),
+            TraceMode::Transmission => self.transmission_sample(ray, sampler, rays),
+            TraceMode::Full => self.full_radiance(ray, None, 0, 1.0, sampler, rays),
         }
     }
 
@@ -459,14 +662,14 @@ impl<'a> Tracer<'a> {
         let centre = camera.pixel_ray(Camera::pixel_center(x, y));
         let (centre_radiance, aov) = self.transmission_path(centre, rays);
         let spp = self.settings.spp.max(1);
-        if spp == 1 && self.settings.mode == TraceMode::Transmission {
+        if spp == 1 && self.settings.mode == TraceMode::Transmission && !self.rough {
             return (centre_radiance, aov);
         }
         let sum: Vec3 = (0..spp)
             .map(|i| {
                 let offset = pixel_sample(x, y, i, spp);
                 let ray = camera.pixel_ray(Vec2::new(x as f32, y as f32) + offset);
-                self.sample_radiance(ray, rays)
+                self.sample_radiance(ray, PathSampler::new(x, y, i), rays)
             })
             .sum();
         (sum / spp as f32, aov)

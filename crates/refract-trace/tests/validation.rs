@@ -9,7 +9,7 @@ use refract_geometry::{LensDesc, shapes};
 use refract_scene::{
     Aov, Environment, Frame, InterfaceRule, Refractor, Scene, TraceMode, TraceSettings,
 };
-use refract_trace::{Tracer, render};
+use refract_trace::{PathSampler, Tracer, render};
 
 fn small_camera(res: u32) -> Camera {
     Camera::new(CameraDesc {
@@ -440,7 +440,7 @@ fn conductor_sphere_reflects_the_known_direction() {
             ..TraceSettings::default()
         },
     );
-    let radiance = full.full_radiance(ray, None, 0, 1.0, &mut 0);
+    let radiance = full.full_radiance(ray, None, 0, 1.0, PathSampler::new(0, 0, 0), &mut 0);
     assert!(
         (radiance - expected).abs().max_element() < 1e-5,
         "{radiance}"

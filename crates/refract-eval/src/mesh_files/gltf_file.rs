@@ -29,6 +29,8 @@ pub struct GlassMaterial {
     /// scaled by the node's uniform scale like `thickness`), when the distance is finite
     /// (glTF's default, infinity, absorbs nothing).
     pub attenuation: Option<(Vec3, f32)>,
+    /// `pbrMetallicRoughness.roughnessFactor` in `[0, 1]` (glTF's default 1 when absent).
+    pub roughness: f32,
 }
 
 /// A glTF document with its buffers, checked (accessor indices and bounds, required
@@ -180,7 +182,7 @@ fn material_label(material: &gltf::Material<'_>) -> String {
 }
 
 /// What refract does not model of a glass material (issue 54 #16: dropped without a word):
-/// textures of the transmission and the thickness, roughness, partial transmission.
+/// textures of the transmission and the thickness, partial transmission.
 fn unmodelled(material: &gltf::Material<'_>) -> Vec<String> {
     let label = material_label(material);
     let mut dropped = Vec::new();
@@ -201,11 +203,12 @@ fn unmodelled(material: &gltf::Material<'_>) -> Vec<String> {
     {
         dropped.push("its thicknessTexture (thicknessFactor alone is read)".to_owned());
     }
-    let roughness = material.pbr_metallic_roughness().roughness_factor();
-    if roughness > 0.0 {
-        dropped.push(format!(
-            "roughnessFactor {roughness} (glTF's default is 1; refract's glass is smooth)"
-        ));
+    if material
+        .pbr_metallic_roughness()
+        .metallic_roughness_texture()
+        .is_some()
+    {
+        dropped.push("its metallicRoughnessTexture (roughnessFactor alone is read)".to_owned());
     }
     dropped
         .into_iter()
@@ -380,6 +383,7 @@ fn glass_material(material: &gltf::Material<'_>, world: Mat4) -> Option<GlassMat
         ior: material.ior(),
         transmission: material.transmission().map(|t| t.transmission_factor()),
         thickness: material.volume().map(|v| v.thickness_factor() * node_scale),
+        roughness: material.pbr_metallic_roughness().roughness_factor(),
         attenuation: material.volume().and_then(|v| {
             v.attenuation_distance().is_finite().then(|| {
                 (

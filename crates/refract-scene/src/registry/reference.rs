@@ -60,6 +60,26 @@ impl TraceSettings {
     };
 }
 
+/// The fewest samples per pixel the reference takes on a scene with rough surfaces in the
+/// comparisons (`compare`, the default job, sweeps): its colour there is a Monte Carlo
+/// estimate over microfacet normals, and one sample is noise.
+pub const ROUGH_MIN_SPP: u32 = 64;
+
+impl TraceSettings {
+    /// These settings for `scene`: the samples raised to [`ROUGH_MIN_SPP`] when the scene has
+    /// a rough surface ([`crate::Scene::has_roughness`]).
+    pub fn for_scene(self, scene: &crate::Scene) -> Self {
+        if scene.has_roughness() {
+            Self {
+                spp: self.spp.max(ROUGH_MIN_SPP),
+                ..self
+            }
+        } else {
+            self
+        }
+    }
+}
+
 impl Default for TraceSettings {
     fn default() -> Self {
         Self::DEFAULT
@@ -98,7 +118,7 @@ const REFERENCE_PARAMS: &[ParamSpec] = &[
     },
     ParamSpec {
         name: "spp",
-        doc: "samples per pixel (1 = the pixel centre; more: stratified, box filter)",
+        doc: "samples per pixel (1 = the pixel centre; more: stratified, box filter); comparisons raise it to 64 on scenes with rough surfaces",
         kind: ParamKind::Integer {
             min: 1,
             max: MAX_SPP,
