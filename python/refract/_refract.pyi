@@ -60,6 +60,9 @@ class Scene:
     @property
     def ior(self) -> float: ...
     @property
+    def roughness(self) -> List[float]:
+        """Each refractor's roughness (0 smooth to 1), in the scene's refractor order."""
+    @property
     def warnings(self) -> List[str]: ...
     @property
     def eye(self) -> Tuple[float, float, float]: ...

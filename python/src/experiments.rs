@@ -160,6 +160,7 @@ pub fn compare(
             res,
             spp,
             reference_backend,
+            warm_up: 1,
             frames,
             engines,
             engine_policy: GpuPolicy::Required,

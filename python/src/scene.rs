@@ -155,6 +155,13 @@ impl Scene {
         self.scene.refractor.ior()
     }
 
+    /// Each refractor's roughness (glTF's `roughnessFactor`, 0 to 1; 0 is smooth), in the
+    /// scene's refractor order; only the reference traces it (docs/reference.md).
+    #[getter]
+    fn roughness(&self) -> Vec<f32> {
+        self.scene.refractors().map(|r| r.roughness()).collect()
+    }
+
     /// What loading the scene fixed or noticed (mesh and environment quirks).
     #[getter]
     fn warnings(&self) -> Vec<String> {

@@ -13,6 +13,8 @@ def test_load_builtin_and_ior(sphere):
     glass = refract.Scene.load("sphere", ior=1.2)
     assert glass.ior == pytest.approx(1.2)
     assert "sphere" in repr(glass)
+    assert sphere.roughness == [0.0]
+    assert refract.Scene.load("rough-glass").roughness == pytest.approx([0.0, 0.1, 0.3, 0.6])
 
 
 def test_bad_inputs_raise_the_cli_messages(tmp_path):

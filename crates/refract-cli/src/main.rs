@@ -190,6 +190,7 @@ fn compare_options(args: CompareArgs) -> anyhow::Result<refract_lab::jobs::Compa
             ReferenceBackendArg::Cpu => BackendId::Trace,
             ReferenceBackendArg::Gpu => BackendId::Gpu,
         },
+        warm_up: 1,
         frames: args.frames,
         engines: refract_lab::engines::parse_engines(&args.engines)?,
         engine_policy: GpuPolicy::Required,

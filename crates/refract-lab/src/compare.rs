@@ -61,8 +61,9 @@ pub fn method_params(
 /// reference on both backends (the CPU only without an adapter) and every engine's own
 /// renderer (skipped with a note where Node, Chromium or the npm packages are missing) on
 /// every built-in scene at 512², 1 reference sample per pixel (64 on scenes with rough surfaces,
-/// [`refract_scene::ROUGH_MIN_SPP`]), 3 timed frames after one warm-up
-/// (a median for the report's time column; `refract bench` is the measurement), into `out/`.
+/// [`refract_scene::ROUGH_MIN_SPP`]), 3 timed frames after the AOV frame and no other warm-up
+/// (a median for the report's time column, which drops a slow first frame; `refract bench` is
+/// the measurement), into `out/`.
 pub fn default_options() -> crate::Result<CompareOptions> {
     let ids: Vec<MethodId> = MethodId::approximations().collect();
     Ok(CompareOptions {
@@ -73,6 +74,7 @@ pub fn default_options() -> crate::Result<CompareOptions> {
         res: 512,
         spp: 1,
         reference_backend: BackendId::Trace,
+        warm_up: 0,
         frames: 3,
         engines: refract_engines::Engine::ALL.to_vec(),
         engine_policy: GpuPolicy::IfAvailable,
@@ -194,7 +196,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 renderer.render(&camera, method, FrameOutputs::ColorAndAovs, &mut frame)?;
                 // Timed frames write the colour only, as a real-time renderer displays it.
                 let mut scratch = Frame::default();
-                let times = time_frames(1, options.frames, || {
+                let times = time_frames(options.warm_up, options.frames, || {
                     Ok(renderer
                         .render(&camera, method, FrameOutputs::Color, &mut scratch)?
                         .ms)

@@ -28,7 +28,10 @@ pub struct CompareOptions {
     /// Where the reference is traced: [`BackendId::Trace`] (the CPU tracer, the default) or
     /// [`BackendId::Gpu`] (`refract_gpu::reference`, every mode and sample count).
     pub reference_backend: BackendId,
-    /// Timed frames per method (after 1 warm-up frame).
+    /// Untimed frames per method before the timed ones (after the frame with the AOVs, which
+    /// has already built what the method keeps between frames).
+    pub warm_up: u32,
+    /// Timed frames per method (the median is reported).
     pub frames: u32,
     /// The engines whose own renderers run beside the methods (`crate::engines`): their
     /// colour and `P_geom` against the same reference.
