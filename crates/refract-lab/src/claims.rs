@@ -28,6 +28,7 @@ mod inventory;
 mod layers;
 mod nearby;
 mod pvrr;
+mod rough;
 
 use inventory::{Inventory, Ledger, Verdict};
 
@@ -219,8 +220,26 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         progress,
     )?);
     md.push_str(&pvrr::section(args, &inventory, &mut ledger)?);
-    md.push_str(&engine::section(args, &inventory, &mut ledger, progress)?);
+    // One browser per engine for both sections that render with the engines themselves.
+    let engines = crate::engines::EngineRenderers::open(
+        &refract_engines::Engine::ALL,
+        crate::backends::GpuPolicy::IfAvailable,
+        progress,
+    )?;
+    md.push_str(&engine::section(
+        args,
+        &inventory,
+        &mut ledger,
+        progress,
+        engines.as_ref(),
+    )?);
     md.push_str(&layers::section(args, &inventory, &mut ledger)?);
+    md.push_str(&rough::section(
+        args,
+        &inventory,
+        &mut ledger,
+        engines.as_ref(),
+    )?);
     md.push_str(&ledger.coverage(&inventory));
     write_text_atomically(&args.out, &md)?;
     Ok(md)

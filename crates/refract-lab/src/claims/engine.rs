@@ -14,7 +14,6 @@ use refract_engines::Engine;
 
 use super::inventory::{Inventory, Ledger};
 use super::{Bench, ClaimsArgs, Truth, value};
-use crate::backends::GpuPolicy;
 use crate::data_scenes;
 use crate::engines::{EngineRenderers, engine_record};
 use crate::progress::Progress;
@@ -208,12 +207,14 @@ fn scenes(
     Ok(scenes)
 }
 
-/// Measures the engine methods and returns the markdown section.
+/// Measures the engine methods and returns the markdown section; `engines`: the engines'
+/// own renderers when they run (shared with the rough-glass section: one browser each).
 pub fn section(
     args: &ClaimsArgs,
     inventory: &Inventory,
     ledger: &mut Ledger,
     progress: &dyn Progress,
+    engines: Option<&EngineRenderers>,
 ) -> crate::Result<String> {
     let mut bench = Bench::new(args)?;
     let mut notes = Vec::new();
@@ -224,8 +225,7 @@ pub fn section(
     let mut sweep = String::new();
     let mut failure_rows = String::new();
     let mut fidelity_rows = String::new();
-    let engines = EngineRenderers::open(&Engine::ALL, GpuPolicy::IfAvailable, progress)?;
-    match &engines {
+    match engines {
         Some(_) => {}
         None => notes.push(
             "the engines themselves did not run (Node, Chromium or `npm ci --prefix engines` is \
@@ -243,10 +243,7 @@ pub fn section(
         }
         // The engines themselves, beside their re-implementations.
         let mut engine_frames = Vec::new();
-        if let Some(engines) = engines
-            .as_ref()
-            .filter(|_| truth.scene.refractor.is_dielectric())
-        {
+        if let Some(engines) = engines.filter(|_| truth.scene.refractor.is_dielectric()) {
             for engine in engines.render(&truth.scene, &truth.frame, args.res, args.res)? {
                 let (record, _) =
                     engine_record(&truth.frame, &engine.frame, &truth.scene, &truth.camera);
