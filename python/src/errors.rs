@@ -90,7 +90,8 @@ pub enum OnSignal {
     Abandon,
     /// Set the flag (the work's [`refract_lab::Progress::cancelled`] reads it) and wait for the
     /// work to stop at its next check, then return what it returns
-    /// ([`refract_lab::LabError::Cancelled`]: `KeyboardInterrupt`).
+    /// ([`refract_lab::LabError::Cancelled`]: `KeyboardInterrupt`), or the signal's own
+    /// exception when the work finished before it looked at the flag.
     Cancel(Arc<AtomicBool>),
 }
 
@@ -112,6 +113,8 @@ pub fn interruptible<T: Send + 'static>(
         })
         .map_err(|err| RenderError::new_err(format!("cannot start a render thread: {err}")))?;
     let mut outcome = outcome;
+    // The signal taken while the work was asked to stop ([`OnSignal::Cancel`]).
+    let mut taken: Option<PyErr> = None;
     loop {
         // The receiver goes into the GIL-free closure and back (a `&Receiver` is not `Send`).
         let (received, back) = py.detach(move || (outcome.recv_timeout(SIGNAL_POLL), outcome));
@@ -119,16 +122,27 @@ pub fn interruptible<T: Send + 'static>(
         match received {
             Ok(outcome) => {
                 let result = as_python(outcome);
-                if !matches!(on_signal, OnSignal::Cancel(ref flag) if flag.load(Ordering::SeqCst)) {
-                    py.check_signals()?;
-                }
-                return result;
+                return match taken {
+                    // The work ended before it saw the flag: the signal still stands (a Ctrl-C
+                    // is never lost to a result that arrived just after it).
+                    Some(signal) if result.is_ok() => Err(signal),
+                    Some(_) => result,
+                    None => {
+                        py.check_signals()?;
+                        result
+                    }
+                };
             }
             Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
-                if let Err(signal) = py.check_signals() {
+                if taken.is_none()
+                    && let Err(signal) = py.check_signals()
+                {
                     match &on_signal {
                         OnSignal::Abandon => return Err(signal),
-                        OnSignal::Cancel(flag) => flag.store(true, Ordering::SeqCst),
+                        OnSignal::Cancel(flag) => {
+                            flag.store(true, Ordering::SeqCst);
+                            taken = Some(signal);
+                        }
                     }
                 }
             }
