@@ -865,6 +865,26 @@ fn claims_are_measured_and_written() {
     };
     let md = claims("c/claims.md", &[]);
     assert!(md.contains("Written by `refract claims`"), "{md}");
+    // The provenance block, measured (run outside a checkout here: the commit says so).
+    let provenance = md
+        .split("## Provenance")
+        .nth(1)
+        .expect("a provenance section");
+    for field in [
+        "- commit: unknown (not run in a git checkout)",
+        "- compiler: rustc ",
+        "- build: profile ",
+        "- CPU: ",
+        "- GPU: none used",
+        "- load average",
+    ] {
+        assert!(provenance.contains(field), "{field}: {md}");
+    }
+    assert!(!md.contains("<!-- provenance -->"), "{md}");
+    assert!(
+        md.contains("The papers' claims: ") && md.contains("of 64 measured here"),
+        "{md}"
+    );
     for claim in ["**W1** Two interfaces", "**W3**", "**W4**"] {
         assert!(
             md.lines()

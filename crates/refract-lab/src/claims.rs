@@ -137,6 +137,9 @@ fn fallback_share(frame: &Frame) -> Option<f64> {
     (!pixels.is_empty()).then(|| n as f64 / pixels.len() as f64)
 }
 
+/// Where [`run`] puts the provenance block once the run has ended.
+const PROVENANCE_MARK: &str = "<!-- provenance -->\n";
+
 /// Measures every claim, writes `args.out` (docs/claims.md) and returns its text; scenes left
 /// out for want of `args.data` go to `progress`.
 pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> {
@@ -148,6 +151,15 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     refract_eval::atomic_write::check_writable(&args.out)?;
     let inventory = Inventory::builtin()?;
     let mut ledger = Ledger::default();
+    let mut provenance = crate::provenance::Provenance::start();
+    if args.reference_backend == ReferenceBackend::Gpu {
+        provenance.gpu = refract_gpu::GpuContext::new().ok().map(|c| {
+            format!(
+                "{} ({:?}, {:?}; the references)",
+                c.info.name, c.info.backend, c.info.device_type
+            )
+        });
+    }
     let (scenes, notes) = scenes(&args.data)?;
     let mut measured = Vec::new();
     let mut cpu = CpuRenderer::new();
@@ -241,6 +253,8 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         engines.as_ref(),
     )?);
     md.push_str(&ledger.coverage(&inventory));
+    provenance.finish();
+    let md = md.replacen(PROVENANCE_MARK, &provenance.markdown(), 1);
     write_text_atomically(&args.out, &md)?;
     Ok(md)
 }
@@ -490,6 +504,13 @@ fn document(
             ReferenceBackend::Cpu => "",
             ReferenceBackend::Gpu => "; traced on the GPU, `--reference-backend gpu`",
         }
+    );
+    let _ = writeln!(
+        md,
+        "## Provenance\n\n\
+         Where and how these numbers were measured, read from the checkout, the build and the \
+         system by `refract claims` (`refract_lab::provenance`); the engines' frames come from \
+         headless Chromium on the same machine (`docs/engines.md`).\n\n{PROVENANCE_MARK}"
     );
     for note in notes {
         let _ = writeln!(md, "Note: {note}\n");

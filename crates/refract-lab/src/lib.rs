@@ -12,7 +12,8 @@
 //! * [`bench`](mod@bench): the papers' timing tables on this machine.
 //! * [`engines`]: the engines' own renderers (three.js, ...) beside the methods.
 //! * [`render`](mod@render): one frame of one method, as `refract render` and Python render it.
-//! * [`backends`], [`memory`], [`timing`], [`data_scenes`], [`output_dirs`]: what they share.
+//! * [`backends`], [`memory`], [`timing`], [`data_scenes`], [`output_dirs`], [`provenance`]:
+//!   what they share.
 //!
 //! Progress and notes go through [`Progress`] ([`Quiet`] ignores them); errors are
 //! [`LabError`]. Modules depend downward only: `report` and `sweep_report` render results,
@@ -33,6 +34,7 @@ pub mod output_dirs;
 pub mod overview;
 pub mod plots;
 pub mod progress;
+pub mod provenance;
 pub mod render;
 pub mod report;
 pub mod sweep;

@@ -71,7 +71,7 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<St
     }
     let provenance = Provenance {
         date,
-        commit: checkout_commit(),
+        commit: crate::provenance::checkout_commit(),
         cpu: crate::timing::cpu_description(),
         gpu,
         gpu_driver,
@@ -128,32 +128,6 @@ fn gpu_adapter(
     }
 }
 
-/// The commit of the checkout the command runs in (`git rev-parse --short=12 HEAD`), with
-/// `(uncommitted changes)` when tracked files differ from it; a sentence saying so where git or
-/// the checkout is missing.
-fn checkout_commit() -> String {
-    let git = |args: &[&str]| {
-        std::process::Command::new("git")
-            .args(args)
-            .output()
-            .ok()
-            .filter(|out| out.status.success())
-            .map(|out| String::from_utf8_lossy(&out.stdout).trim().to_owned())
-    };
-    match git(&["rev-parse", "--short=12", "HEAD"]) {
-        Some(hash) => {
-            let changed = git(&["status", "--porcelain", "--untracked-files=no"])
-                .is_some_and(|status| !status.is_empty());
-            if changed {
-                format!("{hash} (uncommitted changes)")
-            } else {
-                hash
-            }
-        }
-        None => "unknown (not run in a git checkout)".to_owned(),
-    }
-}
-
 /// The settings that shape the numbers, as a command line.
 fn command_line(args: &BenchArgs) -> String {
     let backends = args.backends.join(",");
@@ -173,7 +147,7 @@ fn tables_markdown(provenance: &Provenance, outputs: &[(Table, TableOutput)]) ->
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "Measured by `{}` ({:.0} s) at commit {} on {}.\n\n- CPU: {}\n- GPU: {}\n- GPU driver: {}\n",
+        "Measured by `{}` ({:.0} s) at commit {} on {}.\n\n- CPU: {}\n- GPU: {}\n- GPU driver: {}\n- compiler: {}\n- build: {}\n",
         provenance.command,
         provenance.seconds,
         provenance.commit,
@@ -181,6 +155,8 @@ fn tables_markdown(provenance: &Provenance, outputs: &[(Table, TableOutput)]) ->
         provenance.cpu,
         provenance.gpu.as_deref().unwrap_or("none"),
         provenance.gpu_driver.as_deref().unwrap_or("–"),
+        crate::provenance::rustc(),
+        crate::provenance::build(),
     );
     for (_, output) in outputs {
         let text = output.markdown.trim_end();

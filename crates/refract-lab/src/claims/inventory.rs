@@ -271,18 +271,22 @@ impl Ledger {
              (`crates/refract-lab/claims.toml`); a test changed after it was measured is listed \
              under Revisions.\n\n| id | claim (section) | verdict | where |\n|---|---|---|---|\n",
         );
-        let (mut measured, mut confirmed) = (0, 0);
+        // Counted apart: the papers' inventory (index 0) and the project's own claims (1).
+        let (mut measured, mut confirmed, mut total) = ([0; 2], [0; 2], [0; 2]);
+        let paper_ids = inventory_ids();
         for c in &inventory.claims {
+            let own = usize::from(!paper_ids.contains(&c.id));
+            total[own] += 1;
             let verdict = match (&c.not_measured, self.verdicts.get(&c.id)) {
                 (Some(reason), _) => format!("not measured here: {reason}"),
                 (None, None) => {
                     "**no row**: the test is stated but did not run (missing data?)".to_owned()
                 }
                 (None, Some(rows)) => {
-                    measured += 1;
+                    measured[own] += 1;
                     let summary = summarise(rows);
                     if rows.iter().all(|(_, v)| *v == Verdict::Confirmed) {
-                        confirmed += 1;
+                        confirmed[own] += 1;
                     }
                     summary
                 }
@@ -298,8 +302,9 @@ impl Ledger {
         }
         let _ = writeln!(
             md,
-            "\n{measured} of {} claims measured here, {confirmed} confirmed on every scene.",
-            inventory.claims.len()
+            "\nThe papers' claims: {} of {} measured here, {} confirmed on every scene. The \
+             project's own claims (B): {} of {} measured, {} confirmed on every scene.",
+            measured[0], total[0], confirmed[0], measured[1], total[1], confirmed[1]
         );
         if !inventory.revisions.is_empty() {
             md.push_str(
