@@ -160,5 +160,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.method,
         args.out.display()
     );
+    if let Some(adapter) = renders.adapter() {
+        // As compare and bench say it: which GPU the frame came from.
+        eprintln!("GPU: {adapter}");
+    }
     Ok(())
 }

@@ -240,7 +240,34 @@ fn render_writes_png_and_exr() {
         );
         assert!(output.status.success(), "{method}: {}", stderr(&output));
         assert!(dir.path().join(file).is_file());
+        // A CPU render names no GPU.
+        assert!(!stderr(&output).contains("GPU: "), "{}", stderr(&output));
     }
+    // A GPU render says which adapter the frame came from (issue 51), as compare and bench do.
+    if std::env::var("REFRACT_REQUIRE_GPU").is_err() && refract_gpu::GpuContext::new().is_err() {
+        println!("skipped: no GPU adapter for --backend gpu");
+        return;
+    }
+    let output = refract(
+        &[
+            "render",
+            "torus",
+            "--backend",
+            "gpu",
+            "--res",
+            "40x30",
+            "--out",
+            "g.png",
+        ],
+        dir.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let adapter = refract_gpu::GpuContext::new().expect("adapter").info.name;
+    assert!(
+        stderr(&output).contains(&format!("GPU: {adapter} (")),
+        "{}",
+        stderr(&output)
+    );
 }
 
 #[test]

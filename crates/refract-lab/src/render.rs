@@ -22,6 +22,7 @@ pub const MAX_SIZE: u32 = refract_scene::MAX_FRAME_SIZE;
 pub struct Renders {
     scene: Arc<Scene>,
     renderers: Vec<Box<dyn Renderer + Send>>,
+    adapter: Option<String>,
 }
 
 /// What [`Renders::render`] renders.
@@ -45,7 +46,14 @@ impl Renders {
         Self {
             scene,
             renderers: Vec::new(),
+            adapter: None,
         }
+    }
+
+    /// The GPU adapter the GPU renders ran on (name, graphics API, device type), once one has
+    /// opened; `None` before or without one.
+    pub fn adapter(&self) -> Option<&str> {
+        self.adapter.as_deref()
     }
 
     /// The scene.
@@ -77,7 +85,15 @@ impl Renders {
             None => {
                 let mut renderer: Box<dyn Renderer + Send> = match backend {
                     BackendId::Cpu => Box::new(CpuRenderer::new()),
-                    BackendId::Gpu => Box::new(GpuRenderer::new()?),
+                    BackendId::Gpu => {
+                        let gpu = GpuRenderer::new()?;
+                        let info = &gpu.context().info;
+                        self.adapter = Some(format!(
+                            "{} ({:?}, {:?})",
+                            info.name, info.backend, info.device_type
+                        ));
+                        Box::new(gpu)
+                    }
                     BackendId::Trace => Box::new(ReferenceRenderer::new()),
                 };
                 renderer.prepare(&self.scene)?;
