@@ -72,6 +72,17 @@ fn sphere_masks(truth: &Frame) -> crate::Result<Vec<Vec<bool>>> {
         .collect())
 }
 
+/// Whose numbers a [`Row`] holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// The reference itself (no FLIP against itself).
+    Reference,
+    /// A re-implementation on the CPU backend.
+    Method,
+    /// An engine rendering the exported scene (the rows B8 and B9 judge).
+    Engine,
+}
+
 /// A renderer's frames of the scene (`rough`) and of its smooth twin (every roughness 0), at the
 /// section's resolution and at [`FACTOR`] times it.
 struct Frames {
@@ -86,7 +97,7 @@ struct Frames {
 /// high one box-filtered.
 struct Row {
     label: String,
-    engine: bool,
+    kind: Kind,
     flip: Vec<Option<f64>>,
     change: Vec<Option<f64>>,
     change_high: Vec<Option<f64>>,
@@ -95,7 +106,7 @@ struct Row {
 impl Row {
     fn new(
         label: String,
-        engine: bool,
+        kind: Kind,
         reference: &[Vec3],
         f: &Frames,
         res: u32,
@@ -107,7 +118,7 @@ impl Row {
         let down = |colors: &[Vec3]| box_down(colors, res * FACTOR, res * FACTOR, FACTOR);
         Self {
             label,
-            engine,
+            kind,
             flip: per_sphere(flip_map(reference, &f.rough, res, res)),
             change: per_sphere(flip_map(&f.smooth, &f.rough, res, res)),
             change_high: per_sphere(flip_map(
@@ -210,7 +221,7 @@ pub fn section(
         .collect();
     let mut rows = vec![Row::new(
         format!("reference ({SPP} samples a pixel)"),
-        false,
+        Kind::Reference,
         &truth.color,
         &reference_frames,
         res,
@@ -233,7 +244,7 @@ pub fn section(
     };
     rows.push(Row::new(
         "`volume-thickness` (reads no roughness)".to_owned(),
-        false,
+        Kind::Method,
         &truth.color,
         &frames,
         res,
@@ -262,7 +273,7 @@ pub fn section(
                 };
                 rows.push(Row::new(
                     format!("`{label}` (the engine itself)"),
-                    true,
+                    Kind::Engine,
                     &truth.color,
                     &frames,
                     res,
@@ -276,7 +287,7 @@ pub fn section(
         ),
     }
     let reference_row = &rows[0];
-    for row in rows.iter().filter(|r| r.engine) {
+    for row in rows.iter().filter(|r| r.kind == Kind::Engine) {
         for (k, roughness) in ROUGHNESS.iter().enumerate().skip(1) {
             let scene_label = format!("{SCENE}: {}, roughness {roughness}", row.label);
             b8.push((
@@ -349,7 +360,7 @@ pub fn section(
                 .collect::<Vec<_>>()
                 .join(" | ")
         };
-        let flip = if row.label.starts_with("reference") {
+        let flip = if row.kind == Kind::Reference {
             vec![None; ROUGHNESS.len()]
         } else {
             row.flip.clone()
@@ -398,7 +409,7 @@ mod tests {
         assert_eq!(b9_verdict(None, Some(0.02), 0.02), Verdict::Inconclusive);
         let row = Row {
             label: String::new(),
-            engine: true,
+            kind: Kind::Engine,
             flip: vec![],
             change: vec![Some(0.0), Some(0.2)],
             change_high: vec![Some(0.0), Some(0.05)],
