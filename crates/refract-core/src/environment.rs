@@ -10,6 +10,7 @@ use core::f32::consts::{PI, TAU};
 
 use glam::{Vec2, Vec3};
 
+use crate::math;
 use crate::real::{Real, Vector3};
 
 /// How an environment lookup evaluates `atan2(y, x)`.
@@ -139,9 +140,56 @@ pub fn sample_latlong_bilinear<A: Atan2<V::Real>, V: Vector3>(
     a.lerp(b, fx).lerp(c.lerp(d, fx), fy)
 }
 
+/// The four texels and weights of [`sample_latlong_bilinear`]'s lookup of unit `dir` (one
+/// direction): `index` of the texels at `(x₀, y₀)`, `(x₀+1, y₀)`, `(x₀, y₀+1)`, `(x₀+1, y₀+1)`
+/// and the fractions `(fx, fy)`, for lookups that interpolate something other than the texels'
+/// RGB (the reference's spectra, as Mitsuba 3's spectral `envmap` does).
+#[inline]
+pub fn latlong_bilinear_taps<A: Atan2>(width: u32, height: u32, dir: Vec3) -> ([usize; 4], Vec2) {
+    let (u, v) = latlong_coordinates::<Vec3, A>(dir);
+    let last_row = (height - 1) as f32;
+    let x = u * width as f32 - 0.5;
+    let y = (v * last_row).clamp(0.0, last_row);
+    let (x0, y0) = (math::floor(x), math::floor(y));
+    let w = i64::from(width);
+    let column = |dx: i64| (x0 as i64 + dx).rem_euclid(w) as usize;
+    let row = |dy: usize| (y0 as usize + dy).min(height as usize - 1) * width as usize;
+    (
+        [
+            row(0) + column(0),
+            row(0) + column(1),
+            row(1) + column(0),
+            row(1) + column(1),
+        ],
+        Vec2::new(x - x0, y - y0),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The taps and weights interpolate to the RGB lookup (both axes, the wrap and the poles).
+    #[test]
+    fn bilinear_taps_match_the_lookup() {
+        let (w, h) = (7u32, 5u32);
+        let texels: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::new(i as f32, (i * i % 11) as f32, (i % 3) as f32))
+            .collect();
+        for k in 0..200 {
+            let t = k as f32 * 0.37;
+            let dir = Vec3::new(t.sin(), (t * 0.7).cos(), (t * 1.3).sin() - 0.2).normalize();
+            let ([a, b, c, d], f) = latlong_bilinear_taps::<Exact>(w, h, dir);
+            let taps = texels[a]
+                .lerp(texels[b], f.x)
+                .lerp(texels[c].lerp(texels[d], f.x), f.y);
+            let lookup = sample_latlong_bilinear::<Exact, _>(&texels, w, h, dir);
+            assert!(
+                (taps - lookup).abs().max_element() < 1e-5,
+                "{dir}: {taps} vs {lookup}"
+            );
+        }
+    }
 
     #[test]
     fn mitsuba_axes() {

@@ -14,6 +14,7 @@
 //!   leaves, bit-identical.
 //! * [`microfacet`]: rough interfaces: GGX, Smith masking, visible-normal sampling (Walter et al. 2007, Heitz 2018).
 //! * [`shading`]: the opaque objects' albedos and directional light.
+//! * [`spectral`]: dispersion: wavelengths, the CIE observer, RGB↔spectrum (Jakob–Hanika), `KHR_materials_dispersion`'s IOR.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
 //! * [`engine`]: the refraction today's engines ship (Godot, three.js, Bevy, Unity HDRP, Filament): exit models and screen lookups.
@@ -74,6 +75,7 @@ pub mod procedural_sky;
 pub mod pvrr;
 pub mod real;
 pub mod shading;
+pub mod spectral;
 pub mod vector;
 pub mod wgsl;
 

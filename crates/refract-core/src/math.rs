@@ -36,6 +36,14 @@ mod imp {
     pub fn exp(x: f32) -> f32 {
         x.exp()
     }
+    #[inline]
+    pub fn ln(x: f32) -> f32 {
+        x.ln()
+    }
+    #[inline]
+    pub fn cbrt(x: f32) -> f32 {
+        x.cbrt()
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -72,6 +80,14 @@ mod imp {
     pub fn exp(x: f32) -> f32 {
         libm::expf(x)
     }
+    #[inline]
+    pub fn ln(x: f32) -> f32 {
+        libm::logf(x)
+    }
+    #[inline]
+    pub fn cbrt(x: f32) -> f32 {
+        libm::cbrtf(x)
+    }
 }
 
-pub(crate) use imp::{atan2, exp, floor, sin, sin_cos, sqrt, tan, trunc};
+pub(crate) use imp::{atan2, cbrt, exp, floor, ln, sin, sin_cos, sqrt, tan, trunc};
