@@ -32,14 +32,21 @@ fn counts(frame: &Frame, aov: Aov) -> &[u32] {
         .unwrap_or_else(|| panic!("no {aov:?} layer"))
 }
 
-/// Every refractor comes back with its IOR, its nesting and its absorption, the chart and the
+/// Every refractor comes back with its IOR, its nesting, its roughness, its dispersion and its
+/// absorption, the chart and the
 /// floor as opaque objects; traced from the file's camera, the refractors met and the
 /// interfaces crossed agree with the built-in scene's on all but a few silhouette pixels. A
 /// lost refractor, a wrong nesting, a camera off by a normalisation or a refractor scaled
 /// apart from the others changes hundreds of pixels.
 #[test]
 fn exported_many_refractor_scenes_read_back_as_the_same_refractors() {
-    for name in ["glass-behind-glass", "vessel", "liquid", "rough-glass"] {
+    for name in [
+        "glass-behind-glass",
+        "vessel",
+        "liquid",
+        "rough-glass",
+        "prism",
+    ] {
         let (original, loaded, warnings) = exported_and_read_back(name);
         assert_eq!(
             loaded.refractor_count(),
@@ -55,6 +62,13 @@ fn exported_many_refractor_scenes_read_back_as_the_same_refractors() {
                 a.roughness(),
                 b.roughness(),
                 "{name} refractor {k}: roughness"
+            );
+            // KHR_materials_dispersion (issue 52): dispersion = 20 / V_d there and back.
+            assert!(
+                a.abbe() == b.abbe() || ((a.abbe() - b.abbe()) / a.abbe()).abs() < 1e-6,
+                "{name} refractor {k}: Abbe number {} vs {}",
+                a.abbe(),
+                b.abbe()
             );
             assert_eq!(
                 a.attenuation().is_some(),

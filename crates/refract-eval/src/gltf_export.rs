@@ -313,6 +313,9 @@ fn glass_material(name: &str, refractor: &Refractor, specular: f32) -> Value {
     if specular != 1.0 {
         extensions["KHR_materials_specular"] = json!({ "specularFactor": specular });
     }
+    if refractor.is_dispersive() {
+        extensions["KHR_materials_dispersion"] = json!({ "dispersion": 20.0 / refractor.abbe() });
+    }
     json!({
         "name": name,
         "pbrMetallicRoughness": {
@@ -369,6 +372,10 @@ fn document(
     camera: Mat4,
 ) -> Value {
     let c = &scene.camera;
+    let mut extensions_used = extensions_used.to_vec();
+    if scene.has_dispersion() {
+        extensions_used.push("KHR_materials_dispersion");
+    }
     let mut nodes: Vec<Value> = (0..meshes.len())
         .map(|k| json!({ "mesh": k, "name": meshes[k]["name"] }))
         .collect();

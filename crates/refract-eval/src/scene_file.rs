@@ -126,7 +126,7 @@ translate = [0.6, -0.75, 2.6]
 }
 
 /// The built-in scenes: name, one line, TOML. They need no file.
-pub const BUILTIN_SCENES: [(&str, &str, &str); 16] = [
+pub const BUILTIN_SCENES: [(&str, &str, &str); 17] = [
     (
         "sphere",
         "the paper's 1,600-triangle sphere, IOR 1.5, procedural environment",
@@ -310,6 +310,11 @@ translate = [0.5, -0.9, -1.0]
         "four glass spheres (IOR 1.5) of roughness 0, 0.1, 0.3 and 0.6 side by side before the colour chart (after glTF's TransmissionRoughnessTest)",
         ROUGH_GLASS_SCENE,
     ),
+    (
+        "prism",
+        "a 60-degree glass prism (IOR 1.5, Abbe number 30) before bright slits on a black wall (after glTF's DispersionTest)",
+        PRISM_SCENE,
+    ),
 ];
 
 /// The chart stage of the many-refractor scenes (issue 49): `chart`'s camera, colour chart and
@@ -431,6 +436,38 @@ scale = 0.32
 translate = [1.125, -0.48, 0.0]
 "#
 );
+
+/// `prism`: an equilateral prism standing on its end (axis vertical), turned so that the
+/// camera's rays pass it near minimum deviation (37° at IOR 1.5), 3 units before a black wall
+/// that carries fifteen white slits 0.09 wide and 0.75 apart; through the prism the slits
+/// appear shifted sideways and spread into spectra (`n(400 nm) − n(700 nm) = 0.037` at
+/// Abbe number 30: a fringe about 0.14 wide on the wall).
+const PRISM_SCENE: &str = r#"[camera]
+eye = [0.0, 0.2, 4.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+near = 0.05
+far = 20.0
+
+[refractor]
+mesh = "builtin:prism"
+ior = 1.5
+abbe = 30.0
+rotate_deg = [0.0, 18.6, 0.0]
+
+[[objects]]
+mesh = "builtin:plane"
+color = [0.0, 0.0, 0.0]
+scale = 10.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.0, -3.0]
+
+[[objects]]
+mesh = "builtin:slits"
+color = [1.0, 1.0, 1.0]
+scale = 8.0
+translate = [0.0, 0.0, -2.98]
+"#;
 
 /// The `engine-failures` scene (issue 28): what the engines' screen-space refraction cannot
 /// show, each where a pixel count can find it. The torus (tilted 60°, left of centre) has glass
@@ -652,6 +689,11 @@ struct RefractorSection {
     /// The surface's roughness in [0, 1] (glTF's `roughnessFactor`; GGX α = roughness²); the
     /// glTF material's when the mesh is a glTF file with one, else 0 (smooth).
     roughness: Option<f32>,
+    /// The glass's Abbe number `V_d` (≥ 1; glass 20–90), or `inf` for none; not with
+    /// `dispersion`. The glTF material's `KHR_materials_dispersion` when neither is given.
+    abbe: Option<f32>,
+    /// glTF's `KHR_materials_dispersion` `dispersion` (≥ 0; `20 / V_d`, 0: none); not with `abbe`.
+    dispersion: Option<f32>,
 }
 
 fn default_ior() -> f32 {
@@ -692,6 +734,35 @@ fn check_roughness(origin: &str, section: &str, roughness: f32) -> Result<f32, S
             format!("{section} roughness"),
             roughness,
             refract_scene::scene::ROUGHNESS_EXPECTED,
+        ))
+    }
+}
+
+/// The Abbe number of a `dispersion` value: `20 / dispersion` (∞ for 0); NaN for a negative
+/// or NaN one, which [`check_abbe`] refuses.
+fn dispersion_to_abbe(dispersion: f32) -> f32 {
+    if dispersion >= 0.0 {
+        refract_core::spectral::abbe_from_dispersion(dispersion)
+    } else {
+        f32::NAN
+    }
+}
+
+/// `abbe` of `section` (from its `key`) at least 1 or infinite, or an error naming it.
+fn check_abbe(origin: &str, section: &str, key: &str, abbe: f32) -> Result<f32, SceneError> {
+    if abbe >= refract_scene::scene::ABBE_MIN {
+        Ok(abbe)
+    } else {
+        let expected = if key == "dispersion" {
+            "a dispersion from 0 (none) to 20 (20 / Abbe number)"
+        } else {
+            refract_scene::scene::ABBE_EXPECTED
+        };
+        Err(SceneError::field(
+            origin,
+            format!("{section} {key}"),
+            abbe,
+            expected,
         ))
     }
 }
@@ -1129,9 +1200,9 @@ fn build_refractor(
         format!("{section}: ")
     };
     let ior = r.ior;
-    let (glass_ior, glass_thickness, glass_attenuation, glass_roughness) = glass
-        .map_or((None, None, None, None), |g| {
-            (g.ior, g.thickness, g.attenuation, g.roughness)
+    let (glass_ior, glass_thickness, glass_attenuation, glass_roughness, glass_abbe) = glass
+        .map_or((None, None, None, None, None), |g| {
+            (g.ior, g.thickness, g.attenuation, g.roughness, g.abbe)
         });
     if let Some(glass) = glass_ior.filter(|g| (g - ior).abs() > 1e-6) {
         warnings.push(format!(
@@ -1163,10 +1234,33 @@ fn build_refractor(
         Some(value) => check_roughness(origin, section, value)?,
         None => glass_roughness.unwrap_or(0.0),
     };
+    // The section's abbe or dispersion, else the glTF material's KHR_materials_dispersion.
+    let abbe = match (r.abbe, r.dispersion) {
+        (Some(_), Some(_)) => {
+            return Err(SceneError::field(
+                origin,
+                format!("{section} abbe"),
+                "given with dispersion",
+                "one of abbe (V_d) and dispersion (20 / V_d)",
+            ));
+        }
+        (Some(abbe), None) => check_abbe(origin, section, "abbe", abbe)?,
+        (None, Some(d)) => check_abbe(origin, section, "dispersion", dispersion_to_abbe(d))?,
+        (None, None) => glass_abbe.unwrap_or(f32::INFINITY),
+    };
+    if abbe.is_finite() && conductor.is_some() {
+        return Err(SceneError::field(
+            origin,
+            format!("{section} abbe"),
+            abbe,
+            "dispersion only for glass (a conductor does not refract)",
+        ));
+    }
     let mut refractor = Refractor::new(mesh, ior)?;
     refractor.set_conductor(conductor);
     refractor.set_attenuation(attenuation);
     refractor.set_roughness(roughness)?;
+    refractor.set_abbe(abbe)?;
     // KHR_materials_volume: the node's transform applies to the thickness, so does ours.
     refractor.set_volume_thickness(glass_thickness.map(|d| d * r.scale));
     warn_of_d_n(&label, &refractor, warnings);
@@ -1207,6 +1301,8 @@ struct GlassFacts {
     attenuation: Option<(Vec3, f32)>,
     /// `roughnessFactor` (glTF's default 1 when the material does not give one).
     roughness: Option<f32>,
+    /// The Abbe number of `KHR_materials_dispersion` (`None`: the extension is absent).
+    abbe: Option<f32>,
 }
 
 /// A glTF material's `KHR_materials_volume` absorption as an [`refract_scene::Attenuation`],
@@ -1277,6 +1373,7 @@ fn load_mesh_spec(
         thickness: m.thickness.map(|d| d * scale),
         attenuation: m.attenuation.map(|(color, d)| (color, d * scale)),
         roughness: Some(m.roughness),
+        abbe: m.abbe,
     });
     Ok((loaded.mesh, glass))
 }
@@ -1370,6 +1467,16 @@ fn build_gltf(name: &str, path: &Path) -> Result<LoadedScene, SceneError> {
                         refract_scene::scene::ROUGHNESS_EXPECTED,
                     )
                 })?;
+                if let Some(abbe) = glass.abbe {
+                    refractor.set_abbe(abbe).map_err(|_| {
+                        SceneError::field(
+                            &origin,
+                            format!("{section}: KHR_materials_dispersion dispersion"),
+                            20.0 / abbe,
+                            "a dispersion from 0 (none) to 20 (20 / Abbe number)",
+                        )
+                    })?;
+                }
                 let label = format!("{origin}: refractor[{}] ({section}): ", refractors.len());
                 warn_of_d_n(&label, &refractor, &mut warnings);
                 refractors.push(refractor);
@@ -1460,6 +1567,42 @@ mod tests {
             assert_eq!(scene.name, name);
             assert!(scene.refractor.d_n().iter().all(|d| d.is_finite()));
         }
+    }
+
+    /// `abbe` and `dispersion` (issue 52): either sets the Abbe number (`dispersion = 20 / V_d`),
+    /// both at once, a value out of range or dispersion on a conductor is an error naming the
+    /// key; `prism` disperses with V_d = 30 and no other built-in scene does.
+    #[test]
+    fn abbe_and_dispersion_are_read_and_checked() {
+        let load = |extra: &str| {
+            let text = format!("[refractor]\nmesh = \"builtin:sphere\"\n{extra}");
+            load_scene_str("d", &text, Path::new("."), "d.toml").map(|l| l.scene)
+        };
+        let abbe = |extra: &str| load(extra).expect(extra).refractor.abbe();
+        assert_eq!(abbe(""), f32::INFINITY);
+        assert_eq!(abbe("abbe = 40.0\n"), 40.0);
+        assert_eq!(abbe("dispersion = 0.5\n"), 40.0);
+        assert_eq!(abbe("dispersion = 0.0\n"), f32::INFINITY);
+        assert_eq!(abbe("abbe = inf\n"), f32::INFINITY);
+        for (bad, key) in [
+            ("abbe = 0.5\n", "abbe"),
+            ("abbe = nan\n", "abbe"),
+            ("dispersion = -1.0\n", "dispersion"),
+            ("dispersion = 25.0\n", "dispersion"),
+            ("abbe = 30.0\ndispersion = 0.5\n", "abbe"),
+            ("material = \"gold\"\nabbe = 30.0\n", "abbe"),
+        ] {
+            let err = refract_scene::full_message(&load(bad).expect_err(bad));
+            assert!(err.contains("d.toml") && err.contains(key), "{bad}: {err}");
+        }
+        for (name, _, _) in BUILTIN_SCENES {
+            let scene = load_scene(name).expect(name).scene;
+            assert_eq!(scene.has_dispersion(), name == "prism", "{name}");
+        }
+        assert_eq!(
+            load_scene("prism").expect("prism").scene.refractor.abbe(),
+            30.0
+        );
     }
 
     /// An open mirror as the specular object misses d_N everywhere; d_N serves refraction only,

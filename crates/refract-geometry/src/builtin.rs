@@ -58,10 +58,18 @@ pub const CATALOG: &[(&str, &str)] = &[
         "mirror-right",
         "right 4 of the 7 columns of mirror-convex (Kakimoto et al. Fig. 7)",
     ),
+    (
+        "prism",
+        "equilateral (60 deg) prism along y, circumradius 0.45, height 1.4, flat faces (sides 6 x 6 quads), 218 triangles",
+    ),
+    (
+        "slits",
+        "15 vertical strips 0.012 wide and 1.4 tall over 1.4 in x, facing +z (a dispersion test's bright slits)",
+    ),
 ];
 
 /// The names in [`CATALOG`].
-pub const NAMES: [&str; 12] = [
+pub const NAMES: [&str; 14] = [
     "sphere",
     "icosphere",
     "torus",
@@ -74,6 +82,8 @@ pub const NAMES: [&str; 12] = [
     "mirror-concave",
     "mirror-left",
     "mirror-right",
+    "prism",
+    "slits",
 ];
 
 /// The mirrors' side and radius of curvature (`mirror-*`).
@@ -108,6 +118,8 @@ pub fn mesh(name: &str) -> Result<Mesh, GeometryError> {
         "mirror-concave" => shapes::mirror_patch(MIRROR_SIZE, -2.0 * MIRROR_RADIUS, 7, 0..7),
         "mirror-left" => shapes::mirror_patch(MIRROR_SIZE, MIRROR_RADIUS, 7, 0..4),
         "mirror-right" => shapes::mirror_patch(MIRROR_SIZE, MIRROR_RADIUS, 7, 3..7),
+        "prism" => shapes::prism(0.45, 1.4, 6),
+        "slits" => shapes::slits(15, 0.012, 1.4, 1.4),
         _ => {
             return Err(GeometryError::UnknownBuiltin {
                 name: name.to_owned(),

@@ -248,6 +248,112 @@ pub fn cuboid(half_extents: Vec3, subdivisions: u32) -> Result<Mesh, GeometryErr
     Mesh::new("box", positions, Some(normals), vec![], triangles)
 }
 
+/// A straight prism of equilateral cross-section (apex angle 60°, the dispersion prism of the
+/// textbooks) along `y`, `height` tall, its triangle's vertices at distance `circumradius` from
+/// the axis, one of them toward `+x`; flat faces with their own vertices (three rectangles, each
+/// a grid of `subdivisions²` quads so that most vertices have a `d_N` of their own, and the two
+/// end triangles), closed by position.
+pub fn prism(circumradius: f32, height: f32, subdivisions: u32) -> Result<Mesh, GeometryError> {
+    require(
+        "prism",
+        circumradius > 0.0
+            && circumradius.is_finite()
+            && height > 0.0
+            && height.is_finite()
+            && subdivisions >= 1,
+        "expected a circumradius and a height > 0 and subdivisions ≥ 1",
+    )?;
+    let corner = |k: u32| {
+        let a = k as f32 * core::f32::consts::TAU / 3.0;
+        Vec3::new(a.cos(), 0.0, -a.sin()) * circumradius
+    };
+    let half = 0.5 * height;
+    let (mut positions, mut normals, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+    let n = subdivisions + 1;
+    for k in 0..3 {
+        let (a, b) = (corner(k), corner(k + 1));
+        let outward = (a + b).normalize();
+        let base = positions.len() as u32;
+        for row in 0..n {
+            for col in 0..n {
+                let t = col as f32 / subdivisions as f32;
+                let y = -half + height * row as f32 / subdivisions as f32;
+                positions.push(a.lerp(b, t) + y * Vec3::Y);
+                normals.push(outward);
+            }
+        }
+        // Counter-clockwise seen from outside, whichever way a → b runs.
+        let (p0, p1, p2) = (
+            positions[base as usize],
+            positions[base as usize + 1],
+            positions[(base + n) as usize],
+        );
+        let flip = (p1 - p0).cross(p2 - p0).dot(outward) < 0.0;
+        for row in 0..subdivisions {
+            for col in 0..subdivisions {
+                let q = base + row * n + col;
+                let (t1, t2) = ([q, q + 1, q + n + 1], [q, q + n + 1, q + n]);
+                if flip {
+                    triangles.push([t1[0], t1[2], t1[1]]);
+                    triangles.push([t2[0], t2[2], t2[1]]);
+                } else {
+                    triangles.push(t1);
+                    triangles.push(t2);
+                }
+            }
+        }
+    }
+    for (y, normal) in [(half, Vec3::Y), (-half, Vec3::NEG_Y)] {
+        let base = positions.len() as u32;
+        let cap = [0, 1, 2].map(|k| corner(k) + y * Vec3::Y);
+        positions.extend_from_slice(&cap);
+        normals.extend([normal; 3]);
+        let wound = (cap[1] - cap[0]).cross(cap[2] - cap[0]).dot(normal) > 0.0;
+        triangles.push(if wound {
+            [base, base + 1, base + 2]
+        } else {
+            [base, base + 2, base + 1]
+        });
+    }
+    Mesh::new("prism", positions, Some(normals), vec![], triangles)
+}
+
+/// `count` vertical strips in the `xy` plane facing `+z`, each `width` wide and `height` tall,
+/// their centres evenly spaced over `[−span/2, span/2]` in `x`: the bright slits of a
+/// dispersion test, before a dark wall.
+pub fn slits(count: u32, width: f32, span: f32, height: f32) -> Result<Mesh, GeometryError> {
+    require(
+        "slits",
+        count >= 1
+            && width > 0.0
+            && span >= 0.0
+            && height > 0.0
+            && [width, span, height].iter().all(|v| v.is_finite())
+            && (count == 1 || width < span / (count - 1) as f32),
+        "expected at least one slit, width and height > 0, and slits narrower than their spacing",
+    )?;
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for k in 0..count {
+        let x = if count == 1 {
+            0.0
+        } else {
+            span * (k as f32 / (count - 1) as f32 - 0.5)
+        };
+        let base = positions.len() as u32;
+        let (l, r, h) = (x - 0.5 * width, x + 0.5 * width, 0.5 * height);
+        positions.extend([
+            Vec3::new(l, -h, 0.0),
+            Vec3::new(r, -h, 0.0),
+            Vec3::new(r, h, 0.0),
+            Vec3::new(l, h, 0.0),
+        ]);
+        triangles.push([base, base + 1, base + 2]);
+        triangles.push([base, base + 2, base + 3]);
+    }
+    let normals = vec![Vec3::Z; positions.len()];
+    Mesh::new("slits", positions, Some(normals), vec![], triangles)
+}
+
 /// A square in the `xz` plane facing `+y`, side `size`, `subdivisions²` quads, with uvs in
 /// `[0, 1]²` (`u` along `+x`, `v` along `+z`) for textured ground planes.
 pub fn plane(size: f32, subdivisions: u32) -> Result<Mesh, GeometryError> {
@@ -408,6 +514,39 @@ mod tests {
         assert_closed_and_outward(&torus, 2.0 * PI * PI * 0.7 * 0.09, 0.01);
         let cube = cuboid(Vec3::new(0.5, 1.0, 1.5), 3).expect("box");
         assert_closed_and_outward(&cube, 8.0 * 0.5 * 1.0 * 1.5, 1e-5);
+    }
+
+    /// The prism is closed and wound outward (its signed volume is `(3√3/4) r² h`), each face's
+    /// normal points away from the axis or along it, and its apex angle is 60°.
+    #[test]
+    fn prism_is_closed_with_flat_outward_faces() {
+        let (r, h) = (0.45, 1.4);
+        let m = prism(r, h, 3).expect("prism");
+        let volume = 3.0 * 3f32.sqrt() / 4.0 * r * r * h;
+        assert!((m.signed_volume() - volume).abs() < 1e-5 * volume.max(1.0));
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a).normalize();
+            for i in t {
+                assert!((m.normals[*i as usize] - n).length() < 1e-5, "flat faces");
+            }
+            assert!(n.dot((a + b + c) / 3.0) > 0.0, "outward");
+        }
+        let side_normals: Vec<Vec3> = m.normals.iter().filter(|n| n.y == 0.0).copied().collect();
+        assert_eq!(side_normals.len(), 3 * 16);
+        let angle = side_normals[0].angle_between(side_normals[16]).to_degrees();
+        assert!(
+            (angle - 120.0).abs() < 1e-3,
+            "faces 120° apart: apex 60°, got {angle}"
+        );
+        assert!(
+            slits(3, 0.5, 1.0, 1.0).is_err(),
+            "slits wider than their spacing"
+        );
+        assert_eq!(
+            slits(15, 0.012, 1.4, 1.4).expect("slits").triangles.len(),
+            30
+        );
     }
 
     #[test]

@@ -24,6 +24,7 @@ pub mod pvrr;
 pub mod registry;
 pub mod renderer;
 pub mod scene;
+pub mod spectral;
 pub mod tonemap;
 
 pub use environment::{Environment, EnvironmentReport, LatLongMap};

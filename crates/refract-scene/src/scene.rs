@@ -39,6 +39,7 @@ pub struct Refractor {
     attenuation: Option<Attenuation>,
     within: Option<usize>,
     roughness: f32,
+    abbe: f32,
 }
 
 /// The most refractors a scene holds (the GPU reference keeps one bit per refractor met).
@@ -102,6 +103,20 @@ impl Attenuation {
 }
 
 pub use refract_core::microfacet::{ROUGHNESS_EXPECTED, ROUGHNESS_RANGE, roughness_in_range};
+pub use refract_core::spectral::ABBE_MIN;
+
+/// What an error about an Abbe number says was expected.
+pub const ABBE_EXPECTED: &str = "an Abbe number of 1 or more (glass: 20-90), or inf for none";
+
+/// `abbe` (an Abbe number `V_d`) at least [`ABBE_MIN`] or `+inf` (no dispersion), or an error
+/// naming `origin`'s `abbe`.
+pub fn check_abbe(origin: &str, abbe: f32) -> Result<(), SceneError> {
+    if abbe >= ABBE_MIN {
+        Ok(())
+    } else {
+        Err(SceneError::field(origin, "abbe", abbe, ABBE_EXPECTED))
+    }
+}
 pub use refract_core::optics::{IOR_EXPECTED, IOR_RANGE, MAX_IOR, MIN_IOR, ior_in_range};
 
 /// `roughness` in [`ROUGHNESS_RANGE`], or an error naming `origin`'s `roughness`.
@@ -135,6 +150,7 @@ impl Refractor {
             attenuation: None,
             within: None,
             roughness: 0.0,
+            abbe: f32::INFINITY,
         })
     }
 
@@ -173,6 +189,7 @@ impl Refractor {
             attenuation: None,
             within: None,
             roughness: 0.0,
+            abbe: f32::INFINITY,
         })
     }
 
@@ -280,6 +297,26 @@ impl Refractor {
     pub fn set_roughness(&mut self, roughness: f32) -> Result<(), SceneError> {
         check_roughness("refractor", roughness)?;
         self.roughness = roughness;
+        Ok(())
+    }
+
+    /// Its glass's Abbe number `V_d` (`+inf`, the default: no dispersion): the index at
+    /// wavelength `λ` is [`refract_core::spectral::dispersive_ior`]`(ior, abbe, λ)`, glTF's
+    /// `KHR_materials_dispersion` with `dispersion = 20 / V_d`. Only the reference renders
+    /// dispersion spectrally.
+    pub fn abbe(&self) -> f32 {
+        self.abbe
+    }
+
+    /// Whether its index depends on the wavelength (a finite Abbe number, on glass).
+    pub fn is_dispersive(&self) -> bool {
+        self.abbe.is_finite() && self.is_dielectric()
+    }
+
+    /// Sets [`Self::abbe`] (an error below [`ABBE_MIN`] or for NaN).
+    pub fn set_abbe(&mut self, abbe: f32) -> Result<(), SceneError> {
+        check_abbe("refractor", abbe)?;
+        self.abbe = abbe;
         Ok(())
     }
 
@@ -747,6 +784,12 @@ impl Scene {
                 .objects
                 .iter()
                 .any(|o| o.conductor().is_some() && o.roughness() > 0.0)
+    }
+
+    /// Whether any refractor is dispersive ([`Refractor::is_dispersive`]): the reference then
+    /// renders spectrally.
+    pub fn has_dispersion(&self) -> bool {
+        self.refractors().any(Refractor::is_dispersive)
     }
 
     /// Whether every surface is glass or diffuse (what the image-space and nearby-geometry

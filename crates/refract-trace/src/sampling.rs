@@ -46,6 +46,18 @@ pub fn pixel_sample(x: u32, y: u32, index: u32, count: u32) -> Vec2 {
     (p + shift).fract()
 }
 
+/// `u ∈ [0, 1)` of the wavelengths of sample `index` of `count` in pixel `(x, y)`
+/// ([`refract_core::spectral::Wavelengths::sample`]): `(i + ½) / N`, stratified over the
+/// pixel's samples, shifted per pixel by a hashed Cranley–Patterson rotation independent of
+/// the position's.
+#[inline]
+pub fn wavelength_sample(x: u32, y: u32, index: u32, count: u32) -> f32 {
+    let h = hash(path_root(x, y) ^ 0x5BD1_E995);
+    let shift = (h >> 8) as f32 / 16_777_216.0;
+    let u = (index as f32 + 0.5) / count.max(1) as f32 + shift;
+    if u >= 1.0 { u - 1.0 } else { u }
+}
+
 /// The key of the root of pixel `(x, y)`'s path tree.
 #[inline]
 pub fn path_root(x: u32, y: u32) -> u32 {

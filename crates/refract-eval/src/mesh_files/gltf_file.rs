@@ -31,6 +31,10 @@ pub struct GlassMaterial {
     pub attenuation: Option<(Vec3, f32)>,
     /// `pbrMetallicRoughness.roughnessFactor` in `[0, 1]` (glTF's default 1 when absent).
     pub roughness: f32,
+    /// The Abbe number `20 / dispersion` of `KHR_materials_dispersion` (`None` without the
+    /// extension; infinite for `dispersion = 0`; NaN for a value that is not a number ≥ 0, which
+    /// the scene loader refuses).
+    pub abbe: Option<f32>,
 }
 
 /// A glTF document with its buffers, checked (accessor indices and bounds, required
@@ -373,6 +377,16 @@ fn glass_material(material: &gltf::Material<'_>, world: Mat4) -> Option<GlassMat
     let glass = material.ior().is_some()
         || material.transmission().is_some()
         || material.volume().is_some();
+    // KHR_materials_dispersion (the gltf crate has no type for it): `dispersion`, default 0.
+    let abbe = material
+        .extension_value("KHR_materials_dispersion")
+        .map(|ext| match ext.get("dispersion") {
+            None => f32::INFINITY,
+            Some(d) => match d.as_f64() {
+                Some(d) if d >= 0.0 => refract_core::spectral::abbe_from_dispersion(d as f32),
+                _ => f32::NAN,
+            },
+        });
     // KHR_materials_volume: lengths are in the mesh's units, and the node's transform applies.
     let node_scale = Affine3A::from_mat4(world)
         .matrix3
@@ -384,6 +398,7 @@ fn glass_material(material: &gltf::Material<'_>, world: Mat4) -> Option<GlassMat
         transmission: material.transmission().map(|t| t.transmission_factor()),
         thickness: material.volume().map(|v| v.thickness_factor() * node_scale),
         roughness: material.pbr_metallic_roughness().roughness_factor(),
+        abbe,
         attenuation: material.volume().and_then(|v| {
             v.attenuation_distance().is_finite().then(|| {
                 (

@@ -62,14 +62,16 @@ impl TraceSettings {
 
 /// The fewest samples per pixel the reference takes on a scene with rough surfaces in the
 /// comparisons (`compare`, the default job, sweeps): its colour there is a Monte Carlo
-/// estimate over microfacet normals, and one sample is noise.
+/// estimate over microfacet normals (or, in a dispersive scene, over wavelengths), and one
+/// sample is noise.
 pub const ROUGH_MIN_SPP: u32 = 64;
 
 impl TraceSettings {
     /// These settings for `scene`: the samples raised to [`ROUGH_MIN_SPP`] when the scene has
-    /// a rough surface ([`crate::Scene::has_roughness`]).
+    /// a rough surface ([`crate::Scene::has_roughness`]) or dispersive glass
+    /// ([`crate::Scene::has_dispersion`]).
     pub fn for_scene(self, scene: &crate::Scene) -> Self {
-        if scene.has_roughness() {
+        if scene.has_roughness() || scene.has_dispersion() {
             Self {
                 spp: self.spp.max(ROUGH_MIN_SPP),
                 ..self
