@@ -63,6 +63,9 @@ class Scene:
     def roughness(self) -> List[float]:
         """Each refractor's roughness (0 smooth to 1), in the scene's refractor order."""
     @property
+    def abbe(self) -> List[float]:
+        """Each refractor's Abbe number (inf: no dispersion), in the scene's refractor order."""
+    @property
     def warnings(self) -> List[str]: ...
     @property
     def eye(self) -> Tuple[float, float, float]: ...

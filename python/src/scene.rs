@@ -162,6 +162,14 @@ impl Scene {
         self.scene.refractors().map(|r| r.roughness()).collect()
     }
 
+    /// Each refractor's Abbe number `V_d` (`inf`: no dispersion; glTF's
+    /// `KHR_materials_dispersion` is `20 / V_d`), in the scene's refractor order; only the
+    /// reference renders dispersion, spectrally (docs/reference.md).
+    #[getter]
+    fn abbe(&self) -> Vec<f32> {
+        self.scene.refractors().map(|r| r.abbe()).collect()
+    }
+
     /// What loading the scene fixed or noticed (mesh and environment quirks).
     #[getter]
     fn warnings(&self) -> Vec<String> {

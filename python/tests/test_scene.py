@@ -15,6 +15,8 @@ def test_load_builtin_and_ior(sphere):
     assert "sphere" in repr(glass)
     assert sphere.roughness == [0.0]
     assert refract.Scene.load("rough-glass").roughness == pytest.approx([0.0, 0.1, 0.3, 0.6])
+    assert sphere.abbe == [math.inf]
+    assert refract.Scene.load("prism").abbe == pytest.approx([30.0])
 
 
 def test_bad_inputs_raise_the_cli_messages(tmp_path):

@@ -147,6 +147,7 @@ fn gpu_reference_matches_the_cpu_reference_on_every_built_in_scene() {
         "vessel",
         "liquid",
         "rough-glass",
+        "prism",
     ] {
         let scene = Arc::new(load_scene(name).expect("built-in").scene);
         let Agreement {
@@ -225,12 +226,25 @@ fn full_mode_and_supersampling_match_the_cpu_reference() {
         // nodes, so they agree pixel by pixel as on smooth glass.
         ("rough-glass", &[("spp", "4")][..]),
         ("rough-glass", &[("mode", "full"), ("spp", "4")][..]),
+        // Dispersion: both draw the same hero wavelengths per sample, terminate them at the
+        // same interfaces and look up the same texel spectra in the same uplift table.
+        ("prism", &[("spp", "4")][..]),
+        ("prism", &[("mode", "full"), ("spp", "4")][..]),
+        ("dispersive-sphere", &[("spp", "4")][..]),
+        ("dispersive-sphere", &[("mode", "full"), ("spp", "4")][..]),
         // Many samples of a deep full-mode tree in one frame: lavapipe ends an invocation's
         // loops after 65,535 iterations in all, so a dispatch of all 24 samples came out
         // darker in blocks of pixels (issue 52's finding); one sample a dispatch there.
         ("glass-behind-glass", &[("mode", "full"), ("spp", "24")][..]),
     ] {
-        let mut scene = load_scene(name).expect("built-in").scene;
+        // `dispersive-sphere`: `sphere` with an Abbe number of 20 (the texel spectra of the
+        // smooth map behind dispersive glass).
+        let mut scene = load_scene(name.strip_prefix("dispersive-").unwrap_or(name))
+            .expect("built-in")
+            .scene;
+        if name.starts_with("dispersive-") {
+            scene.refractor.set_abbe(20.0).expect("abbe");
+        }
         scene.environment = smooth_environment();
         let scene = Arc::new(scene);
         let settings = settings(pairs);

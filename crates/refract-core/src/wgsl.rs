@@ -34,13 +34,18 @@ pub const CORE: &str = include_str!("../wgsl/core.wgsl");
 /// The procedural environment (`wgsl/procedural_sky.wgsl`): `procedural_radiance`.
 pub const PROCEDURAL_SKY: &str = include_str!("../wgsl/procedural_sky.wgsl");
 
+/// The spectral functions (`wgsl/spectral.wgsl`): the CIE tables, hero wavelengths, sigmoid
+/// spectra, `KHR_materials_dispersion`'s index ([`crate::spectral`]).
+pub const SPECTRAL: &str = include_str!("../wgsl/spectral.wgsl");
+
 /// The `const` declarations the functions use, generated from the Rust values
 /// ([`crate::gpu::wgsl_constants`]).
 pub fn constants() -> String {
     crate::gpu::wgsl_constants()
 }
 
-/// The constants header, [`CORE`] and [`PROCEDURAL_SKY`], ready to prepend to a shader.
+/// The constants header, [`CORE`], [`PROCEDURAL_SKY`] and [`SPECTRAL`], ready to prepend to a
+/// shader.
 pub fn library() -> String {
-    format!("{}\n{CORE}\n{PROCEDURAL_SKY}", constants())
+    format!("{}\n{CORE}\n{PROCEDURAL_SKY}\n{SPECTRAL}", constants())
 }

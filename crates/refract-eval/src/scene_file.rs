@@ -439,7 +439,7 @@ translate = [1.125, -0.48, 0.0]
 
 /// `prism`: an equilateral prism standing on its end (axis vertical), turned so that the
 /// camera's rays pass it near minimum deviation (37° at IOR 1.5), 3 units before a black wall
-/// that carries fifteen white slits 0.09 wide and 0.75 apart; through the prism the slits
+/// that carries fifteen white slits 0.1 wide and 0.81 apart; through the prism the slits
 /// appear shifted sideways and spread into spectra (`n(400 nm) − n(700 nm) = 0.037` at
 /// Abbe number 30: a fringe about 0.14 wide on the wall).
 const PRISM_SCENE: &str = r#"[camera]

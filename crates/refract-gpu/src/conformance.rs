@@ -15,7 +15,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::scene_buffers::EnvironmentUniforms;
 use crate::shaders::{
-    CORE, DISTANCE_SEARCH, FRAME, PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE, WgslFile,
+    CORE, DISTANCE_SEARCH, FRAME, PROCEDURAL_SKY, SPECTRAL, ShaderModule, TWO_INTERFACE, WgslFile,
 };
 
 /// The leaves' entry points (`src/conformance.wgsl`).
@@ -30,7 +30,7 @@ const CONFORMANCE_KERNELS: WgslFile = (
 /// The conformance harness (`refract_gpu::conformance`).
 pub const CONFORMANCE_MODULE: ShaderModule = ShaderModule {
     name: "conformance",
-    files: &[CORE, PROCEDURAL_SKY, DISTANCE_SEARCH, CONFORMANCE],
+    files: &[CORE, PROCEDURAL_SKY, SPECTRAL, DISTANCE_SEARCH, CONFORMANCE],
 };
 
 /// The module of `src/conformance_kernels.wgsl`.
@@ -40,7 +40,7 @@ pub const CONFORMANCE_KERNELS_MODULE: ShaderModule = ShaderModule {
 };
 
 /// The entry points of the conformance module.
-pub const ENTRY_POINTS: [&str; 20] = [
+pub const ENTRY_POINTS: [&str; 22] = [
     "test_refract",
     "test_reflect",
     "test_face_forward",
@@ -61,6 +61,8 @@ pub const ENTRY_POINTS: [&str; 20] = [
     "test_rough_normal",
     "test_rough_reflected",
     "test_rough_refracted",
+    "test_spectral_tables",
+    "test_spectral_sample",
 ];
 
 /// The entry points of the whole-kernel module (`src/conformance_kernels.wgsl`).

@@ -248,3 +248,28 @@ fn test_rough_refracted(@builtin(global_invocation_id) id: vec3<u32>) {
     let s = sample_rough_interface(in_a[i].xyz, in_b[i].xyz, in_a[i].w, in_b[i].w, row_sample(i));
     out_v[i] = vec4<f32>(s.refracted, s.refracted_masking);
 }
+
+// a = (λ, _, _, _) -> (cie_1931_xyz(λ), cie_d65(λ))
+@compute @workgroup_size(64)
+fn test_spectral_tables(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let lambda = in_a[i].x;
+    out_v[i] = vec4<f32>(cie_1931_xyz(lambda), cie_d65(lambda));
+}
+
+// a = (u, λ, ior, abbe), b = (c0, c1, c2, terminate) -> (λ₀ of wavelengths_sample(u), its
+// weight, sigmoid_spectrum(c, λ), dispersive_ior(ior, abbe, λ)); with b.w > 0.5 the weight is
+// the hero's after wavelengths_terminated.
+@compute @workgroup_size(64)
+fn test_spectral_sample(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    let a = in_a[i];
+    let b = in_b[i];
+    var w = wavelengths_sample(a.x);
+    if b.w > 0.5 {
+        w = wavelengths_terminated(w);
+    }
+    out_v[i] = vec4<f32>(w.lambda.x, w.weight.x, sigmoid_spectrum(b.xyz, a.y), dispersive_ior(a.z, a.w, a.y));
+}

@@ -28,6 +28,7 @@ use refract_core::TirPolicy;
 use refract_core::microfacet::alpha_from_roughness;
 use refract_core::{Camera, gpu::FrameUniforms};
 use refract_geometry::{FlatBvh, Mesh};
+use refract_scene::spectral::{EmitterSpectrum, SpectralLighting, uplift_tables};
 use refract_scene::{
     Aov, Frame, FrameOutputs, InterfaceRule, Layer, RenderError, Scene, TraceMode, TraceSettings,
 };
@@ -39,7 +40,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::frame_uniforms::frame_uniforms;
 use crate::scene_buffers::{EnvironmentUniforms, GpuScene};
 use crate::shaders::{
-    BVH, CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, ShaderModule, WgslFile,
+    BVH, CORE, ENVIRONMENT, FRAME, MATERIALS, PROCEDURAL_SKY, SPECTRAL, ShaderModule, WgslFile,
 };
 
 /// The exact reference's paths (`src/reference.wgsl`).
@@ -58,6 +59,7 @@ pub const REFERENCE_MODULE: ShaderModule = ShaderModule {
     files: &[
         CORE,
         PROCEDURAL_SKY,
+        SPECTRAL,
         FRAME,
         ENVIRONMENT,
         MATERIALS,
@@ -74,6 +76,7 @@ pub const REFERENCE_RAY_QUERY_MODULE: ShaderModule = ShaderModule {
         RAY_QUERY_ENABLE,
         CORE,
         PROCEDURAL_SKY,
+        SPECTRAL,
         FRAME,
         ENVIRONMENT,
         MATERIALS,
@@ -111,7 +114,12 @@ struct TraceUniforms {
     sample_end: u32,
     throughput_cutoff: f32,
     rough: u32,
-    _padding: u32,
+    spectral: u32,
+    uplift_res: u32,
+    env_spectra: u32,
+    _padding: [u32; 2],
+    light_ambient_spectrum: [f32; 4],
+    light_directional_spectrum: [f32; 4],
 }
 
 /// `struct TraceSurface` of `src/reference.wgsl`, one per mesh: a conductor (`eta.w` = 1) or a
@@ -126,6 +134,8 @@ struct TraceSurface {
     outside_ior: f32,
     within: u32,
     alpha: f32,
+    abbe: f32,
+    _padding: [f32; 3],
 }
 
 /// `NO_MEDIUM` of `src/reference.wgsl`: air.
@@ -134,11 +144,15 @@ const NO_MEDIUM: u32 = u32::MAX;
 impl TraceSurface {
     /// A conductor of `roughness` (a diffuse object for `None`).
     fn conductor(conductor: Option<refract_scene::Conductor>, roughness: f32) -> Self {
-        conductor.map_or_else(Self::default, |c| Self {
+        let plain = Self {
+            abbe: f32::INFINITY,
+            ..Self::default()
+        };
+        conductor.map_or(plain, |c| Self {
             eta: c.eta.extend(1.0).to_array(),
             k: c.k.extend(0.0).to_array(),
             alpha: alpha_from_roughness(roughness),
-            ..Self::default()
+            ..plain
         })
     }
 
@@ -155,7 +169,69 @@ impl TraceSurface {
                 .and_then(|w| u32::try_from(w).ok())
                 .unwrap_or(NO_MEDIUM),
             alpha: alpha_from_roughness(refractor.roughness()),
+            abbe: if refractor.is_dispersive() {
+                refractor.abbe()
+            } else {
+                f32::INFINITY
+            },
             ..Self::conductor(refractor.conductor(), refractor.roughness())
+        }
+    }
+}
+
+/// What a dispersive scene's spectral render reads (`spectral_data` of `src/reference.wgsl`):
+/// the uplift table's brightness axis and coefficients, then the lat-long environment's texel
+/// spectra (coefficients and scale) from `env_offset` on; one zero for an RGB scene.
+struct SpectralUpload {
+    data: Vec<f32>,
+    res: u32,
+    env_offset: u32,
+    ambient: [f32; 4],
+    directional: [f32; 4],
+    /// Whether the scene is dispersive (rendered spectrally).
+    enabled: bool,
+}
+
+impl SpectralUpload {
+    fn new(scene: &Scene) -> Self {
+        if !scene.has_dispersion() {
+            return Self {
+                data: vec![0.0],
+                res: 0,
+                env_offset: 0,
+                ambient: [0.0; 4],
+                directional: [0.0; 4],
+                enabled: false,
+            };
+        }
+        let tables = uplift_tables();
+        let table = tables.table();
+        let lighting = SpectralLighting::new(scene, &table);
+        let mut data = Vec::with_capacity(
+            tables.scale().len() + tables.data().len() + 4 * lighting.texels.len(),
+        );
+        data.extend_from_slice(tables.scale());
+        data.extend_from_slice(tables.data());
+        let env_offset = data.len() as u32;
+        for t in &lighting.texels {
+            data.extend_from_slice(&t.coefficients);
+            data.push(t.scale);
+        }
+        let packed = |e: &EmitterSpectrum| {
+            [
+                e.coefficients[0],
+                e.coefficients[1],
+                e.coefficients[2],
+                e.scale,
+            ]
+        };
+        Self {
+            res: tables.res() as u32,
+            env_offset,
+            ambient: packed(&lighting.ambient),
+            directional: packed(&lighting.directional),
+            data,
+            enabled: true,
         }
     }
 }
@@ -216,6 +292,7 @@ impl ReferencePipeline {
                     storage_entry(5, true),
                     storage_entry(6, false),
                     storage_entry(7, false),
+                    storage_entry(8, true),
                 ],
             });
             let bvh_layout = match traversal {
@@ -409,6 +486,8 @@ pub struct GpuReference {
     triangles: wgpu::Buffer,
     /// One [`TraceSurface`] per mesh.
     surfaces: wgpu::Buffer,
+    /// [`SpectralUpload::data`].
+    spectral: wgpu::Buffer,
     uniforms: TraceUniforms,
     /// Samples per dispatch, `None`: [`DEFAULT_PIXEL_SAMPLES_PER_DISPATCH`] over the pixels.
     samples_per_dispatch: Option<u32>,
@@ -507,6 +586,7 @@ impl GpuReference {
             )
             .collect();
         let light = &scene.light;
+        let spectral = SpectralUpload::new(scene);
         let uniforms = TraceUniforms {
             light_direction: light.direction.extend(0.0).to_array(),
             light_radiance: light.radiance.extend(0.0).to_array(),
@@ -522,8 +602,14 @@ impl GpuReference {
             sample_end: 1,
             throughput_cutoff: 0.0,
             rough: u32::from(scene.has_roughness()),
-            _padding: 0,
+            spectral: u32::from(spectral.enabled),
+            uplift_res: spectral.res,
+            env_spectra: spectral.env_offset,
+            _padding: [0; 2],
+            light_ambient_spectrum: spectral.ambient,
+            light_directional_spectrum: spectral.directional,
         };
+        context.check_storage::<f32>("spectral data", spectral.data.len())?;
         Ok(context.checked(|| Self {
             bvh_group,
             _acceleration: acceleration,
@@ -539,6 +625,11 @@ impl GpuReference {
             surfaces: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("reference surfaces"),
                 contents: bytemuck::cast_slice(&surfaces),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+            spectral: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference spectral data"),
+                contents: bytemuck::cast_slice(&spectral.data),
                 usage: wgpu::BufferUsages::STORAGE,
             }),
             uniforms,
@@ -635,16 +726,17 @@ impl GpuReference {
         let device = &context.device;
         let queue = &context.queue;
         queue.write_buffer(&buffers.frame, 0, bytemuck::bytes_of(&frame_uniforms));
-        // The centre path alone when it is the colour (transmission at one sample), else the
-        // samples in batches.
+        // The centre path alone when it is the colour (transmission at one sample, nothing rough
+        // or dispersive), else the samples in batches.
         let mut first = 0;
         loop {
             trace.sample_first = first;
-            trace.sample_end = if trace.mode == 0 && spp == 1 && trace.rough == 0 {
-                0
-            } else {
-                (first + batch).min(spp)
-            };
+            trace.sample_end =
+                if trace.mode == 0 && spp == 1 && trace.rough == 0 && trace.spectral == 0 {
+                    0
+                } else {
+                    (first + batch).min(spp)
+                };
             let last = trace.sample_end == 0 || trace.sample_end == spp;
             // Each batch's uniforms are written before the submission that reads them.
             queue.write_buffer(&buffers.trace, 0, bytemuck::bytes_of(&trace));
@@ -795,6 +887,7 @@ impl GpuReference {
                     entry(5, &self.triangles),
                     entry(6, &color.0),
                     entry(7, &record.0),
+                    entry(8, &self.spectral),
                 ],
             });
             OutputBuffers {

@@ -12,7 +12,12 @@
 // Tracer::full_radiance, its recursion as an explicit stack). One pixel per invocation; the
 // samples of refract_trace::sampling::pixel_sample, a range of them per dispatch (the sum is
 // carried in the colour buffer between dispatches); the ground truth of the pixel-centre path
-// (refract_trace::PathRecord) written per pixel.
+// (refract_trace::PathRecord) written per pixel. A dispersive scene renders spectrally, as the
+// Tracer does: each sample carries the hero wavelengths of refract_trace::sampling's
+// wavelength_sample, a dispersive interface terminates the secondaries and refracts with the
+// hero's index, a path's end is the environment's or a diffuse surface's spectrum at its
+// wavelengths (the uplift table and the environment's texel spectra in `spectral_data`)
+// projected to linear sRGB.
 
 // The per-triangle attributes the hit needs, in the BVH's leaf order.
 struct TraceTriangle {
@@ -52,7 +57,16 @@ struct TraceUniforms {
     throughput_cutoff: f32,
     // 1: some surface is rough (the pixel-centre path is then not the colour).
     rough: u32,
-    _padding: u32,
+    // 1: the scene is dispersive: render spectrally.
+    spectral: u32,
+    // The uplift table's resolution per axis (spectral_data's layout).
+    uplift_res: u32,
+    // Where the lat-long environment's texel spectra start in spectral_data.
+    env_spectra: u32,
+    _padding: vec2<u32>,
+    // The light's ambient and directional terms as emitter spectra (coefficients, scale).
+    light_ambient_spectrum: vec4<f32>,
+    light_directional_spectrum: vec4<f32>,
 }
 
 // What a mesh's surface is, one per mesh in mesh order: a conductor (eta.w = 1; exact Fresnel
@@ -68,6 +82,11 @@ struct TraceSurface {
     within: u32,
     // GGX α of the surface (0: smooth).
     alpha: f32,
+    // Abbe number of a refractor's glass (inf: not dispersive).
+    abbe: f32,
+    _padding0: f32,
+    _padding1: f32,
+    _padding2: f32,
 }
 
 // The medium of air (no refractor).
@@ -83,6 +102,10 @@ const NO_MEDIUM: u32 = 0xffffffffu;
 // then the refractors met (bit i: refractor i).
 @group(0) @binding(7) var<storage, read_write> out_record: array<u32>;
 const RECORD_WORDS: u32 = 27u;
+// refract_scene::spectral for a dispersive scene: the uplift table's brightness axis
+// (uplift_res values), its coefficients (3 uplift_res³ cells of 3), then from env_spectra on
+// four values per lat-long texel (coefficients, scale).
+@group(0) @binding(8) var<storage, read> spectral_data: array<f32>;
 
 // refract_trace's OFFSET: secondary rays start ε (1 + max|pᵢ|) off the surface.
 const TRACE_OFFSET: f32 = 4e-6;
@@ -169,15 +192,183 @@ fn medium_after(refractor: u32, entering: bool) -> u32 {
     return trace_surfaces[refractor].within;
 }
 
-fn shade_object(mesh: u32, h: SceneHit) -> vec3<f32> {
+// Tracer::shade_object: RGB, or for a spectral path SpectralLighting::diffuse at its
+// wavelengths in linear sRGB.
+fn shade_object(mesh: u32, h: SceneHit, spectral: bool, wl: Wavelengths) -> vec3<f32> {
     let m = trace_materials[mesh - trace.refractor_count];
     var uv = h.uv;
     if m.world_uv != 0u {
         uv = h.p.xz;
     }
     let a = albedo(m, uv);
-    return a * (trace.light_ambient.xyz
-        + abs(dot(h.shading, trace.light_direction.xyz)) * trace.light_radiance.xyz);
+    let cos_light = abs(dot(h.shading, trace.light_direction.xyz));
+    if spectral {
+        let c = uplift_fetch(a);
+        var values: vec4<f32>;
+        for (var i = 0u; i < 4u; i++) {
+            let l = wl.lambda[i];
+            values[i] = sigmoid_spectrum(c, l) * (emitter_unlit(trace.light_ambient_spectrum, l)
+                + emitter_unlit(trace.light_directional_spectrum, l) * cos_light) * cie_d65(l);
+        }
+        return wavelengths_to_linear_srgb(wl, values);
+    }
+    return a * (trace.light_ambient.xyz + cos_light * trace.light_radiance.xyz);
+}
+
+// UpliftTable::find_interval: the last k with scale[k] <= z, at most res - 2.
+fn uplift_find_interval(z: f32) -> u32 {
+    let last = trace.uplift_res - 2u;
+    var left = 0u;
+    var size = last;
+    while size > 0u {
+        let half = size >> 1u;
+        let middle = left + half + 1u;
+        if spectral_data[middle] <= z {
+            left = middle;
+            size -= half + 1u;
+        } else {
+            size = half;
+        }
+    }
+    return min(left, last);
+}
+
+// UpliftTable::fetch: the sigmoid coefficients of reflectance `rgb_in` (clamped to [0, 1]).
+fn uplift_fetch(rgb_in: vec3<f32>) -> vec3<f32> {
+    let rgb = clamp(rgb_in, vec3<f32>(0.0), vec3<f32>(1.0));
+    if rgb.x == rgb.y && rgb.y == rgb.z {
+        let v = rgb.x;
+        var c2 = (v - 0.5) / sqrt(v * (1.0 - v));
+        if v <= 0.0 {
+            c2 = -8192.0;
+        } else if v >= 1.0 {
+            c2 = 8192.0;
+        }
+        return vec3<f32>(0.0, 0.0, c2);
+    }
+    let res = trace.uplift_res;
+    let base = res;
+    var i = 0u;
+    for (var j = 1u; j < 3u; j++) {
+        if rgb[j] >= rgb[i] {
+            i = j;
+        }
+    }
+    let z = rgb[i];
+    if z <= 0.0 {
+        return vec3<f32>(spectral_data[base], spectral_data[base + 1u], spectral_data[base + 2u]);
+    }
+    let scale = f32(res - 1u) / z;
+    let x = rgb[(i + 1u) % 3u] * scale;
+    let y = rgb[(i + 2u) % 3u] * scale;
+    let xi = min(u32(x), res - 2u);
+    let yi = min(u32(y), res - 2u);
+    let zi = uplift_find_interval(z);
+    let offset = base + (((i * res + zi) * res + yi) * res + xi) * 3u;
+    let dx = 3u;
+    let dy = 3u * res;
+    let dz = 3u * res * res;
+    let x1 = x - f32(xi);
+    let x0 = 1.0 - x1;
+    let y1 = y - f32(yi);
+    let y0 = 1.0 - y1;
+    let z1 = (z - spectral_data[zi]) / (spectral_data[zi + 1u] - spectral_data[zi]);
+    let z0 = 1.0 - z1;
+    var out: vec3<f32>;
+    for (var c = 0u; c < 3u; c++) {
+        let o = offset + c;
+        out[c] = ((spectral_data[o] * x0 + spectral_data[o + dx] * x1) * y0
+                + (spectral_data[o + dy] * x0 + spectral_data[o + dy + dx] * x1) * y1) * z0
+            + ((spectral_data[o + dz] * x0 + spectral_data[o + dz + dx] * x1) * y0
+                + (spectral_data[o + dz + dy] * x0 + spectral_data[o + dz + dy + dx] * x1) * y1)
+                * z1;
+    }
+    return out;
+}
+
+// EmitterSpectrum::at without D65 (f · S_c(λ)) for (c, f) packed in a vec4.
+fn emitter_unlit(e: vec4<f32>, lambda: f32) -> f32 {
+    return e.w * sigmoid_spectrum(e.xyz, lambda);
+}
+
+// uplift::emission_coefficients: (c, f) of linear-sRGB radiance `rgb`.
+fn emitter_of(rgb: vec3<f32>) -> vec4<f32> {
+    let f = 2.0 * max(max(max(rgb.x, rgb.y), rgb.z), 0.0);
+    return vec4<f32>(uplift_fetch(rgb / max(f, 1e-8)), f);
+}
+
+// SpectralLighting::environment at the wavelengths `lambda`: a lat-long map's texel spectra
+// and scales interpolated apart (Mitsuba 3's spectral envmap), else the emitter of the colour.
+fn environment_spectral(dir: vec3<f32>, lambda: vec4<f32>) -> vec4<f32> {
+    var out: vec4<f32>;
+    if frame.environment_kind == ENVIRONMENT_LATLONG {
+        let width = frame.environment_width;
+        let height = frame.environment_height;
+        let uv = direction_to_latlong(dir);
+        let x = uv.x * f32(width) - 0.5;
+        let y = clamp(uv.y * f32(height - 1u), 0.0, f32(height - 1u));
+        let x0 = floor(x);
+        let y0 = floor(y);
+        let fx = x - x0;
+        let fy = y - y0;
+        let w = i32(width);
+        let xa = u32(((i32(x0) % w) + w) % w);
+        let xb = u32(((i32(x0) + 1) % w + w) % w);
+        let ya = u32(y0);
+        let yb = min(ya + 1u, height - 1u);
+        let taps = array<u32, 4>(ya * width + xa, ya * width + xb, yb * width + xa, yb * width + xb);
+        var t: array<vec4<f32>, 4>;
+        for (var k = 0u; k < 4u; k++) {
+            let o = trace.env_spectra + 4u * taps[k];
+            t[k] = vec4<f32>(spectral_data[o], spectral_data[o + 1u], spectral_data[o + 2u], spectral_data[o + 3u]);
+        }
+        let scale_top = t[0].w + (t[1].w - t[0].w) * fx;
+        let scale_bottom = t[2].w + (t[3].w - t[2].w) * fx;
+        let scale = scale_top + (scale_bottom - scale_top) * fy;
+        for (var i = 0u; i < 4u; i++) {
+            let l = lambda[i];
+            let s0 = sigmoid_spectrum(t[0].xyz, l);
+            let s1 = sigmoid_spectrum(t[1].xyz, l);
+            let s2 = sigmoid_spectrum(t[2].xyz, l);
+            let s3 = sigmoid_spectrum(t[3].xyz, l);
+            let top = s0 + (s1 - s0) * fx;
+            let bottom = s2 + (s3 - s2) * fx;
+            out[i] = (top + (bottom - top) * fy) * scale * frame.environment_intensity * cie_d65(l);
+        }
+        return out;
+    }
+    var rgb = frame.environment_constant.xyz;
+    if frame.environment_kind != ENVIRONMENT_CONSTANT {
+        rgb = procedural_radiance(dir);
+    }
+    let e = emitter_of(rgb);
+    for (var i = 0u; i < 4u; i++) {
+        out[i] = emitter_unlit(e, lambda[i]) * cie_d65(lambda[i]);
+    }
+    return out;
+}
+
+// Radiance arriving along `dir` from the environment: RGB, or the linear sRGB of the spectral
+// radiance at the path's wavelengths.
+fn environment_seen(dir: vec3<f32>, spectral: bool, wl: Wavelengths) -> vec3<f32> {
+    if spectral {
+        return wavelengths_to_linear_srgb(wl, environment_spectral(dir, wl.lambda));
+    }
+    return environment_radiance(dir);
+}
+
+// refract_trace::sampling::wavelength_sample.
+fn wavelength_sample(x: u32, y: u32, index: u32, count: u32) -> f32 {
+    let h = sample_hash(path_root(x, y) ^ 0x5BD1E995u);
+    let shift = f32(h >> 8u) / 16777216.0;
+    let u = (f32(index) + 0.5) / f32(max(count, 1u)) + shift;
+    return select(u, u - 1.0, u >= 1.0);
+}
+
+// Whether refractor `mesh`'s interface is dispersive (its glass or the glass around it).
+fn dispersive_interface(mesh: u32) -> bool {
+    let s = trace_surfaces[mesh];
+    return s.abbe < 3.0e38 || (s.within != NO_MEDIUM && trace_surfaces[s.within].abbe < 3.0e38);
 }
 
 struct PathOut {
@@ -208,8 +399,20 @@ struct Interface {
     transmitted_radiance: f32,
 }
 
-fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
+// `hero` is the wavelength (nm) whose indices a dispersive interface has, or negative for the
+// indices at the d line (Tracer::interface).
+fn interface_at(dir: vec3<f32>, h: SceneHit, hero: f32) -> Interface {
     let surface = trace_surfaces[h.mesh];
+    var ior = surface.ior;
+    var outside_ior = surface.outside_ior;
+    if hero > 0.0 {
+        ior = dispersive_ior(surface.ior, surface.abbe, hero);
+        outside_ior = 1.0;
+        if surface.within != NO_MEDIUM {
+            let o = trace_surfaces[surface.within];
+            outside_ior = dispersive_ior(o.ior, o.abbe, hero);
+        }
+    }
     var i: Interface;
     if trace.interface_rule == 0u {
         i.entering = -dot(dir, h.shading) >= 0.0;
@@ -218,7 +421,7 @@ fn interface_at(dir: vec3<f32>, h: SceneHit) -> Interface {
         i.entering = dot(dir, h.geometric) < 0.0;
         i.facing = face_forward_shading_normal(select(-h.shading, h.shading, i.entering), dir);
     }
-    i.eta = select(surface.ior / surface.outside_ior, surface.outside_ior / surface.ior, i.entering);
+    i.eta = select(ior / outside_ior, outside_ior / ior, i.entering);
     i.transmitted_radiance = 1.0;
     if trace.interface_rule == 0u {
         i.transmitted_radiance = i.eta * i.eta;
@@ -304,8 +507,9 @@ fn interface_sample(key: u32, depth: u32, index: u32) -> vec2<f32> {
 // Tracer::refracted_path: Tracer::transmission_path (`sampled` false: every surface as if
 // smooth) or Tracer::transmission_sample (rough surfaces sampled at sample `index`, from the
 // path-tree node `key_in`).
-fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>, sampled: bool, index: u32, key_in: u32) -> PathOut {
+fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>, sampled: bool, index: u32, key_in: u32, spectral: bool, wl_in: Wavelengths) -> PathOut {
     var out: PathOut;
+    var wl = wl_in;
     var key = key_in;
     var origin = origin_in;
     var dir = dir_in;
@@ -320,7 +524,7 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>, sampled: bool, ind
             if out.p1.w != 0.0 {
                 out.t_out = vec4<f32>(dir, 1.0);
             }
-            out.radiance = scale * environment_radiance(dir);
+            out.radiance = scale * environment_seen(dir, spectral, wl);
             return out;
         }
         let conductor = conductor_of(h.mesh);
@@ -355,14 +559,19 @@ fn transmission_path(origin_in: vec3<f32>, dir_in: vec3<f32>, sampled: bool, ind
                 out.t_out = vec4<f32>(dir, 1.0);
                 out.p_geom = vec4<f32>(h.p, 1.0);
             }
-            out.radiance = scale * shade_object(h.mesh, h);
+            out.radiance = scale * shade_object(h.mesh, h, spectral, wl);
             return out;
         }
         if depth == trace.max_depth {
             out.radiance = vec3<f32>(0.0);
             return out;
         }
-        let side = interface_at(dir, h);
+        var hero = -1.0;
+        if spectral && dispersive_interface(h.mesh) {
+            wl = wavelengths_terminated(wl);
+            hero = wl.lambda.x;
+        }
+        let side = interface_at(dir, h, hero);
         let entering = side.entering;
         let facing = side.facing;
         let eta = side.eta;
@@ -456,6 +665,8 @@ struct Branch {
     medium: u32,
     // Its node in the path tree (refract_trace's PathSampler::key).
     key: u32,
+    // The weights of the sample's wavelengths on this branch (Wavelengths::weight).
+    wl_weight: vec4<f32>,
 }
 
 // Pending branches never outnumber the depth limit (their depths strictly increase from the
@@ -467,12 +678,12 @@ const FULL_STACK: u32 = 64u;
 // with their exact reflectance, branches under the throughput cutoff or past the depth limit
 // dropped; rough surfaces split about one visible microfacet normal drawn at the branch's node
 // for sample `index`. Returns the radiance and (w) the closest-hit queries traced.
-fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec4<f32> {
+fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32, spectral: bool, wl_in: Wavelengths) -> vec4<f32> {
     var stack: array<Branch, FULL_STACK>;
     var top = 0u;
     var radiance = vec3<f32>(0.0);
     var rays = 0u;
-    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0), NO_MEDIUM, key);
+    var b = Branch(origin, 0u, dir, 1.0, vec3<f32>(1.0), NO_MEDIUM, key, wl_in.weight);
     let cutoff = trace.throughput_cutoff;
     loop {
         let h = scene_hit(b.origin, b.dir);
@@ -480,8 +691,9 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec
         b.weight *= absorbed(b.medium, select(BVH_INF, h.t, h.found));
         // Whether the branch ended here (its contribution, if any, added).
         var ended = true;
+        let wl = Wavelengths(wl_in.lambda, b.wl_weight);
         if !h.found {
-            radiance += b.weight * environment_radiance(b.dir);
+            radiance += b.weight * environment_seen(b.dir, spectral, wl);
         } else {
             let conductor = conductor_of(h.mesh);
             if conductor[0].x != 0.0 {
@@ -491,14 +703,19 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec
                     let reflectance = bounce.weight;
                     let throughput = b.throughput * max(max(reflectance.x, reflectance.y), reflectance.z);
                     if throughput > cutoff {
-                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED));
+                        b = Branch(continue_origin(h, next), b.depth + 1u, next, throughput, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED), b.wl_weight);
                         ended = false;
                     }
                 }
             } else if h.mesh >= trace.refractor_count {
-                radiance += b.weight * shade_object(h.mesh, h);
+                radiance += b.weight * shade_object(h.mesh, h, spectral, wl);
             } else if b.depth < trace.max_depth {
-                let i = interface_at(b.dir, h);
+                var hero = -1.0;
+                if spectral && dispersive_interface(h.mesh) {
+                    b.wl_weight = wavelengths_terminated(wl).weight;
+                    hero = wl.lambda.x;
+                }
+                let i = interface_at(b.dir, h, hero);
                 let alpha = trace_surfaces[h.mesh].alpha;
                 // The two lobes: direction and weight of each.
                 var reflected_dir: vec3<f32>;
@@ -525,7 +742,7 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec
                 let depth = b.depth + 1u;
                 if reflected {
                     let next = reflected_dir;
-                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED));
+                    let branch = Branch(continue_origin(h, next), depth, next, b.throughput * reflectance, b.weight * reflectance, b.medium, path_child(b.key, REFLECTED), b.wl_weight);
                     // (The stack cannot be full: see FULL_STACK.)
                     if transmitted && top < FULL_STACK {
                         stack[top] = branch;
@@ -545,6 +762,7 @@ fn full_radiance(origin: vec3<f32>, dir: vec3<f32>, index: u32, key: u32) -> vec
                         b.weight * (transmittance * i.transmitted_radiance),
                         medium_after(h.mesh, i.entering),
                         path_child(b.key, TRANSMITTED),
+                        b.wl_weight,
                     );
                     ended = false;
                 }
@@ -573,9 +791,9 @@ fn trace_reference(@builtin(global_invocation_id) id: vec3<u32>) {
     if trace.sample_first > 0u {
         sum = out_color[i];
     } else {
-        let centre_is_colour = trace.mode == 0u && trace.spp == 1u && trace.rough == 0u;
+        let centre_is_colour = trace.mode == 0u && trace.spp == 1u && trace.rough == 0u && trace.spectral == 0u;
         if centre_is_colour || trace.write_records != 0u {
-            let path = transmission_path(frame.eye.xyz, pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5)), false, 0u, 0u);
+            let path = transmission_path(frame.eye.xyz, pixel_ray_dir(vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5)), false, 0u, 0u, false, Wavelengths(vec4<f32>(0.0), vec4<f32>(0.0)));
             write_record(i, path);
             if centre_is_colour {
                 out_color[i] = vec4<f32>(path.radiance, f32(path.rays));
@@ -588,11 +806,16 @@ fn trace_reference(@builtin(global_invocation_id) id: vec3<u32>) {
         let offset = pixel_sample(id.x, id.y, s, trace.spp);
         let dir = pixel_ray_dir(vec2<f32>(f32(id.x), f32(id.y)) + offset);
         let key = path_root(id.x, id.y);
+        let spectral = trace.spectral != 0u;
+        var wl = Wavelengths(vec4<f32>(0.0), vec4<f32>(0.0));
+        if spectral {
+            wl = wavelengths_sample(wavelength_sample(id.x, id.y, s, trace.spp));
+        }
         if trace.mode == 0u {
-            let path = transmission_path(frame.eye.xyz, dir, true, s, key);
+            let path = transmission_path(frame.eye.xyz, dir, true, s, key, spectral, wl);
             sum += vec4<f32>(path.radiance, f32(path.rays));
         } else {
-            sum += full_radiance(frame.eye.xyz, dir, s, key);
+            sum += full_radiance(frame.eye.xyz, dir, s, key, spectral, wl);
         }
     }
     if trace.sample_end == trace.spp {

@@ -15,6 +15,8 @@ pub type WgslFile = (&'static str, &'static str);
 pub const CORE: WgslFile = ("core.wgsl", refract_core::wgsl::CORE);
 /// The procedural sky (`refract_core::wgsl`).
 pub const PROCEDURAL_SKY: WgslFile = ("procedural_sky.wgsl", refract_core::wgsl::PROCEDURAL_SKY);
+/// refract-core's spectral functions (`refract_core::wgsl::SPECTRAL`).
+pub const SPECTRAL: WgslFile = ("spectral.wgsl", refract_core::wgsl::SPECTRAL);
 /// The frame uniforms, coverage codes, the unknown-code colour.
 pub const FRAME: WgslFile = ("frame.wgsl", include_str!("../shaders/frame.wgsl"));
 /// The environment lookup.

@@ -17,6 +17,7 @@ use refract_core::microfacet::{ggx_d, sample_rough_interface, smith_g1, visible_
 use refract_core::nearby_geometry::{Plane, screen_fraction_to_segment};
 use refract_core::optics::{critical_angle, face_forward_shading_normal, reflect, refract};
 use refract_core::procedural_sky::procedural_radiance;
+use refract_core::spectral::{Wavelengths, cie_1931_xyz, d65, dispersive_ior, sigmoid_spectrum};
 use refract_core::vector::{angle_between, robust_normalize};
 use refract_gpu::conformance::evaluate;
 
@@ -154,6 +155,36 @@ proptest! {
         // The sky has hard edges (checker squares, stripes, sun): a direction within rounding of
         // an edge may land on the other side. Allow one such row per batch.
         prop_assert!(sky_mismatch <= 1, "{} sky mismatches", sky_mismatch);
+    }
+
+    /// The spectral tables and functions (spectral/mod.rs): CIE 1931 and D65 by wavelength
+    /// (inside and outside 360–830 nm), the hero wavelength and its weight before and after
+    /// termination, sigmoid spectra (finite and infinite `c₂`) and the dispersive index.
+    #[test]
+    fn spectral_functions_agree(rows in prop::collection::vec((300f32..900.0, 0f32..1.0, 1.0f32..2.5, 1.0f32..100.0, (-1e-4f32..1e-4, -0.1f32..0.1, -30.0f32..30.0), any::<bool>()), ROWS)) {
+        let context = gpu_or_skip!();
+        let a: Vec<Vec4> = rows.iter().map(|(l, u, ior, abbe, _, _)| Vec4::new(*u, *l, *ior, *abbe)).collect();
+        let b: Vec<Vec4> = rows.iter().enumerate().map(|(k, (_, _, _, _, c, terminate))| {
+            // Every eighth row's c₂ is infinite (the constant 0 or 1).
+            let c2 = if k % 8 == 0 { f32::INFINITY.copysign(c.2) } else { c.2 };
+            Vec4::new(c.0, c.1, c2, if *terminate { 1.0 } else { 0.0 })
+        }).collect();
+        let tables = evaluate(context, "test_spectral_tables", &a.iter().map(|r| Vec4::splat(r.y)).collect::<Vec<_>>(), &a).expect("gpu");
+        let sampled = evaluate(context, "test_spectral_sample", &a, &b).expect("gpu");
+        for (k, (lambda, u, ior, abbe, _, terminate)) in rows.iter().enumerate() {
+            let xyz = cie_1931_xyz(*lambda);
+            prop_assert!(close3(tables[k], xyz, 1e-5) && close(tables[k].w, d65(*lambda), 1e-5), "{} nm: {} vs {} {}", lambda, tables[k], xyz, d65(*lambda));
+            let mut w = Wavelengths::sample(*u);
+            if *terminate {
+                w.terminate_secondary();
+            }
+            // λ spans 360-830 nm and the weight grows steeply at the ends: relative terms.
+            prop_assert!((sampled[k].x - w.lambda[0]).abs() <= 1e-4 * w.lambda[0], "λ {} vs {}", sampled[k].x, w.lambda[0]);
+            prop_assert!((sampled[k].y - w.weight[0]).abs() <= 1e-4 * w.weight[0], "weight {} vs {}", sampled[k].y, w.weight[0]);
+            let c = [b[k].x, b[k].y, b[k].z];
+            prop_assert!(close(sampled[k].z, sigmoid_spectrum(c, *lambda), 1e-5), "S {} vs {}", sampled[k].z, sigmoid_spectrum(c, *lambda));
+            prop_assert!(close(sampled[k].w, dispersive_ior(*ior, *abbe, *lambda), 1e-5));
+        }
     }
 
     /// GGX's distribution, Smith's masking and the visible normals' density (microfacet.rs).
