@@ -216,6 +216,9 @@ fn gpu_frames_agree_with_cpu_frames() {
             .scene,
     );
     check("engine-failures", &failures, &mut gpu);
+    // Dispersive glass: three.js's three lookups per pixel on both backends.
+    let prism = Arc::new(load_scene("prism").expect("prism").scene);
+    check("prism", &prism, &mut gpu);
     if let Some(data) = shared_data() {
         check("cow", &shared(&data, "cow.obj", 1.2), &mut gpu);
     }

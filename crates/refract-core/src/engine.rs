@@ -93,6 +93,25 @@ pub enum EngineModel {
     },
 }
 
+impl EngineModel {
+    /// Half the spread of the three indices this model refracts with on glass of index `ior`
+    /// and Abbe number `abbe` (0: one index, no dispersion). Only three.js disperses among the
+    /// models here: its `transmission_pars_fragment` (r163 on, `USE_DISPERSION`) refracts each
+    /// RGB channel with its own index, `ior − s`, `ior`, `ior + s` for red, green, blue, with
+    /// `s = (ior − 1) · 0.025 · dispersion` and glTF's `dispersion = 20 / V_d`, and reads
+    /// channel `i` of lookup `i`. Bevy, Godot and HDRP have no dispersion; Filament's
+    /// (four wavelengths, `solid` only) is not re-implemented.
+    pub fn dispersion_half_spread(&self, ior: f32, abbe: f32) -> f32 {
+        match self {
+            Self::VolumeThickness {
+                reject_nearer: false,
+                ..
+            } if abbe.is_finite() => (ior - 1.0) * 0.025 * (20.0 / abbe),
+            _ => 0.0,
+        }
+    }
+}
+
 /// The screen texture of the opaque objects, as an engine's lookup reads it: the view depth of
 /// what texel `(x, y)` shows (`f32::INFINITY` where it shows the environment).
 pub trait OpaqueDepth {
@@ -494,6 +513,34 @@ impl EngineUniforms {
 
 #[cfg(test)]
 mod tests {
+
+    /// three.js's half spread `(ior − 1) · 0.025 · 20 / V_d` on its model only.
+    #[test]
+    fn only_threejs_disperses() {
+        let three = EngineModel::VolumeThickness {
+            thickness: 1.0,
+            reject_nearer: false,
+        };
+        assert!((three.dispersion_half_spread(1.5, 30.0) - 0.5 * 0.025 * 20.0 / 30.0).abs() < 1e-9);
+        assert_eq!(three.dispersion_half_spread(1.5, f32::INFINITY), 0.0);
+        let bevy = EngineModel::VolumeThickness {
+            thickness: 1.0,
+            reject_nearer: true,
+        };
+        let godot = EngineModel::ScreenOffset {
+            scale: 0.05,
+            depth_guard: true,
+        };
+        let hdrp = EngineModel::Proxy {
+            shape: ProxyShape::Sphere,
+            thickness: 1.0,
+            lookup: ProxyLookup::Hdrp,
+        };
+        for other in [bevy, godot, hdrp] {
+            assert_eq!(other.dispersion_half_spread(1.5, 30.0), 0.0, "{other:?}");
+        }
+    }
+
     use super::*;
     use crate::camera::CameraDesc;
     use crate::nearby_geometry::view_depth;

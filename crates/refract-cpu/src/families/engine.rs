@@ -86,8 +86,8 @@ pub struct EnginePasses {
     meshes: NearbyMeshes,
     /// Refractor `k`'s nearest front faces in `fronts[k]`.
     fronts: Vec<SurfaceBuffer>,
-    /// Refractor `k`'s model and IOR.
-    refractors: Vec<(EngineModel, f32)>,
+    /// Refractor `k`'s model, IOR and dispersion half spread.
+    refractors: Vec<(EngineModel, f32, f32)>,
     screen: NearbyTexture,
     aovs: Vec<EngineAov>,
 }
@@ -107,8 +107,15 @@ impl CpuFamily for EnginePasses {
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
         self.refractors.clear();
-        self.refractors
-            .extend(scene.refractors().map(|r| (params.model(r), r.ior())));
+        self.refractors.extend(scene.refractors().map(|r| {
+            let model = params.model(r);
+            let spread = if r.is_dispersive() {
+                model.dispersion_half_spread(r.ior(), r.abbe())
+            } else {
+                0.0
+            };
+            (model, r.ior(), spread)
+        }));
         // Without opaque objects the screen texture is the environment everywhere: not drawn.
         let screen = (!scene.objects.is_empty()).then(|| {
             self.screen.render_into(scene, &self.meshes, camera);
@@ -148,8 +155,8 @@ impl CpuFamily for EnginePasses {
 struct PixelContext<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
-    /// Refractor `k`'s model and IOR.
-    refractors: &'a [(EngineModel, f32)],
+    /// Refractor `k`'s model, IOR and dispersion half spread.
+    refractors: &'a [(EngineModel, f32, f32)],
     /// Refractor `k`'s front faces.
     fronts: &'a [SurfaceBuffer],
     /// The opaque objects' screen texture; `None` for a scene without objects.
@@ -215,7 +222,7 @@ impl PixelContext<'_> {
                     }
                 }
                 None => {
-                    self.screen(x, texel, 1.0, colors, &mut lanes);
+                    self.screen(x, texel, Vec3::ONE, colors, &mut lanes);
                     if let Some(aovs) = aovs.as_deref_mut() {
                         aovs[x as usize] = EngineAov::NONE;
                     }
@@ -262,7 +269,9 @@ impl PixelContext<'_> {
 
     /// Eight pixels of row `y` where refractor `k` is drawn (padding repeats lane 0): their
     /// front surfaces eight at a time (bit-identical to one at a time), the engine's path with
-    /// refractor `k`'s model and IOR, then its reads.
+    /// refractor `k`'s model and IOR, then its reads; a dispersive model (three.js's,
+    /// [`EngineModel::dispersion_half_spread`]) takes one path per channel, each channel read
+    /// from its own, the AOVs from the middle one.
     fn refractor(
         &self,
         group: &PixelGroup,
@@ -273,7 +282,7 @@ impl PixelContext<'_> {
         mut aovs: Option<&mut [EngineAov]>,
     ) {
         let fronts = self.fronts[k].texels_x8(&group.x, y);
-        let (model, ior) = self.refractors[k];
+        let (model, ior, spread) = self.refractors[k];
         let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
         for (i, f) in fronts.iter().enumerate() {
             p1[i] = f.p_ws;
@@ -281,16 +290,44 @@ impl PixelContext<'_> {
         }
         let (p1, n1) = (&p1, &n1);
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
-        let paths = engine_path_x8(
-            self.camera,
-            &ScreenDepth(self.screen),
-            &uv,
-            p1,
-            n1,
-            ior,
-            model,
-        );
-        for (&x, path) in group.x.iter().zip(&paths).take(group.len) {
+        let one = [(ior, Vec3::ONE)];
+        let per_channel = [
+            (ior - spread, Vec3::X),
+            (ior, Vec3::Y),
+            (ior + spread, Vec3::Z),
+        ];
+        let passes: &[(f32, Vec3)] = if spread > 0.0 { &per_channel } else { &one };
+        for (pass, &(ior, channels)) in passes.iter().enumerate() {
+            let paths = engine_path_x8(
+                self.camera,
+                &ScreenDepth(self.screen),
+                &uv,
+                p1,
+                n1,
+                ior,
+                model,
+            );
+            let aovs = if pass == passes.len() / 2 {
+                aovs.as_deref_mut()
+            } else {
+                None
+            };
+            self.read_paths(group, &paths, channels, colors, lanes, aovs);
+        }
+    }
+
+    /// Adds the reads of `paths` (lane `i` for pixel `group.x[i]`) times `channels` to the
+    /// pixels' colours, and their AOVs when asked.
+    fn read_paths(
+        &self,
+        group: &PixelGroup,
+        paths: &[refract_core::engine::EnginePath; LANES],
+        channels: Vec3,
+        colors: &mut [Vec3],
+        lanes: &mut EnvironmentLanes<'_>,
+        mut aovs: Option<&mut [EngineAov]>,
+    ) {
+        for (&x, path) in group.x.iter().zip(paths).take(group.len) {
             let mut aov = EngineAov {
                 covered: true,
                 p2: path.p2,
@@ -299,7 +336,7 @@ impl PixelContext<'_> {
                 ..EngineAov::NONE
             };
             if path.screen_weight > 0.0 {
-                self.screen(x, path.texel, path.screen_weight, colors, lanes);
+                self.screen(x, path.texel, path.screen_weight * channels, colors, lanes);
                 if let Some(t) = self.object(path.texel) {
                     aov.p_geom = t.surface.p_ws;
                     aov.ng_texel =
@@ -307,7 +344,8 @@ impl PixelContext<'_> {
                 }
             }
             if path.screen_weight < 1.0 {
-                lanes.push(x, path.environment_dir, 1.0 - path.screen_weight, colors);
+                let weight = (1.0 - path.screen_weight) * channels;
+                lanes.push(x, path.environment_dir, weight, colors);
             }
             if let Some(aovs) = aovs.as_deref_mut() {
                 aovs[x as usize] = aov;
@@ -329,7 +367,7 @@ impl PixelContext<'_> {
         &self,
         x: u32,
         texel: UVec2,
-        weight: f32,
+        weight: Vec3,
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
     ) {
@@ -350,7 +388,7 @@ struct EnvironmentLanes<'a> {
     x: [u32; LANES],
     dirs: [Vec3; LANES],
     texels: [Option<Vec2>; LANES],
-    weights: [f32; LANES],
+    weights: [Vec3; LANES],
     len: usize,
 }
 
@@ -362,26 +400,26 @@ impl<'a> EnvironmentLanes<'a> {
             x: [0; LANES],
             dirs: [Vec3::Z; LANES],
             texels: [None; LANES],
-            weights: [0.0; LANES],
+            weights: [Vec3::ZERO; LANES],
             len: 0,
         }
     }
 
     /// Queues `weight · L(dir)` for pixel `x`.
     #[inline]
-    fn push(&mut self, x: u32, dir: Vec3, weight: f32, colors: &mut [Vec3]) {
+    fn push(&mut self, x: u32, dir: Vec3, weight: Vec3, colors: &mut [Vec3]) {
         self.queue(x, dir, None, weight, colors);
     }
 
     /// Queues `weight · L(eye ray through the centre of texel)` for pixel `x`.
     #[inline]
-    fn push_texel(&mut self, x: u32, texel: UVec2, weight: f32, colors: &mut [Vec3]) {
+    fn push_texel(&mut self, x: u32, texel: UVec2, weight: Vec3, colors: &mut [Vec3]) {
         let uv = Camera::pixel_center(texel.x, texel.y);
         self.queue(x, Vec3::Z, Some(uv), weight, colors);
     }
 
     #[inline]
-    fn queue(&mut self, x: u32, dir: Vec3, texel: Option<Vec2>, weight: f32, colors: &mut [Vec3]) {
+    fn queue(&mut self, x: u32, dir: Vec3, texel: Option<Vec2>, weight: Vec3, colors: &mut [Vec3]) {
         self.x[self.len] = x;
         self.dirs[self.len] = dir;
         self.texels[self.len] = texel;

@@ -141,8 +141,10 @@ impl GpuFamily for EnginePipelines {
     }
 }
 
-/// Refractor `k`'s `(IOR, amount, 0, 0)` in entry `k` (`engine.wgsl`'s `engine_refractors`):
-/// the IOR and the model's `amount` ([`EngineUniforms::amount`]) of `params` on that refractor.
+/// Refractor `k`'s `(IOR, amount, spread, 0)` in entry `k` (`engine.wgsl`'s
+/// `engine_refractors`): the IOR, the model's `amount` ([`EngineUniforms::amount`]) of `params`
+/// on that refractor and its dispersion half spread
+/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index).
 fn refractor_table(
     scene: &refract_scene::Scene,
     params: &EngineParams,
@@ -150,8 +152,14 @@ fn refractor_table(
 ) -> [[f32; 4]; MAX_REFRACTORS] {
     let mut table = [[0.0; 4]; MAX_REFRACTORS];
     for (entry, refractor) in table.iter_mut().zip(scene.refractors()) {
-        let amount = EngineUniforms::new(camera, &params.model(refractor), false).amount;
-        *entry = [refractor.ior(), amount, 0.0, 0.0];
+        let model = params.model(refractor);
+        let amount = EngineUniforms::new(camera, &model, false).amount;
+        let spread = if refractor.is_dispersive() {
+            model.dispersion_half_spread(refractor.ior(), refractor.abbe())
+        } else {
+            0.0
+        };
+        *entry = [refractor.ior(), amount, spread, 0.0];
     }
     table
 }

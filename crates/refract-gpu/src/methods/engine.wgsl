@@ -10,7 +10,7 @@
 // from `engine_refractors`, over the screen texture of the opaque objects only, as the engines
 // draw several transmissive objects.
 
-// Refractor k's (IOR, amount, 0, 0): crates/refract-gpu/src/methods/engine.rs.
+// Refractor k's (IOR, amount, dispersion half spread, 0): crates/refract-gpu/src/methods/engine.rs.
 @group(0) @binding(17) var<uniform> engine_refractors: array<vec4<f32>, MAX_REFRACTORS>;
 
 // The screen texel: xyz = P, w = 1 where it holds an object.
@@ -86,14 +86,36 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
     let n1 = select(px.n1, n4.xyz, n4.w > 0.5);
     let k = min(u32(round(textureLoad(front_n1, texel, 0).w)) - 1u, MAX_REFRACTORS - 1u);
     let refractor = engine_refractors[k];
-    let path = engine_path(px.uv, px.p1, n1, refractor.x, refractor.y);
+    // three.js's dispersion (refract_core::engine::EngineModel::dispersion_half_spread): one
+    // path per channel at ior − s, ior, ior + s, channel c read from path c; the AOVs from the
+    // middle one. Without it one path for all three channels.
+    let spread = refractor.z;
+    var passes = 1u;
+    if spread > 0.0 {
+        passes = 3u;
+    }
     var color = vec3<f32>(0.0);
-    if path.screen_weight > 0.0 {
-        color += path.screen_weight * screen_color(path.texel);
+    var middle: EnginePath;
+    for (var lookup = 0u; lookup < passes; lookup++) {
+        var ior = refractor.x;
+        var channels = vec3<f32>(1.0);
+        if passes == 3u {
+            ior = refractor.x + (f32(lookup) - 1.0) * spread;
+            channels = vec3<f32>(0.0);
+            channels[lookup] = 1.0;
+        }
+        let path = engine_path(px.uv, px.p1, n1, ior, refractor.y);
+        if path.screen_weight > 0.0 {
+            color += (path.screen_weight * channels) * screen_color(path.texel);
+        }
+        if path.screen_weight < 1.0 {
+            color += ((1.0 - path.screen_weight) * channels) * environment_radiance(path.environment_dir);
+        }
+        if lookup == passes / 2u {
+            middle = path;
+        }
     }
-    if path.screen_weight < 1.0 {
-        color += (1.0 - path.screen_weight) * environment_radiance(path.environment_dir);
-    }
+    let path = middle;
     out_color[i] = vec4<f32>(color, f32(COVERAGE_PATH));
     write_engine_aovs(i, path, true);
 }

@@ -165,7 +165,7 @@ const GUARD_PARAM: ParamSpec = ParamSpec {
 };
 const DEPTH_TEST_PARAM: ParamSpec = ParamSpec {
     name: "depth-test",
-    doc: "none: three.js (samples in front of the glass show through); reject: Bevy (such samples become the environment along normalize(I + d T))",
+    doc: "none: three.js (samples in front of the glass show through; dispersive glass refracts each RGB channel with its own index); reject: Bevy (such samples become the environment along normalize(I + d T))",
     kind: ParamKind::Choice(&DEPTH_TEST_CHOICES),
     default: "none",
 };
