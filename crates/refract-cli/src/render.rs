@@ -150,9 +150,20 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         &mut frame,
     )?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
+    let backend_id = match (method.id(), backend) {
+        (MethodId::Reference, BackendId::Cpu) => BackendId::Trace,
+        (_, backend) => backend,
+    };
+    let description = refract_lab::provenance::frame_description(
+        &renders.scene().name,
+        &method,
+        backend_id.id(),
+        renders.adapter(),
+        (width, height),
+    );
     match extension.as_deref() {
-        Some("exr") => frame.write_exr(&args.out)?,
-        _ => frame.write_png(&args.out)?,
+        Some("exr") => frame.write_exr_described(&args.out, &description)?,
+        _ => frame.write_png_described(&args.out, &description)?,
     }
     println!(
         "{} {} {width}x{height} in {ms:.1} ms -> {}",

@@ -164,6 +164,9 @@ fn compare_writes_metrics_images_and_reports() {
         "layer_miss_share",
         "zoom_share",
         "ms_per_frame",
+        "device",
+        "version",
+        "commit",
     ];
     for record in records {
         let object = record.as_object().expect("object");
@@ -243,6 +246,33 @@ fn render_writes_png_and_exr() {
         // A CPU render names no GPU.
         assert!(!stderr(&output).contains("GPU: "), "{}", stderr(&output));
     }
+    // The PNG says what made it (issue 51 #6): method, parameters, backend, device, scene,
+    // resolution, version and commit as text chunks.
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(dir.path().join("w.png")).expect("open"),
+    ));
+    let reader = decoder.read_info().expect("png");
+    let text: std::collections::HashMap<String, String> = reader
+        .info()
+        .utf8_text
+        .iter()
+        .map(|c| (c.keyword.clone(), c.get_text().expect("utf-8")))
+        .collect();
+    for (keyword, value) in [
+        ("refract.scene", "torus"),
+        ("refract.method", "wyman"),
+        ("refract.backend", "cpu"),
+        ("refract.resolution", "40x30"),
+        ("refract.version", env!("CARGO_PKG_VERSION")),
+    ] {
+        assert_eq!(
+            text.get(keyword).map(String::as_str),
+            Some(value),
+            "{text:?}"
+        );
+    }
+    assert!(text["refract.params"].contains("back=furthest"), "{text:?}");
+    assert!(!text["refract.device"].is_empty() && !text["refract.commit"].is_empty());
     // A GPU render says which adapter the frame came from (issue 51), as compare and bench do.
     if std::env::var("REFRACT_REQUIRE_GPU").is_err() && refract_gpu::GpuContext::new().is_err() {
         println!("skipped: no GPU adapter for --backend gpu");

@@ -279,6 +279,27 @@ pub fn write_png_rgb8(
     })
 }
 
+/// [`write_png_rgb8`] with `description`'s `(keyword, text)` pairs as the PNG's international
+/// text chunks (`iTXt`, UTF-8; keywords of 1 to 79 Latin-1 characters), which image viewers
+/// and `exiftool` show.
+pub fn write_png_rgb8_described(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+    description: &[(&str, String)],
+) -> Result<(), SceneError> {
+    write_atomically(path, "the PNG", |w| -> Result<(), png::EncodingError> {
+        let mut encoder = png::Encoder::new(w, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        for (keyword, text) in description {
+            encoder.add_itxt_chunk((*keyword).to_owned(), text.clone())?;
+        }
+        encoder.write_header()?.write_image_data(pixels)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

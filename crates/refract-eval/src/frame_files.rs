@@ -6,7 +6,7 @@ use std::path::Path;
 use glam::Vec3;
 use refract_scene::{Aov, AovKind, Frame, MAX_FRAME_SIZE, SceneError};
 
-use crate::atomic_write::{write_atomically, write_png_rgb8};
+use crate::atomic_write::{write_atomically, write_png_rgb8_described};
 use crate::environment_files::exr_size;
 use crate::images::check_finite;
 
@@ -20,17 +20,40 @@ pub trait FrameFiles: Sized {
     /// all 32-bit float. Written atomically (no partial file on failure). A frame with a
     /// non-finite colour is an error naming the count and the first pixel (layers may hold NaN:
     /// "no value here").
-    fn write_exr(&self, path: &Path) -> Result<(), SceneError>;
+    fn write_exr(&self, path: &Path) -> Result<(), SceneError> {
+        self.write_exr_described(path, &[])
+    }
+    /// [`FrameFiles::write_exr`] saying what made the frame: `description`'s `(name, text)`
+    /// pairs as text attributes of the EXR's header (text an EXR cannot hold, outside
+    /// Latin-1, has its characters replaced by `?`).
+    fn write_exr_described(
+        &self,
+        path: &Path,
+        description: &[(&str, String)],
+    ) -> Result<(), SceneError>;
     /// Writes the colour as an 8-bit sRGB PNG after [`refract_scene::tonemap::to_srgb8`],
     /// atomically.
-    fn write_png(&self, path: &Path) -> Result<(), SceneError>;
+    fn write_png(&self, path: &Path) -> Result<(), SceneError> {
+        self.write_png_described(path, &[])
+    }
+    /// [`FrameFiles::write_png`] with `description` as text chunks
+    /// ([`crate::atomic_write::write_png_rgb8_described`]).
+    fn write_png_described(
+        &self,
+        path: &Path,
+        description: &[(&str, String)],
+    ) -> Result<(), SceneError>;
     /// Reads a frame written by [`FrameFiles::write_exr`]: the colour and every layer whose
     /// channels are present (the ray count is not stored: 0).
     fn read_exr(path: &Path) -> Result<Self, SceneError>;
 }
 
 impl FrameFiles for Frame {
-    fn write_exr(&self, path: &Path) -> Result<(), SceneError> {
+    fn write_exr_described(
+        &self,
+        path: &Path,
+        description: &[(&str, String)],
+    ) -> Result<(), SceneError> {
         use exr::prelude::*;
         check_finite(path, self.width, &self.color)?;
         let mut channels = Vec::new();
@@ -66,9 +89,22 @@ impl FrameFiles for Frame {
             line_order: LineOrder::Increasing,
             ..Encoding::default()
         };
+        let mut attributes = LayerAttributes::default();
+        let latin1 = |text: &str| {
+            let kept: String = text
+                .chars()
+                .map(|c| if u32::from(c) < 256 { c } else { '?' })
+                .collect();
+            Text::new_or_none(kept.as_str())
+        };
+        for (name, text) in description {
+            if let (Some(name), Some(text)) = (latin1(name), latin1(text)) {
+                attributes.other.insert(name, AttributeValue::Text(text));
+            }
+        }
         let layer = Layer::new(
             size,
-            LayerAttributes::default(),
+            attributes,
             encoding,
             AnyChannels::sort(channels.into()),
         );
@@ -76,14 +112,18 @@ impl FrameFiles for Frame {
         write_atomically(path, "the EXR", |w| image.write().to_buffered(w))
     }
 
-    fn write_png(&self, path: &Path) -> Result<(), SceneError> {
+    fn write_png_described(
+        &self,
+        path: &Path,
+        description: &[(&str, String)],
+    ) -> Result<(), SceneError> {
         check_finite(path, self.width, &self.color)?;
         let pixels: Vec<u8> = self
             .color
             .iter()
             .flat_map(|&c| refract_scene::tonemap::to_srgb8(c))
             .collect();
-        write_png_rgb8(path, self.width, self.height, &pixels)
+        write_png_rgb8_described(path, self.width, self.height, &pixels, description)
     }
 
     fn read_exr(path: &Path) -> Result<Frame, SceneError> {
@@ -174,6 +214,70 @@ impl FrameFiles for Frame {
 
 #[cfg(test)]
 mod tests {
+
+    /// Issue 51 #6: a described EXR carries its description as header text attributes and a
+    /// described PNG as iTXt chunks, read back by the exr and png crates.
+    #[test]
+    fn described_files_carry_their_description() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut frame = Frame::default();
+        frame.reset(3, 2);
+        let description = [
+            ("refract.method", "wyman".to_owned()),
+            (
+                "refract.device",
+                "llvmpipe (LLVM 15, 256 bits) – Vulkan".to_owned(),
+            ),
+        ];
+        let exr_path = dir.path().join("f.exr");
+        frame
+            .write_exr_described(&exr_path, &description)
+            .expect("exr");
+        let image = {
+            use exr::prelude::ReadChannels as _;
+            use exr::prelude::ReadLayers as _;
+            exr::prelude::read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .all_channels()
+                .first_valid_layer()
+                .all_attributes()
+                .from_file(&exr_path)
+                .expect("read exr")
+        };
+        let other = &image.layer_data.attributes.other;
+        let text = |name: &str| match other.get(&exr::prelude::Text::from(name)) {
+            Some(exr::prelude::AttributeValue::Text(t)) => t.to_string(),
+            other => panic!("{name}: {other:?}"),
+        };
+        assert_eq!(text("refract.method"), "wyman");
+        // Outside Latin-1 (the en dash) becomes `?`.
+        assert_eq!(
+            text("refract.device"),
+            "llvmpipe (LLVM 15, 256 bits) ? Vulkan"
+        );
+        let png_path = dir.path().join("f.png");
+        frame
+            .write_png_described(&png_path, &description)
+            .expect("png");
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&png_path).expect("open"),
+        ));
+        let reader = decoder.read_info().expect("png info");
+        let chunks: Vec<(String, String)> = reader
+            .info()
+            .utf8_text
+            .iter()
+            .map(|c| (c.keyword.clone(), c.get_text().expect("utf-8 text")))
+            .collect();
+        for (keyword, text) in &description {
+            assert!(
+                chunks.contains(&((*keyword).to_owned(), text.clone())),
+                "{chunks:?}"
+            );
+        }
+    }
+
     use super::*;
 
     /// Issue 54: an EXR whose header claims 100000² pixels (a file of a few hundred bytes) is

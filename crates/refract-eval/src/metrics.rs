@@ -127,6 +127,23 @@ pub struct MetricsRecord {
     pub zoom_share: Option<f64>,
     /// Median time per frame (all per-frame passes), milliseconds.
     pub ms_per_frame: Option<f64>,
+    /// What ran the row: the GPU adapter for a `gpu` row, the CPU model for `cpu` and `trace`
+    /// rows, the engine's page for an engine's own row.
+    pub device: Option<String>,
+    /// The refract version that measured it.
+    pub version: Option<String>,
+    /// The commit of the checkout it ran in (with "(uncommitted changes)" where the tree
+    /// differed from it).
+    pub commit: Option<String>,
+}
+
+impl MetricsRecord {
+    /// Records what measured the row: `device`, this build's version and `commit`.
+    pub fn made_by(&mut self, device: String, commit: &str) {
+        self.device = Some(device);
+        self.version = Some(env!("CARGO_PKG_VERSION").to_owned());
+        self.commit = Some(commit.to_owned());
+    }
 }
 
 /// Per-pixel error maps (NaN where not applicable) for the images.

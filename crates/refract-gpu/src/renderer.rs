@@ -114,6 +114,11 @@ impl Renderer for GpuRenderer {
         BackendId::Gpu
     }
 
+    fn device(&self) -> Option<String> {
+        let info = &self.context.info;
+        Some(format!("{} ({:?})", info.name, info.backend))
+    }
+
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
         let uploaded = self
             .context

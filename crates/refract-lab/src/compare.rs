@@ -143,6 +143,11 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         (scenes.len() * (1 + options.methods.len() * renderers.len() + engine_count)) as u64,
     );
     let mut records = Vec::new();
+    // What measured the rows (metrics.json's `device`, `version`, `commit`).
+    let (cpu, commit) = (
+        crate::timing::cpu_description(),
+        crate::provenance::checkout_commit(),
+    );
     let mut scene_images = Vec::new();
     let (w, h) = (options.res, options.res);
     for scene in &scenes {
@@ -163,7 +168,14 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         write_color(&dir.join("reference.png"), w, h, &truth.color)?;
         let key = format!("{}/reference.hdr.js", scene.name);
         write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
-        truth.write_exr(&dir.join("reference.exr"))?;
+        let description = crate::provenance::frame_description(
+            &scene.name,
+            &settings,
+            reference.backend().id(),
+            reference.device().as_deref(),
+            (w, h),
+        );
+        truth.write_exr_described(&dir.join("reference.exr"), &description)?;
         write_mask(
             &dir.join("tir-reference.png"),
             w,
@@ -176,6 +188,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         // "trace" for the CPU tracer, "gpu" for the GPU's.
         reference.backend().id().clone_into(&mut row.backend);
         row.params = settings.describe();
+        row.made_by(reference.device().unwrap_or_else(|| cpu.clone()), &commit);
         records.push(row);
 
         let mut images = Vec::new();
@@ -217,6 +230,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 record.backend = backend.id().to_owned();
                 record.params = method.describe();
                 record.ms_per_frame = Some(times.median);
+                record.made_by(renderer.device().unwrap_or_else(|| cpu.clone()), &commit);
                 records.push(record);
                 write_error_maps(&dir, &written, (w, h), &maps)?;
                 images.push(written);
@@ -238,6 +252,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                     record.scene.clone_from(&scene.name);
                     record.method.clone_from(&engine.label);
                     record.backend = ENGINE_BACKEND.to_owned();
+                    record.made_by(format!("headless Chromium ({ENGINE_BACKEND})"), &commit);
                     records.push(record);
                     write_error_maps(&dir, &written, (w, h), &maps)?;
                     images.push(written);

@@ -49,6 +49,32 @@ pub fn load_average() -> Option<String> {
     (fields.len() == 3).then(|| fields.join(" / "))
 }
 
+/// What made a frame, as its files carry it (EXR header attributes, PNG text chunks:
+/// `refract_eval::FrameFiles::write_exr_described`): the scene, the method, its parameters,
+/// the backend (`cpu`, `gpu`, `trace`), the device (the GPU adapter, else this machine's CPU),
+/// the resolution, this build's version and the checkout's commit.
+pub fn frame_description(
+    scene: &str,
+    method: &refract_scene::MethodParams,
+    backend: &str,
+    device: Option<&str>,
+    (width, height): (u32, u32),
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("refract.scene", scene.to_owned()),
+        ("refract.method", method.id().name().to_owned()),
+        ("refract.params", method.describe()),
+        ("refract.backend", backend.to_owned()),
+        (
+            "refract.device",
+            device.map_or_else(crate::timing::cpu_description, str::to_owned),
+        ),
+        ("refract.resolution", format!("{width}x{height}")),
+        ("refract.version", env!("CARGO_PKG_VERSION").to_owned()),
+        ("refract.commit", checkout_commit()),
+    ]
+}
+
 /// The date now, UTC, RFC 3339 to the second.
 pub fn now() -> String {
     humantime::format_rfc3339_seconds(SystemTime::now()).to_string()

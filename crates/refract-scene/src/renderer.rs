@@ -95,6 +95,12 @@ pub trait Renderer {
     /// Which backend this is.
     fn backend(&self) -> BackendId;
 
+    /// The device it runs on, where it is not this machine's CPU: the GPU adapter's name
+    /// (`None` for the CPU backend and the CPU tracer).
+    fn device(&self) -> Option<String> {
+        None
+    }
+
     /// Whether [`Renderer::render`] runs `method`: the registry row's `backends` (a test renders
     /// every row on every backend and holds `render` to it).
     fn supports(&self, method: MethodId) -> bool {
