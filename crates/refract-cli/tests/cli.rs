@@ -207,11 +207,37 @@ fn compare_writes_metrics_images_and_reports() {
     ] {
         assert!(out.join(file).is_file(), "{file}");
     }
+    // Images say what made them (issue 51 #6): the method's error map names the method and
+    // its backend, the reference's image the reference.
+    for (file, method, backend) in [
+        ("sphere/flip-wyman-cpu.png", "wyman", "cpu"),
+        ("sphere/wyman-cpu.png", "wyman", "cpu"),
+        ("sphere/reference.png", "reference", "trace"),
+    ] {
+        let text = png_text(&out.join(file));
+        assert_eq!(text["refract.method"], method, "{file}: {text:?}");
+        assert_eq!(text["refract.backend"], backend, "{file}: {text:?}");
+        assert_eq!(text["refract.scene"], "sphere", "{file}: {text:?}");
+    }
     let leftovers: Vec<_> = walk(&out)
         .into_iter()
         .filter(|p| p.to_string_lossy().contains("partial"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// The `iTXt` chunks of the PNG at `path`, by keyword.
+fn png_text(path: &Path) -> std::collections::HashMap<String, String> {
+    let file = std::fs::File::open(path).expect("open png");
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .expect("png");
+    reader
+        .info()
+        .utf8_text
+        .iter()
+        .map(|c| (c.keyword.clone(), c.get_text().expect("utf-8")))
+        .collect()
 }
 
 fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
@@ -248,16 +274,7 @@ fn render_writes_png_and_exr() {
     }
     // The PNG says what made it (issue 51 #6): method, parameters, backend, device, scene,
     // resolution, version and commit as text chunks.
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(dir.path().join("w.png")).expect("open"),
-    ));
-    let reader = decoder.read_info().expect("png");
-    let text: std::collections::HashMap<String, String> = reader
-        .info()
-        .utf8_text
-        .iter()
-        .map(|c| (c.keyword.clone(), c.get_text().expect("utf-8")))
-        .collect();
+    let text = png_text(&dir.path().join("w.png"));
     for (keyword, value) in [
         ("refract.scene", "torus"),
         ("refract.method", "wyman"),

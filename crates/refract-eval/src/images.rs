@@ -6,7 +6,7 @@ use std::path::Path;
 use glam::Vec3;
 use refract_scene::SceneError;
 
-use crate::atomic_write::write_png_rgb8;
+use crate::atomic_write::write_png_rgb8_described;
 use refract_scene::tonemap::to_srgb8;
 
 /// The top of the colour bar of `T2` angle-error maps, degrees.
@@ -36,9 +36,21 @@ pub fn check_finite(path: &Path, width: u32, color: &[Vec3]) -> Result<(), Scene
 
 /// Linear radiance, tonemapped to sRGB.
 pub fn write_color(path: &Path, width: u32, height: u32, color: &[Vec3]) -> Result<(), SceneError> {
+    write_color_described(path, width, height, color, &[])
+}
+
+/// [`write_color`] with `description` as the PNG's text chunks
+/// ([`crate::atomic_write::write_png_rgb8_described`]).
+pub fn write_color_described(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: &[Vec3],
+    description: &[(&str, String)],
+) -> Result<(), SceneError> {
     check_finite(path, width, color)?;
     let pixels: Vec<u8> = color.iter().flat_map(|&c| to_srgb8(c)).collect();
-    write_png_rgb8(path, width, height, &pixels)
+    write_png_rgb8_described(path, width, height, &pixels, description)
 }
 
 /// Linear radiance for the report's exposure control, as RGBE (a shared exponent per pixel)
@@ -120,6 +132,18 @@ pub fn write_error_map(
     values: &[f32],
     max: f32,
 ) -> Result<(), SceneError> {
+    write_error_map_described(path, width, height, values, max, &[])
+}
+
+/// [`write_error_map`] with `description` as the PNG's text chunks.
+pub fn write_error_map_described(
+    path: &Path,
+    width: u32,
+    height: u32,
+    values: &[f32],
+    max: f32,
+    description: &[(&str, String)],
+) -> Result<(), SceneError> {
     let lut = nv_flip::magma_lut().to_vec();
     let out_width = width + BAR_WIDTH;
     let mut pixels = Vec::with_capacity((out_width * height * 3) as usize);
@@ -141,7 +165,7 @@ pub fn write_error_map(
             });
         }
     }
-    write_png_rgb8(path, out_width, height, &pixels)
+    write_png_rgb8_described(path, out_width, height, &pixels, description)
 }
 
 /// A mask: magenta where `mask`, the tonemapped image dimmed elsewhere.
@@ -151,6 +175,18 @@ pub fn write_mask(
     height: u32,
     mask: &[bool],
     color: &[Vec3],
+) -> Result<(), SceneError> {
+    write_mask_described(path, width, height, mask, color, &[])
+}
+
+/// [`write_mask`] with `description` as the PNG's text chunks.
+pub fn write_mask_described(
+    path: &Path,
+    width: u32,
+    height: u32,
+    mask: &[bool],
+    color: &[Vec3],
+    description: &[(&str, String)],
 ) -> Result<(), SceneError> {
     let pixels: Vec<u8> = mask
         .iter()
@@ -163,7 +199,7 @@ pub fn write_mask(
             }
         })
         .collect();
-    write_png_rgb8(path, width, height, &pixels)
+    write_png_rgb8_described(path, width, height, &pixels, description)
 }
 
 #[cfg(test)]

@@ -24,7 +24,8 @@ use crate::progress::{Note, Progress};
 use crate::report::{MethodImages, SceneImages, write_reports};
 use crate::timing::time_frames;
 use refract_eval::images::{
-    P2_SCALE, T2_SCALE_DEG, write_color, write_error_map, write_hdr_script, write_mask,
+    P2_SCALE, T2_SCALE_DEG, write_color_described, write_error_map_described, write_hdr_script,
+    write_mask_described,
 };
 
 /// The parameters of `ids` with the exit TIR policy `tir` and every `(name, value)` of
@@ -165,9 +166,6 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
         let timing =
             reference.render(&camera, &settings, FrameOutputs::ColorAndAovs, &mut truth)?;
         progress.advance(STAGE_COMPARE, 1);
-        write_color(&dir.join("reference.png"), w, h, &truth.color)?;
-        let key = format!("{}/reference.hdr.js", scene.name);
-        write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
         let description = crate::provenance::frame_description(
             &scene.name,
             &settings,
@@ -175,14 +173,12 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
             reference.device().as_deref(),
             (w, h),
         );
+        write_color_described(&dir.join("reference.png"), w, h, &truth.color, &description)?;
+        let key = format!("{}/reference.hdr.js", scene.name);
+        write_hdr_script(&dir.join("reference.hdr.js"), &key, w, h, &truth.color)?;
         truth.write_exr_described(&dir.join("reference.exr"), &description)?;
-        write_mask(
-            &dir.join("tir-reference.png"),
-            w,
-            h,
-            &tir_mask(&truth),
-            &truth.color,
-        )?;
+        let path = dir.join("tir-reference.png");
+        write_mask_described(&path, w, h, &tir_mask(&truth), &truth.color, &description)?;
         let mut row = reference_record(&truth, timing.ms);
         row.scene.clone_from(&scene.name);
         // "trace" for the CPU tracer, "gpu" for the GPU's.
@@ -221,8 +217,15 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                     // Methods that look up nearby geometry get a map of where they missed it.
                     has_miss: id.info().aovs.contains(&Aov::NgTexel),
                 };
+                let description = crate::provenance::frame_description(
+                    &scene.name,
+                    method,
+                    backend.id(),
+                    renderer.device().as_deref(),
+                    (w, h),
+                );
                 let (mut record, maps) =
-                    evaluate_and_write(&dir, &written, (&truth, &frame), || {
+                    evaluate_and_write(&dir, &written, &description, (&truth, &frame), || {
                         evaluate_method(&truth, &frame, &camera, scene, method)
                     })?;
                 record.scene.clone_from(&scene.name);
@@ -232,7 +235,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                 record.ms_per_frame = Some(times.median);
                 record.made_by(renderer.device().unwrap_or_else(|| cpu.clone()), &commit);
                 records.push(record);
-                write_error_maps(&dir, &written, (w, h), &maps)?;
+                write_error_maps(&dir, &written, &description, (w, h), &maps)?;
                 images.push(written);
                 progress.advance(STAGE_COMPARE, 1);
             }
@@ -245,8 +248,16 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                         has_p2: false,
                         has_miss: true,
                     };
+                    let description = crate::provenance::file_description(
+                        &scene.name,
+                        (&engine.label, ""),
+                        ENGINE_BACKEND,
+                        Some("headless Chromium"),
+                        (w, h),
+                    );
+                    let frames = (&truth, &engine.frame);
                     let (mut record, maps) =
-                        evaluate_and_write(&dir, &written, (&truth, &engine.frame), || {
+                        evaluate_and_write(&dir, &written, &description, frames, || {
                             engine_record(&truth, &engine.frame, scene, &camera)
                         })?;
                     record.scene.clone_from(&scene.name);
@@ -254,7 +265,7 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                     record.backend = ENGINE_BACKEND.to_owned();
                     record.made_by(format!("headless Chromium ({ENGINE_BACKEND})"), &commit);
                     records.push(record);
-                    write_error_maps(&dir, &written, (w, h), &maps)?;
+                    write_error_maps(&dir, &written, &description, (w, h), &maps)?;
                     images.push(written);
                 }
             }
@@ -276,20 +287,24 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
 fn evaluate_and_write<T: Send>(
     dir: &Path,
     written: &MethodImages,
+    description: &[(&str, String)],
     frames: (&Frame, &Frame),
     evaluate: impl FnOnce() -> T + Send,
 ) -> crate::Result<T> {
-    let (evaluated, images) = rayon::join(evaluate, || write_frame_images(dir, written, frames));
+    let (evaluated, images) = rayon::join(evaluate, || {
+        write_frame_images(dir, written, description, frames)
+    });
     images?;
     Ok(evaluated)
 }
 
 /// Writes a frame's images into `dir`, in parallel: `<stem>.png` and its HDR script, its TIR
 /// mask and, for lookups of nearby geometry (`has_miss`), the map of where it missed the
-/// objects the reference's path meets.
+/// objects the reference's path meets; each PNG carries `description`.
 fn write_frame_images(
     dir: &Path,
     written: &MethodImages,
+    description: &[(&str, String)],
     (truth, frame): (&Frame, &Frame),
 ) -> crate::Result<()> {
     let (w, h) = (frame.width, frame.height);
@@ -300,7 +315,10 @@ fn write_frame_images(
         .unwrap_or_default();
     let key = format!("{scene}/{stem}.hdr.js");
     let jobs: [&(dyn Fn() -> Result<(), refract_scene::SceneError> + Sync); 4] = [
-        &|| write_color(&dir.join(format!("{stem}.png")), w, h, &frame.color),
+        &|| {
+            let path = dir.join(format!("{stem}.png"));
+            write_color_described(&path, w, h, &frame.color, description)
+        },
         &|| {
             write_hdr_script(
                 &dir.join(format!("{stem}.hdr.js")),
@@ -312,20 +330,15 @@ fn write_frame_images(
         },
         &|| {
             let path = dir.join(format!("tir-{stem}.png"));
-            write_mask(&path, w, h, &tir_mask(frame), &frame.color)
+            write_mask_described(&path, w, h, &tir_mask(frame), &frame.color, description)
         },
         &|| {
             if !written.has_miss {
                 return Ok(());
             }
             let missed = refract_eval::metrics::missed_geometry(truth, frame);
-            write_mask(
-                &dir.join(format!("miss-{stem}.png")),
-                w,
-                h,
-                &missed,
-                &frame.color,
-            )
+            let path = dir.join(format!("miss-{stem}.png"));
+            write_mask_described(&path, w, h, &missed, &frame.color, description)
         },
     ];
     jobs.par_iter().try_for_each(|job| job())?;
@@ -333,26 +346,26 @@ fn write_frame_images(
 }
 
 /// Writes a frame's error maps into `dir`, in parallel: FLIP, T2 and, with `has_p2`, the
-/// exit-point error.
+/// exit-point error; each PNG carries `description`.
 fn write_error_maps(
     dir: &Path,
     written: &MethodImages,
+    description: &[(&str, String)],
     (w, h): (u32, u32),
     maps: &ErrorMaps,
 ) -> crate::Result<()> {
     let stem = &written.stem;
+    let map = |name: String, values: &[f32], max: f32| {
+        write_error_map_described(&dir.join(name), w, h, values, max, description)
+    };
     let jobs: [&(dyn Fn() -> Result<(), refract_scene::SceneError> + Sync); 3] = [
-        &|| write_error_map(&dir.join(format!("flip-{stem}.png")), w, h, &maps.flip, 1.0),
-        &|| {
-            let path = dir.join(format!("t2err-{stem}.png"));
-            write_error_map(&path, w, h, &maps.t2_deg, T2_SCALE_DEG)
-        },
+        &|| map(format!("flip-{stem}.png"), &maps.flip, 1.0),
+        &|| map(format!("t2err-{stem}.png"), &maps.t2_deg, T2_SCALE_DEG),
         &|| {
             if !written.has_p2 {
                 return Ok(());
             }
-            let path = dir.join(format!("p2err-{stem}.png"));
-            write_error_map(&path, w, h, &maps.p2_rel, P2_SCALE)
+            map(format!("p2err-{stem}.png"), &maps.p2_rel, P2_SCALE)
         },
     ];
     jobs.par_iter().try_for_each(|job| job())?;

@@ -58,12 +58,25 @@ pub fn frame_description(
     method: &refract_scene::MethodParams,
     backend: &str,
     device: Option<&str>,
+    size: (u32, u32),
+) -> Vec<(&'static str, String)> {
+    let made_by = (method.id().name(), method.describe());
+    file_description(scene, (made_by.0, &made_by.1), backend, device, size)
+}
+
+/// [`frame_description`] of a frame from anything, named by `(method, params)` (an engine's
+/// own frame: its label and no parameters).
+pub fn file_description(
+    scene: &str,
+    (method, params): (&str, &str),
+    backend: &str,
+    device: Option<&str>,
     (width, height): (u32, u32),
 ) -> Vec<(&'static str, String)> {
     vec![
         ("refract.scene", scene.to_owned()),
-        ("refract.method", method.id().name().to_owned()),
-        ("refract.params", method.describe()),
+        ("refract.method", method.to_owned()),
+        ("refract.params", params.to_owned()),
         ("refract.backend", backend.to_owned()),
         (
             "refract.device",
