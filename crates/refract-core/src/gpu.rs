@@ -333,6 +333,7 @@ pub fn wgsl_constants() -> String {
             "const HDRP_MIN_COS: f32 = {};",
             f(crate::engine::HDRP_MIN_COS)
         ),
+        crate::spectral::wgsl_tables(),
     ]
     .join("\n")
         + "\n"

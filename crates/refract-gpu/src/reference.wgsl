@@ -302,24 +302,12 @@ fn emitter_of(rgb: vec3<f32>) -> vec4<f32> {
 fn environment_spectral(dir: vec3<f32>, lambda: vec4<f32>) -> vec4<f32> {
     var out: vec4<f32>;
     if frame.environment_kind == ENVIRONMENT_LATLONG {
-        let width = frame.environment_width;
-        let height = frame.environment_height;
-        let uv = direction_to_latlong(dir);
-        let x = uv.x * f32(width) - 0.5;
-        let y = clamp(uv.y * f32(height - 1u), 0.0, f32(height - 1u));
-        let x0 = floor(x);
-        let y0 = floor(y);
-        let fx = x - x0;
-        let fy = y - y0;
-        let w = i32(width);
-        let xa = u32(((i32(x0) % w) + w) % w);
-        let xb = u32(((i32(x0) + 1) % w + w) % w);
-        let ya = u32(y0);
-        let yb = min(ya + 1u, height - 1u);
-        let taps = array<u32, 4>(ya * width + xa, ya * width + xb, yb * width + xa, yb * width + xb);
+        let taps = latlong_bilinear_taps(frame.environment_width, frame.environment_height, dir);
+        let fx = taps.f.x;
+        let fy = taps.f.y;
         var t: array<vec4<f32>, 4>;
         for (var k = 0u; k < 4u; k++) {
-            let o = trace.env_spectra + 4u * taps[k];
+            let o = trace.env_spectra + 4u * taps.index[k];
             t[k] = vec4<f32>(spectral_data[o], spectral_data[o + 1u], spectral_data[o + 2u], spectral_data[o + 3u]);
         }
         let scale_top = t[0].w + (t[1].w - t[0].w) * fx;

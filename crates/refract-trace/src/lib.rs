@@ -20,4 +20,6 @@ pub mod sampling;
 pub mod tracer;
 
 pub use renderer::ReferenceRenderer;
-pub use tracer::{PathRecord, PathSampler, Tracer, render, render_into};
+pub use tracer::{
+    PathRecord, PathSampler, Tracer, render, render_into, render_with, spectral_lighting,
+};

@@ -10,12 +10,16 @@ use refract_scene::{
     TimingSource,
 };
 
-use crate::tracer::render_into;
+use refract_scene::spectral::SpectralLighting;
+
+use crate::tracer::{Tracer, render_with, spectral_lighting};
 
 /// The reference tracer behind the [`Renderer`] interface.
 #[derive(Debug, Default)]
 pub struct ReferenceRenderer {
     scene: Option<Arc<Scene>>,
+    /// The scene's emitter spectra when it is dispersive, computed once in `prepare`.
+    lighting: Option<Arc<SpectralLighting>>,
 }
 
 impl ReferenceRenderer {
@@ -31,8 +35,10 @@ impl Renderer for ReferenceRenderer {
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<(), RenderError> {
-        // The BVHs were built with the scene: nothing to upload.
+        // The BVHs were built with the scene: nothing to upload but, for a dispersive scene, its
+        // emitters' spectra (a lat-long map's per texel), once for every frame.
         self.scene = Some(Arc::clone(scene));
+        self.lighting = spectral_lighting(scene);
         Ok(())
     }
 
@@ -57,7 +63,8 @@ impl Renderer for ReferenceRenderer {
             });
         };
         let start = Instant::now();
-        render_into(scene, camera, settings, frame);
+        let tracer = Tracer::with_lighting(scene, *settings, self.lighting.clone());
+        render_with(&tracer, camera, frame);
         Ok(FrameTiming {
             ms: start.elapsed().as_secs_f64() * 1e3,
             source: TimingSource::Wall,

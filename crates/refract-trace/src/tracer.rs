@@ -16,6 +16,8 @@
 //! where a path ends, the environment's and the diffuse surfaces' spectra at its wavelengths
 //! are turned into linear sRGB and weighted like the RGB radiance they replace.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::environment::Exact;
@@ -172,7 +174,15 @@ impl Medium {
 /// What a spectral render needs besides the scene.
 struct Spectral {
     table: UpliftTable<'static>,
-    lighting: SpectralLighting,
+    lighting: Arc<SpectralLighting>,
+}
+
+/// The spectra of a dispersive `scene`'s emitters (`None` for a scene rendered in RGB), once
+/// per scene: a renderer keeps them between frames ([`Tracer::with_lighting`]).
+pub fn spectral_lighting(scene: &Scene) -> Option<Arc<SpectralLighting>> {
+    scene
+        .has_dispersion()
+        .then(|| Arc::new(SpectralLighting::new(scene, &uplift_tables().table())))
 }
 
 /// Where a branch of the full mode's splitting tree stands.
@@ -285,6 +295,16 @@ const OFFSET: f32 = 4e-6;
 impl<'a> Tracer<'a> {
     /// A tracer of `scene`.
     pub fn new(scene: &'a Scene, settings: TraceSettings) -> Self {
+        Self::with_lighting(scene, settings, spectral_lighting(scene))
+    }
+
+    /// A tracer of `scene` with its emitters' spectra computed before
+    /// ([`spectral_lighting`]`(scene)`).
+    pub fn with_lighting(
+        scene: &'a Scene,
+        settings: TraceSettings,
+        lighting: Option<Arc<SpectralLighting>>,
+    ) -> Self {
         let media = scene
             .refractors()
             .enumerate()
@@ -301,12 +321,9 @@ impl<'a> Tracer<'a> {
                 },
             })
             .collect();
-        let spectral = scene.has_dispersion().then(|| {
-            let table = uplift_tables().table();
-            Spectral {
-                table,
-                lighting: SpectralLighting::new(scene, &table),
-            }
+        let spectral = lighting.map(|lighting| Spectral {
+            table: uplift_tables().table(),
+            lighting,
         });
         Self {
             scene,
@@ -806,7 +823,11 @@ pub fn render(scene: &Scene, camera: &Camera, settings: &TraceSettings) -> Frame
 
 /// [`render`] into an existing frame.
 pub fn render_into(scene: &Scene, camera: &Camera, settings: &TraceSettings, frame: &mut Frame) {
-    let tracer = Tracer::new(scene, *settings);
+    render_with(&Tracer::new(scene, *settings), camera, frame);
+}
+
+/// [`render_into`] with `tracer`.
+pub fn render_with(tracer: &Tracer<'_>, camera: &Camera, frame: &mut Frame) {
     let (width, height) = (camera.width() as usize, camera.height() as usize);
     let n = width * height;
     frame.reset(camera.width(), camera.height());

@@ -69,6 +69,24 @@ pub fn d65(lambda: f32) -> f32 {
     ((1.0 - w1) * tables::D65[i] + w1 * tables::D65[i + 1]) * D65_NORMALIZATION
 }
 
+/// The WGSL declarations of the CIE tables (`CIE_1931_XYZ`, `CIE_D65`) that
+/// `wgsl/spectral.wgsl` reads, written from the Rust tables (shortest round-trip `f32` digits:
+/// the same values), for [`crate::gpu::wgsl_constants`].
+pub fn wgsl_tables() -> alloc::string::String {
+    use alloc::format;
+    use alloc::vec::Vec;
+    let xyz: Vec<_> = tables::CIE_1931_XYZ
+        .iter()
+        .map(|[x, y, z]| format!("vec3<f32>({x:e}, {y:e}, {z:e})"))
+        .collect();
+    let d65: Vec<_> = tables::D65.iter().map(|v| format!("{v:e}")).collect();
+    format!(
+        "const CIE_1931_XYZ = array<vec3<f32>, {CIE_SAMPLES}>({});\nconst CIE_D65 = array<f32, {CIE_SAMPLES}>({});",
+        xyz.join(", "),
+        d65.join(", ")
+    )
+}
+
 /// `tanh⁻¹ x` for `|x| < 1`.
 #[inline]
 fn atanh(x: f32) -> f32 {
