@@ -55,6 +55,7 @@ fn pvrr(scene: &Arc<Scene>, camera: &Camera, p: &PvrrParams) -> (PvrrPasses, Fra
         camera,
         method: MethodId::Pvrr,
         outputs: FrameOutputs::ColorAndAovs,
+        lambda_nm: None,
     };
     passes.render(&cx, p, &mut frame).expect("pvrr frame");
     (passes, frame)

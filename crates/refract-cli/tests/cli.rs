@@ -388,7 +388,7 @@ fn bad_input_gives_one_clear_error_line_and_a_failure() {
                 "--out",
                 "x.png",
             ],
-            "no parameters",
+            "one of wavelengths",
         ),
         (
             &["compare", "nowhere", "--res", "16"],

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use refract_core::Camera;
-use refract_scene::{Frame, FrameOutputs, MethodId, RenderError, Scene};
+use refract_scene::{Frame, FrameOutputs, MethodId, Refractor, RenderError, Scene};
 
 /// What every family's frame reads: the scene, the camera, the method (its registry row names
 /// the AOV layers to write) and what the frame writes.
@@ -22,12 +22,20 @@ pub struct FrameCx<'a> {
     pub method: MethodId,
     /// Colour only, or colour and the row's layers.
     pub outputs: FrameOutputs,
+    /// The wavelength the frame traces (nm), `None` for the d line: every refractor's index is
+    /// [`Refractor::ior_at`] it ([`refract_scene::render_dispersive`]).
+    pub lambda_nm: Option<f32>,
 }
 
 impl FrameCx<'_> {
     /// Whether the frame gets the method's AOV layers.
     pub fn with_aovs(&self) -> bool {
         self.outputs == FrameOutputs::ColorAndAovs
+    }
+
+    /// `refractor`'s index of refraction in this frame.
+    pub fn ior(&self, refractor: &Refractor) -> f32 {
+        refractor.ior_at(self.lambda_nm)
     }
 }
 

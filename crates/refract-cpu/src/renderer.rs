@@ -21,6 +21,8 @@ use crate::family::FrameCx;
 pub struct CpuRenderer {
     scene: Option<Arc<Scene>>,
     families: Families,
+    /// One wavelength's colour of a dispersive frame ([`refract_scene::render_dispersive`]).
+    wavelength_frame: Frame,
 }
 
 impl CpuRenderer {
@@ -61,17 +63,28 @@ impl Renderer for CpuRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Cpu))?;
         let id = method.id();
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
-        let cx = FrameCx {
+        let families = &mut self.families;
+        refract_scene::render_dispersive(
             scene,
-            camera,
-            method: id,
+            method,
             outputs,
-        };
-        let start = Instant::now();
-        self.families.render(&cx, method, frame)?;
-        Ok(FrameTiming {
-            ms: start.elapsed().as_secs_f64() * 1e3,
-            source: TimingSource::Wall,
-        })
+            frame,
+            &mut self.wavelength_frame,
+            |lambda_nm, outputs, frame| {
+                let cx = FrameCx {
+                    scene,
+                    camera,
+                    method: id,
+                    outputs,
+                    lambda_nm,
+                };
+                let start = Instant::now();
+                families.render(&cx, method, frame)?;
+                Ok(FrameTiming {
+                    ms: start.elapsed().as_secs_f64() * 1e3,
+                    source: TimingSource::Wall,
+                })
+            },
+        )
     }
 }

@@ -47,9 +47,11 @@ pub fn rasterize_surface(
 }
 
 /// The material and normal of the surface of mesh `mesh` at triangle `triangle` with
-/// barycentrics `w` (diffuse: its radiance under the scene light).
+/// barycentrics `w` (diffuse: its radiance under the scene light; the refractor's glass at
+/// wavelength `lambda_nm`, [`refract_scene::Refractor::ior_at`]).
 pub fn surface_material(
     scene: &Scene,
+    lambda_nm: Option<f32>,
     mesh: SceneMesh,
     triangle: u32,
     w: Vec3,
@@ -57,7 +59,7 @@ pub fn surface_material(
     n_ws: Vec3,
 ) -> TexelMaterial {
     match mesh {
-        SceneMesh::Refractor => scene.refractor.texel_material(),
+        SceneMesh::Refractor => scene.refractor.texel_material_at(lambda_nm),
         SceneMesh::Object(k) => {
             let object = &scene.objects[k];
             match object.conductor() {

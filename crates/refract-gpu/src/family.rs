@@ -10,8 +10,8 @@ use std::time::Instant;
 
 use refract_core::Camera;
 use refract_scene::{
-    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, RenderError, Scene,
-    TimingSource,
+    BackendId, Frame, FrameOutputs, FrameTiming, MethodId, MethodParams, Refractor, RenderError,
+    Scene, TimingSource,
 };
 
 use crate::context::{GpuContext, GpuError};
@@ -39,12 +39,20 @@ pub(crate) struct GpuFrameCx<'a> {
     /// [`Frame`]); without, the colour stays in [`GpuFamily::color`] for a later GPU pass (the
     /// viewer's window).
     pub readback: bool,
+    /// The wavelength the frame traces (nm), `None` for the d line: every refractor's index is
+    /// [`Refractor::ior_at`] it ([`refract_scene::render_dispersive`]).
+    pub lambda_nm: Option<f32>,
 }
 
 impl GpuFrameCx<'_> {
     /// The frame's size in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.camera.width(), self.camera.height())
+    }
+
+    /// `refractor`'s index of refraction in this frame.
+    pub fn ior(&self, refractor: &Refractor) -> f32 {
+        refractor.ior_at(self.lambda_nm)
     }
 }
 

@@ -33,6 +33,8 @@ pub struct GpuRenderer {
     timestamps: Option<Timestamps>,
     scene: Option<(Arc<Scene>, GpuScene)>,
     families: Families,
+    /// One wavelength's colour of a dispersive frame ([`refract_scene::render_dispersive`]).
+    wavelength_frame: Frame,
 }
 
 impl GpuRenderer {
@@ -55,6 +57,7 @@ impl GpuRenderer {
             timestamps,
             scene: None,
             families,
+            wavelength_frame: Frame::default(),
         })
     }
 
@@ -141,19 +144,31 @@ impl Renderer for GpuRenderer {
             .ok_or(RenderError::NotPrepared(BackendId::Gpu))?;
         let id = method.id();
         refract_scene::scene_support(id, scene).map_err(RenderError::UnsupportedScene)?;
-        let cx = GpuFrameCx {
-            context: &self.context,
-            raster: &self.raster,
+        let families = &mut self.families;
+        let (context, raster, timestamps) = (&self.context, &self.raster, self.timestamps.as_ref());
+        refract_scene::render_dispersive(
             scene,
-            gpu_scene,
-            camera,
-            method: id,
-            params: method,
+            method,
             outputs,
-            timestamps: self.timestamps.as_ref(),
-            readback: true,
-        };
-        self.families.render(&cx, method, Some(frame))
+            frame,
+            &mut self.wavelength_frame,
+            |lambda_nm, outputs, frame| {
+                let cx = GpuFrameCx {
+                    context,
+                    raster,
+                    scene,
+                    gpu_scene,
+                    camera,
+                    method: id,
+                    params: method,
+                    outputs,
+                    timestamps,
+                    readback: true,
+                    lambda_nm,
+                };
+                families.render(&cx, method, Some(frame))
+            },
+        )
     }
 }
 
@@ -170,7 +185,9 @@ pub struct GpuFrame<'a> {
 impl GpuRenderer {
     /// Renders a colour-only frame of `method` seen by `camera` and leaves it on the GPU: no
     /// copy to a readback buffer and no wait for a map, for a consumer on the same device (the
-    /// viewer draws it into its window). [`Renderer::render`] is the same frame read back.
+    /// viewer draws it into its window). [`Renderer::render`] is the same frame read back, except
+    /// on dispersive glass, which this frame shows at its index at the d line (one frame, not
+    /// the sum of [`refract_scene::render_dispersive`]'s wavelengths).
     pub fn render_on_gpu(
         &mut self,
         camera: &Camera,
@@ -193,6 +210,7 @@ impl GpuRenderer {
             outputs: FrameOutputs::Color,
             timestamps: self.timestamps.as_ref(),
             readback: false,
+            lambda_nm: None,
         };
         let timing = self.families.render(&cx, method, None)?;
         let color = self

@@ -17,6 +17,7 @@
 //! * [`frame`]: [`Frame`], linear colour plus named AOV layers.
 //! * [`tonemap`]: the display encoding of every PNG.
 
+pub mod dispersive_frame;
 pub mod environment;
 pub mod error;
 pub mod frame;
@@ -27,6 +28,7 @@ pub mod scene;
 pub mod spectral;
 pub mod tonemap;
 
+pub use dispersive_frame::{dispersion_bins, render_dispersive};
 pub use environment::{Environment, EnvironmentReport, LatLongMap};
 pub use error::{SceneError, full_message};
 pub use frame::{Aov, AovKind, Frame, Layer, LayerValue, MAX_FRAME_SIZE, PixelLayers};

@@ -53,12 +53,18 @@ pub struct Reflector {
 /// The reflectors of `scene`: the specular object (a mirror when it is a conductor, a lens when
 /// it is glass), then every conductor object.
 pub fn reflectors(scene: &Scene) -> Vec<Reflector> {
+    reflectors_at(scene, None)
+}
+
+/// [`reflectors`] with the lens's index at wavelength `lambda_nm`
+/// ([`crate::Refractor::ior_at`]).
+pub fn reflectors_at(scene: &Scene, lambda_nm: Option<f32>) -> Vec<Reflector> {
     let first = Reflector {
         mesh: SceneMesh::Refractor,
         kind: match scene.refractor.conductor() {
             Some(c) => ReflectorKind::Mirror { f0: c.f0() },
             None => ReflectorKind::Lens {
-                ior: scene.refractor.ior(),
+                ior: scene.refractor.ior_at(lambda_nm),
             },
         },
     };
@@ -126,7 +132,7 @@ impl PvrrPlan {
 pub struct PvrrPlanner {
     bounds: Option<SceneBounds>,
     plan: PvrrPlan,
-    key: Option<(CameraDesc, PvrrParams)>,
+    key: Option<(CameraDesc, PvrrParams, Option<u32>)>,
     builds: u64,
 }
 
@@ -159,6 +165,18 @@ impl PvrrPlanner {
         camera: &Camera,
         params: &PvrrParams,
     ) -> Result<&PvrrPlan, RenderError> {
+        self.plan_at(scene, camera, params, None)
+    }
+
+    /// [`Self::plan`] with the lens's index at wavelength `lambda_nm`
+    /// ([`crate::Refractor::ior_at`]).
+    pub fn plan_at(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        params: &PvrrParams,
+        lambda_nm: Option<f32>,
+    ) -> Result<&PvrrPlan, RenderError> {
         let bounds = match self.bounds {
             Some(b) => b,
             None => {
@@ -169,11 +187,11 @@ impl PvrrPlanner {
                 })
             }
         };
-        let key = (*camera.desc(), *params);
+        let key = (*camera.desc(), *params, lambda_nm.map(f32::to_bits));
         if params.update_on_change && self.key == Some(key) {
             return Ok(&self.plan);
         }
-        self.plan = build_plan(scene, camera, params, bounds)?;
+        self.plan = build_plan(scene, camera, params, bounds, lambda_nm)?;
         self.key = Some(key);
         self.builds += 1;
         Ok(&self.plan)
@@ -196,9 +214,10 @@ pub fn build_plan(
     camera: &Camera,
     params: &PvrrParams,
     bounds: SceneBounds,
+    lambda_nm: Option<f32>,
 ) -> Result<PvrrPlan, RenderError> {
     let mut plan = PvrrPlan {
-        reflectors: reflectors(scene),
+        reflectors: reflectors_at(scene, lambda_nm),
         views: vec![PvrrView {
             camera: *camera,
             excluded: None,

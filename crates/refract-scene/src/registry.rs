@@ -21,6 +21,7 @@ mod image_space;
 mod nearby_geometry;
 mod pvrr;
 mod reference;
+mod wavelengths;
 
 pub use depth_peel::{
     DepthPeelParams, MAX_PEEL_INTERFACES, MAX_PEEL_STEPS, MAX_PEEL_THICKNESS_MILLI,
@@ -38,6 +39,8 @@ pub use pvrr::{
     PvrrParams,
 };
 pub use reference::{InterfaceRule, MAX_SPP, ROUGH_MIN_SPP, TraceMode, TraceSettings};
+pub use wavelengths::DispersionWavelengths;
+use wavelengths::WAVELENGTHS_PARAM;
 
 /// Every method, by its design.md id.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -135,6 +138,12 @@ macro_rules! method_families {
                 match self {
                     $(MethodParams::$variant(p) => p,)*
                 }
+            }
+
+            /// The wavelengths a frame of a dispersive scene traces through the method's
+            /// kernel ([`FamilyParams::wavelengths`]).
+            pub fn wavelengths(&self) -> Option<DispersionWavelengths> {
+                self.family().wavelengths()
             }
 
             /// The family these parameters belong to.
@@ -376,6 +385,12 @@ pub trait FamilyParams {
     /// read is refused by [`MethodParams::set_all`] rather than ignored.
     fn unread_unless(&self, name: &str) -> Option<&'static str> {
         let _ = name;
+        None
+    }
+    /// The wavelengths a frame of a dispersive scene traces through the method's kernel,
+    /// `None` for a method that disperses its own way or not at all (the engines, the
+    /// reference).
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
         None
     }
 }

@@ -257,14 +257,20 @@ impl Refractor {
     /// code): a conductor `ior = −1` with `F_p` per channel, glass its index with
     /// `F0 = ((n − 1)/(n + 1))²`.
     pub fn texel_material(&self) -> TexelMaterial {
+        self.texel_material_at(None)
+    }
+
+    /// [`Self::texel_material`] at wavelength `lambda_nm` ([`Self::ior_at`]).
+    pub fn texel_material_at(&self, lambda_nm: Option<f32>) -> TexelMaterial {
+        let ior = self.ior_at(lambda_nm);
         match self.conductor {
             Some(c) => TexelMaterial {
                 rgb: c.f0(),
                 ior: -1.0,
             },
             None => TexelMaterial {
-                rgb: Vec3::splat(refract_core::fresnel::f0_dielectric(1.0 / self.ior)),
-                ior: self.ior,
+                rgb: Vec3::splat(refract_core::fresnel::f0_dielectric(1.0 / ior)),
+                ior,
             },
         }
     }
@@ -277,6 +283,18 @@ impl Refractor {
     /// Index of refraction.
     pub fn ior(&self) -> f32 {
         self.ior
+    }
+
+    /// The index of refraction at wavelength `lambda_nm` (nm): `None` is the d line, where it is
+    /// [`Self::ior`] exactly; otherwise [`refract_core::spectral::dispersive_ior`] of
+    /// [`Self::abbe`] (the same index at every wavelength without dispersion). An approximate
+    /// method traces a dispersive frame at several wavelengths through its kernel
+    /// ([`refract_core::spectral::WavelengthBins`]).
+    pub fn ior_at(&self, lambda_nm: Option<f32>) -> f32 {
+        match lambda_nm {
+            Some(lambda) => refract_core::spectral::dispersive_ior(self.ior, self.abbe, lambda),
+            None => self.ior,
+        }
     }
 
     /// Changes the index of refraction (the BVH and `d_N` do not depend on it).
@@ -302,8 +320,9 @@ impl Refractor {
 
     /// Its glass's Abbe number `V_d` (`+inf`, the default: no dispersion): the index at
     /// wavelength `λ` is [`refract_core::spectral::dispersive_ior`]`(ior, abbe, λ)`, glTF's
-    /// `KHR_materials_dispersion` with `dispersion = 20 / V_d`. Only the reference renders
-    /// dispersion spectrally.
+    /// `KHR_materials_dispersion` with `dispersion = 20 / V_d`. The reference renders
+    /// dispersion spectrally; the approximate methods at a few wavelengths
+    /// ([`Self::ior_at`]).
     pub fn abbe(&self) -> f32 {
         self.abbe
     }
@@ -681,10 +700,15 @@ impl Scene {
     /// The index of the medium that surrounds refractor `index`: the index of the refractor it
     /// lies within, or 1 (air) for one in air or an index out of range.
     pub fn outside_ior(&self, index: usize) -> f32 {
+        self.outside_ior_at(index, None)
+    }
+
+    /// [`Self::outside_ior`] at wavelength `lambda_nm` ([`Refractor::ior_at`]).
+    pub fn outside_ior_at(&self, index: usize, lambda_nm: Option<f32>) -> f32 {
         self.refractor_at(index)
             .and_then(Refractor::within)
             .and_then(|outer| self.refractor_at(outer))
-            .map_or(1.0, Refractor::ior)
+            .map_or(1.0, |outer| outer.ior_at(lambda_nm))
     }
 
     /// Finds which refractor each glass refractor lies within (the innermost one that contains

@@ -8,6 +8,7 @@
 //!
 //! Wavelengths are in nanometres; every function here is pure and allocation-free.
 
+mod bins;
 mod tables;
 pub mod uplift;
 
@@ -15,6 +16,7 @@ use glam::Vec3;
 
 use crate::math;
 
+pub use bins::{MAX_WAVELENGTH_BINS, WavelengthBin, WavelengthBins};
 pub use uplift::{UpliftSolver, UpliftTable};
 
 /// The shortest wavelength rendered, nm (Mitsuba's `MI_CIE_MIN`).

@@ -303,7 +303,7 @@ impl CpuFamily for DepthPeelPasses {
                 });
         });
         self.peel(camera, params.layers);
-        let media = params.media(scene);
+        let media = params.media(scene, cx.lambda_nm);
         let pixels = PixelContext {
             scene,
             camera,

@@ -259,6 +259,8 @@ fn range_of(distance: &[f32]) -> Option<(f32, f32)> {
 struct MapScene<'a> {
     map: &'a DistanceMap,
     scene: &'a Scene,
+    /// The frame's wavelength ([`FrameCx::lambda_nm`]): the index of its glass.
+    lambda_nm: Option<f32>,
 }
 
 impl DistanceLayers for MapScene<'_> {
@@ -343,7 +345,15 @@ impl DistanceMapScene for MapScene<'_> {
         let w = t.barycentrics;
         TexelSurface {
             normal: t.n_ws,
-            material: surface_material(self.scene, mesh, triangle, w, t.p_ws, t.n_ws),
+            material: surface_material(
+                self.scene,
+                self.lambda_nm,
+                mesh,
+                triangle,
+                w,
+                t.p_ws,
+                t.n_ws,
+            ),
         }
     }
 
@@ -462,6 +472,7 @@ impl CpuFamily for DistancePasses {
         let map_scene = MapScene {
             map: &self.map,
             scene,
+            lambda_nm: cx.lambda_nm,
         };
         let eye = EyePass {
             scene,
@@ -500,6 +511,7 @@ mod tests {
         let lookup = MapScene {
             map: &map,
             scene: &scene,
+            lambda_nm: None,
         };
         // Directions spread evenly over the sphere (a golden-angle spiral, shuffled in height
         // so that a group's lanes land on different faces).

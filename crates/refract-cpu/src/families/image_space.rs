@@ -161,9 +161,9 @@ impl CpuFamily for ImageSpacePasses {
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
         let refractor = &scene.refractor;
-        let kernel = &method.kernel(refractor.ior())?;
+        let kernel = &method.kernel(cx.ior(refractor))?;
         let back = match method {
-            ImageSpaceMethod::Single => None,
+            ImageSpaceMethod::Single(_) => None,
             ImageSpaceMethod::TwoInterface(p) => {
                 self.back.render_into(refractor, camera, p.back);
                 Some(&self.back)

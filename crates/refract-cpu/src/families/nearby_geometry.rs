@@ -112,7 +112,7 @@ impl CpuFamily for NearbyPasses {
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
         let refractor = &scene.refractor;
-        let kernel = &method.two.kernel(refractor.ior())?;
+        let kernel = &method.two.kernel(cx.ior(refractor))?;
         let planes = &scene.nearby_planes(camera.look_dir());
         let (ng_desc, pad) = guard_band_camera(camera.desc(), method.guard_band_percent);
         let ng_camera =

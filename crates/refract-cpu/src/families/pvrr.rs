@@ -128,7 +128,7 @@ impl CpuFamily for PvrrPasses {
             outputs,
             ..
         } = *cx;
-        let plan = self.planner.plan(scene, camera, params)?;
+        let plan = self.planner.plan_at(scene, camera, params, cx.lambda_nm)?;
         let views = plan.views.len();
         self.buffers.resize_with(views, SurfaceBuffer::new);
         self.demand.resize_with(views, Demand::default);
@@ -496,7 +496,7 @@ impl ViewRows<'_> {
         let (corners, map, kind) = match *triangle {
             TriangleSurface::Diffuse { mesh, triangle } => {
                 let scene = self.pass.scene;
-                let material = surface_material(scene, mesh, triangle, w, t.p_ws, t.n_ws);
+                let material = surface_material(scene, None, mesh, triangle, w, t.p_ws, t.n_ws);
                 return (material.rgb, PvrrAov::default());
             }
             TriangleSurface::Reflector { corners, map, kind } => (corners, map, kind),
@@ -629,6 +629,7 @@ mod tests {
             camera,
             method: MethodId::Pvrr,
             outputs: FrameOutputs::Color,
+            lambda_nm: None,
         }
     }
 

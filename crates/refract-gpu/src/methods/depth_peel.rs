@@ -327,7 +327,7 @@ impl DepthPeelTargets {
         let uniforms = frame_uniforms(
             camera,
             &gpu_scene.environment,
-            scene.refractor.ior(),
+            cx.ior(&scene.refractor),
             TirPolicy::default(),
         );
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
@@ -338,7 +338,7 @@ impl DepthPeelTargets {
             bytemuck::bytes_of(&PeelUniforms::from(&settings)),
         );
         let mut media = [PeelMedium::default(); MAX_REFRACTORS];
-        for (slot, medium) in media.iter_mut().zip(params.media(scene)) {
+        for (slot, medium) in media.iter_mut().zip(params.media(scene, cx.lambda_nm)) {
             *slot = medium;
         }
         queue.write_buffer(&self.media, 0, bytemuck::cast_slice(&media));

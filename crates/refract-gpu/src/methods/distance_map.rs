@@ -365,7 +365,7 @@ impl DistanceMapTargets {
         let queue = &context.queue;
         let center = scene.refractor.mesh().bounding_sphere().center;
         let (near, far) = scene.cube_map_clip_planes(center);
-        let ior = scene.refractor.ior();
+        let ior = cx.ior(&scene.refractor);
         let frame = frame_uniforms(camera, &gpu_scene.environment, ior, TirPolicy::default());
         let face_cameras: Vec<Camera> = CubeFace::ALL
             .iter()
@@ -390,7 +390,7 @@ impl DistanceMapTargets {
                 _padding: [0.0; 3],
             }),
         );
-        let refractor = scene.refractor.texel_material();
+        let refractor = scene.refractor.texel_material_at(cx.lambda_nm);
         let refractor = refractor.rgb.extend(refractor.ior);
         let light = &scene.light;
         let search = &params.path.search;

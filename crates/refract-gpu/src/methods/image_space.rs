@@ -78,7 +78,7 @@ impl GpuFamily for ImageSpacePipelines {
         targets: &mut ImageSpaceTargets,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError> {
-        let params = kernel.kernel(cx.scene.refractor.ior())?;
+        let params = kernel.kernel(cx.ior(&cx.scene.refractor))?;
         let uniforms = frame_uniforms(
             cx.camera,
             &cx.gpu_scene.environment,
@@ -127,7 +127,7 @@ impl ImageSpacePipelines {
                 storage_entry(8, false),
             ],
             |method: &ImageSpaceMethod| match method {
-                ImageSpaceMethod::Single => ("shade_single", Vec::new()),
+                ImageSpaceMethod::Single(_) => ("shade_single", Vec::new()),
                 ImageSpaceMethod::TwoInterface(p) => (
                     "shade_two_interface",
                     vec![("DISTANCE_MODE", f64::from(distance_mode_code(p.distance)))],
@@ -231,7 +231,7 @@ impl ImageSpaceTargets {
         } = *cx;
         let back = match kernel {
             ImageSpaceMethod::TwoInterface(p) => Some(p.back),
-            ImageSpaceMethod::Single => None,
+            ImageSpaceMethod::Single(_) => None,
         };
         self.refractor.encode(cx, uniforms, back, false, encoder);
         {

@@ -125,7 +125,7 @@ impl GpuFamily for NearbyPipelines {
         targets: &mut NearbyTargets,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError> {
-        let kernel = params.two.kernel(cx.scene.refractor.ior())?;
+        let kernel = params.two.kernel(cx.ior(&cx.scene.refractor))?;
         let (ng_desc, pad) = guard_band_camera(cx.camera.desc(), params.guard_band_percent);
         let ng_camera =
             Camera::new(ng_desc).map_err(|err| RenderError::Parameter(err.to_string()))?;

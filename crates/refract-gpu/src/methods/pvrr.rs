@@ -292,7 +292,8 @@ impl GpuFamily for PvrrFamily {
     }
 
     fn plan(&mut self, cx: &GpuFrameCx<'_>, params: &PvrrParams) -> Result<(), RenderError> {
-        self.planner.plan(cx.scene, cx.camera, params)?;
+        self.planner
+            .plan_at(cx.scene, cx.camera, params, cx.lambda_nm)?;
         Ok(())
     }
 

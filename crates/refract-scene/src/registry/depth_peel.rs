@@ -6,8 +6,8 @@ use glam::{Vec3, Vec4};
 use refract_core::depth_peel::{MAX_PEEL_LAYERS, PeelMedium, PeelSettings};
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
-    ParamSpec, ParamValue,
+    CPU_AND_GPU, DispersionWavelengths, Family, FamilyParams, MemoryModel, MethodId, MethodInfo,
+    MethodParams, ParamKind, ParamSpec, ParamValue, WAVELENGTHS_PARAM,
 };
 use crate::frame::Aov;
 use crate::scene::Scene;
@@ -32,6 +32,8 @@ pub struct DepthPeelParams {
     /// The largest depth gap of an accepted crossing, in thousandths of the radius of the
     /// sphere holding every refractor, `1..=`[`MAX_PEEL_THICKNESS_MILLI`].
     pub thickness_milli: u32,
+    /// Wavelengths traced through dispersive refractors.
+    pub wavelengths: DispersionWavelengths,
 }
 
 impl DepthPeelParams {
@@ -42,18 +44,19 @@ impl DepthPeelParams {
         max_interfaces: 8,
         steps: 48,
         thickness_milli: 50,
+        wavelengths: DispersionWavelengths::DEFAULT,
     };
 
     /// The media of `scene`'s refractors as the march reads them (refractor `k` in entry
-    /// `k`): its IOR, the IOR around it ([`Scene::outside_ior`]), the medium around it and
-    /// its Beer-Lambert coefficient.
-    pub fn media(&self, scene: &Scene) -> Vec<PeelMedium> {
+    /// `k`): its IOR at wavelength `lambda_nm` ([`crate::Refractor::ior_at`]), the IOR around
+    /// it ([`Scene::outside_ior_at`]), the medium around it and its Beer-Lambert coefficient.
+    pub fn media(&self, scene: &Scene, lambda_nm: Option<f32>) -> Vec<PeelMedium> {
         scene
             .refractors()
             .enumerate()
             .map(|(k, r)| PeelMedium {
-                ior: r.ior(),
-                outside_ior: scene.outside_ior(k),
+                ior: r.ior_at(lambda_nm),
+                outside_ior: scene.outside_ior_at(k, lambda_nm),
                 within: r.within().map_or(0, |w| w as u32 + 1),
                 _padding: 0,
                 sigma: r
@@ -149,6 +152,7 @@ const PARAMS: &[ParamSpec] = &[
         },
         default: "50",
     },
+    WAVELENGTHS_PARAM,
 ];
 
 /// Per layer and pixel: the CPU's visibility buffer (8 bytes) and its unpacked depth, normal
@@ -199,7 +203,14 @@ impl FamilyParams for DepthPeelParams {
         MethodId::DepthPeel
     }
 
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
+        Some(self.wavelengths)
+    }
+
     fn apply(&mut self, name: &str, value: ParamValue) -> bool {
+        if name == "wavelengths" {
+            return self.wavelengths.apply(name, value);
+        }
         let ParamValue::Integer(v) = value else {
             return false;
         };
@@ -219,6 +230,7 @@ impl FamilyParams for DepthPeelParams {
             "max-interfaces" => self.max_interfaces,
             "steps" => self.steps,
             "thickness" => self.thickness_milli,
+            "wavelengths" => return self.wavelengths.get(name),
             _ => return None,
         }))
     }

@@ -3,8 +3,9 @@
 use refract_core::distance_map::{DielectricFresnel, MAX_LAYERS, PathParams, SearchParams};
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
-    ParamSpec, ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, DispersionWavelengths, Family, FamilyParams, MemoryModel, MethodId, MethodInfo,
+    MethodParams, ParamKind, ParamSpec, ParamValue, WAVELENGTHS_PARAM, choice_names, lookup,
+    name_of,
 };
 use crate::frame::Aov;
 
@@ -93,6 +94,7 @@ const DISTANCE_MAP_PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Choice(&FRESNEL_CHOICES),
         default: "none",
     },
+    WAVELENGTHS_PARAM,
 ];
 
 const DISTANCE_MAP_AOVS: &[Aov] = &[
@@ -114,6 +116,8 @@ pub struct DistanceMapParams {
     pub layers: u32,
     /// Texels per face edge.
     pub resolution: u32,
+    /// Wavelengths traced through a dispersive refractor.
+    pub wavelengths: DispersionWavelengths,
 }
 
 impl DistanceMapParams {
@@ -132,6 +136,7 @@ impl DistanceMapParams {
         },
         layers: 3,
         resolution: 512,
+        wavelengths: DispersionWavelengths::DEFAULT,
     };
 }
 
@@ -168,6 +173,10 @@ pub(super) const ROWS: &[MethodInfo] = &[MethodInfo {
 }];
 
 impl FamilyParams for DistanceMapParams {
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
+        Some(self.wavelengths)
+    }
+
     fn id(&self) -> MethodId {
         MethodId::DistanceMap
     }
@@ -186,6 +195,7 @@ impl FamilyParams for DistanceMapParams {
             ("depth", ParamValue::Integer(v)) => self.path.max_depth = v,
             ("layers", ParamValue::Integer(v)) => self.layers = v,
             ("res", ParamValue::Integer(v)) => self.resolution = v,
+            ("wavelengths", _) => return self.wavelengths.apply(name, value),
             ("fresnel", ParamValue::Choice(v)) => {
                 return lookup(&FRESNEL_TABLE, v)
                     .map(|f| self.path.fresnel = f)
@@ -206,6 +216,7 @@ impl FamilyParams for DistanceMapParams {
             "depth" => ParamValue::Integer(self.path.max_depth),
             "layers" => ParamValue::Integer(self.layers),
             "res" => ParamValue::Integer(self.resolution),
+            "wavelengths" => return self.wavelengths.get(name),
             "fresnel" => ParamValue::Choice(name_of(&FRESNEL_TABLE, &self.path.fresnel)),
             _ => return None,
         })

@@ -5,8 +5,9 @@ use refract_core::kernel::ImageSpaceParams;
 use refract_core::{BackSurface, DistanceMode, TirPolicy};
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
-    ParamSpec, ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, DispersionWavelengths, Family, FamilyParams, MemoryModel, MethodId, MethodInfo,
+    MethodParams, ParamKind, ParamSpec, ParamValue, WAVELENGTHS_PARAM, choice_names, lookup,
+    name_of,
 };
 use crate::frame::Aov;
 use crate::renderer::RenderError;
@@ -20,6 +21,8 @@ pub struct TwoInterfaceParams {
     pub back: BackSurface,
     /// Total internal reflection at the exit.
     pub tir: TirPolicy,
+    /// Wavelengths traced through a dispersive refractor.
+    pub wavelengths: DispersionWavelengths,
 }
 
 impl TwoInterfaceParams {
@@ -34,8 +37,9 @@ impl TwoInterfaceParams {
 /// An image-space method run: one interface, or two with their parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ImageSpaceMethod {
-    /// `single`: refract once at `P1`, look `T1` up (no parameters).
-    Single,
+    /// `single`: refract once at `P1`, look `T1` up (its only parameter: the wavelengths of a
+    /// dispersive refractor).
+    Single(DispersionWavelengths),
     /// `wyman`, `wyman-dv`, `wyman-dn`: two interfaces.
     TwoInterface(TwoInterfaceParams),
 }
@@ -46,13 +50,14 @@ impl ImageSpaceMethod {
             distance,
             back: BackSurface::Furthest,
             tir: TirPolicy::ClampToCritical,
+            wavelengths: DispersionWavelengths::DEFAULT,
         })
     }
 
     /// The back surface rasterised, `None` for one interface.
     pub fn back_surface(&self) -> Option<BackSurface> {
         match self {
-            ImageSpaceMethod::Single => None,
+            ImageSpaceMethod::Single(_) => None,
             ImageSpaceMethod::TwoInterface(p) => Some(p.back),
         }
     }
@@ -61,7 +66,7 @@ impl ImageSpaceMethod {
     /// mode and the exit policy).
     pub fn kernel(&self, ior: f32) -> Result<ImageSpaceParams, RenderError> {
         match self {
-            ImageSpaceMethod::Single => TwoInterfaceParams::default().kernel(ior),
+            ImageSpaceMethod::Single(_) => TwoInterfaceParams::default().kernel(ior),
             ImageSpaceMethod::TwoInterface(p) => p.kernel(ior),
         }
     }
@@ -92,7 +97,7 @@ pub(super) const TIR_PARAM: ParamSpec = ParamSpec {
     default: "clamp",
 };
 
-const TWO_INTERFACE_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM];
+const TWO_INTERFACE_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, WAVELENGTHS_PARAM];
 
 pub(super) const TWO_INTERFACE_AOVS: &[Aov] = &[
     Aov::Covered,
@@ -122,9 +127,11 @@ pub(super) const ROWS: &[MethodInfo] = &[
         section: "Table 1 \"1-sided\"",
         family: Family::ImageSpace,
         summary: "refract once at P1, look T1 up in the environment",
-        params: &[],
+        params: &[WAVELENGTHS_PARAM],
         aovs: &[Aov::Covered, Aov::T2, Aov::Tir],
-        defaults: || MethodParams::ImageSpace(ImageSpaceMethod::Single),
+        defaults: || {
+            MethodParams::ImageSpace(ImageSpaceMethod::Single(DispersionWavelengths::DEFAULT))
+        },
         renders_conductors: false,
         memory: IMAGE_SPACE_MEMORY,
         backends: CPU_AND_GPU,
@@ -174,9 +181,10 @@ pub(super) const ROWS: &[MethodInfo] = &[
 ];
 
 impl TwoInterfaceParams {
-    /// Sets `back` or `tir` (shared with the nearby-geometry methods).
+    /// Sets `back`, `tir` or `wavelengths` (shared with the nearby-geometry methods).
     pub(super) fn apply(&mut self, name: &str, value: ParamValue) -> bool {
         match (name, value) {
+            ("wavelengths", _) => self.wavelengths.apply(name, value),
             ("back", ParamValue::Choice(v)) => {
                 lookup(&BACK_TABLE, v).map(|b| self.back = b).is_some()
             }
@@ -185,9 +193,10 @@ impl TwoInterfaceParams {
         }
     }
 
-    /// `back` or `tir`.
+    /// `back`, `tir` or `wavelengths`.
     pub(super) fn get(&self, name: &str) -> Option<ParamValue> {
         match name {
+            "wavelengths" => self.wavelengths.get(name),
             "back" => Some(ParamValue::Choice(name_of(&BACK_TABLE, &self.back))),
             "tir" => Some(ParamValue::Choice(name_of(&TIR_TABLE, &self.tir))),
             _ => None,
@@ -198,7 +207,7 @@ impl TwoInterfaceParams {
 impl FamilyParams for ImageSpaceMethod {
     fn id(&self) -> MethodId {
         match self {
-            ImageSpaceMethod::Single => MethodId::Single,
+            ImageSpaceMethod::Single(_) => MethodId::Single,
             ImageSpaceMethod::TwoInterface(p) => match p.distance {
                 DistanceMode::Interpolated => MethodId::Wyman,
                 DistanceMode::ViewOnly => MethodId::WymanDv,
@@ -209,15 +218,22 @@ impl FamilyParams for ImageSpaceMethod {
 
     fn apply(&mut self, name: &str, value: ParamValue) -> bool {
         match self {
-            ImageSpaceMethod::Single => false,
+            ImageSpaceMethod::Single(w) => w.apply(name, value),
             ImageSpaceMethod::TwoInterface(p) => p.apply(name, value),
         }
     }
 
     fn get(&self, name: &str) -> Option<ParamValue> {
         match self {
-            ImageSpaceMethod::Single => None,
+            ImageSpaceMethod::Single(w) => w.get(name),
             ImageSpaceMethod::TwoInterface(p) => p.get(name),
         }
+    }
+
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
+        Some(match self {
+            ImageSpaceMethod::Single(w) => *w,
+            ImageSpaceMethod::TwoInterface(p) => p.wavelengths,
+        })
     }
 }

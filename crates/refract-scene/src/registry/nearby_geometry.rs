@@ -5,8 +5,9 @@ use refract_core::nearby_geometry::{MAX_ITERATIONS, MAX_SEEDS, NearbyLookup, See
 
 use super::image_space::{BACK_PARAM, TIR_PARAM, TwoInterfaceParams};
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
-    ParamSpec, ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, DispersionWavelengths, Family, FamilyParams, MemoryModel, MethodId, MethodInfo,
+    MethodParams, ParamKind, ParamSpec, ParamValue, WAVELENGTHS_PARAM, choice_names, lookup,
+    name_of,
 };
 use crate::frame::Aov;
 
@@ -92,8 +93,14 @@ const SPACING_PARAM: ParamSpec = ParamSpec {
     default: "screen",
 };
 
-const KAY_GREENBERG_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, GUARD_PARAM];
-const ITERATIVE_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, GUARD_PARAM, ITERATIONS_PARAM];
+const KAY_GREENBERG_PARAMS: &[ParamSpec] = &[BACK_PARAM, TIR_PARAM, GUARD_PARAM, WAVELENGTHS_PARAM];
+const ITERATIVE_PARAMS: &[ParamSpec] = &[
+    BACK_PARAM,
+    TIR_PARAM,
+    GUARD_PARAM,
+    ITERATIONS_PARAM,
+    WAVELENGTHS_PARAM,
+];
 const SEEDED_PARAMS: &[ParamSpec] = &[
     BACK_PARAM,
     TIR_PARAM,
@@ -101,6 +108,7 @@ const SEEDED_PARAMS: &[ParamSpec] = &[
     SEEDED_ITERATIONS_PARAM,
     SEEDS_PARAM,
     SPACING_PARAM,
+    WAVELENGTHS_PARAM,
 ];
 
 const NEARBY_AOVS: &[Aov] = &[
@@ -213,6 +221,10 @@ pub(super) const ROWS: &[MethodInfo] = &[
 ];
 
 impl FamilyParams for NearbyParams {
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
+        Some(self.two.wavelengths)
+    }
+
     fn id(&self) -> MethodId {
         match self.lookup {
             NearbyLookup::KayGreenberg => MethodId::KayGreenberg,
@@ -224,7 +236,7 @@ impl FamilyParams for NearbyParams {
 
     fn apply(&mut self, name: &str, value: ParamValue) -> bool {
         match (name, value, &mut self.lookup) {
-            ("back" | "tir", ..) => self.two.apply(name, value),
+            ("back" | "tir" | "wavelengths", ..) => self.two.apply(name, value),
             ("guard", ParamValue::Integer(v), _) => {
                 self.guard_band_percent = v;
                 true
@@ -250,7 +262,7 @@ impl FamilyParams for NearbyParams {
 
     fn get(&self, name: &str) -> Option<ParamValue> {
         match (name, self.lookup) {
-            ("back" | "tir", _) => self.two.get(name),
+            ("back" | "tir" | "wavelengths", _) => self.two.get(name),
             ("guard", _) => Some(ParamValue::Integer(self.guard_band_percent)),
             (
                 "iterations",

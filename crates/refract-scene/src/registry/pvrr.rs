@@ -2,8 +2,9 @@
 //! `pvrr`.
 
 use super::{
-    CPU_AND_GPU, Family, FamilyParams, MemoryModel, MethodId, MethodInfo, MethodParams, ParamKind,
-    ParamSpec, ParamValue, choice_names, lookup, name_of,
+    CPU_AND_GPU, DispersionWavelengths, Family, FamilyParams, MemoryModel, MethodId, MethodInfo,
+    MethodParams, ParamKind, ParamSpec, ParamValue, WAVELENGTHS_PARAM, choice_names, lookup,
+    name_of,
 };
 use crate::frame::Aov;
 
@@ -82,6 +83,7 @@ const PVRR_PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Choice(&UPDATE_CHOICES),
         default: "every-frame",
     },
+    WAVELENGTHS_PARAM,
 ];
 
 const PVRR_AOVS: &[Aov] = &[Aov::Covered, Aov::Zoom];
@@ -100,6 +102,9 @@ pub struct PvrrParams {
     pub dispersion: u32,
     /// Keep the per-vertex work while the camera is unchanged.
     pub update_on_change: bool,
+    /// Wavelengths traced through a dispersive lens (each with [`Self::dispersion`]'s
+    /// channels around its index).
+    pub wavelengths: DispersionWavelengths,
 }
 
 impl PvrrParams {
@@ -111,6 +116,7 @@ impl PvrrParams {
         sizing: MapSizing::Footprint,
         dispersion: 0,
         update_on_change: false,
+        wavelengths: DispersionWavelengths::DEFAULT,
     };
 
     /// The indices of refraction of the R, G and B rays through a lens of index `ior`.
@@ -157,6 +163,10 @@ impl FamilyParams for PvrrParams {
         MethodId::Pvrr
     }
 
+    fn wavelengths(&self) -> Option<DispersionWavelengths> {
+        Some(self.wavelengths)
+    }
+
     fn apply(&mut self, name: &str, value: ParamValue) -> bool {
         match (name, value) {
             ("depth", ParamValue::Integer(v)) => self.depth = v,
@@ -165,6 +175,7 @@ impl FamilyParams for PvrrParams {
                 return lookup(&SIZING_TABLE, v).map(|s| self.sizing = s).is_some();
             }
             ("dispersion", ParamValue::Integer(v)) => self.dispersion = v,
+            ("wavelengths", _) => return self.wavelengths.apply(name, value),
             ("update", ParamValue::Choice(v)) => {
                 return lookup(&UPDATE_TABLE, v)
                     .map(|u| self.update_on_change = u)
@@ -181,6 +192,7 @@ impl FamilyParams for PvrrParams {
             "res" => ParamValue::Integer(self.resolution),
             "sizing" => ParamValue::Choice(name_of(&SIZING_TABLE, &self.sizing)),
             "dispersion" => ParamValue::Integer(self.dispersion),
+            "wavelengths" => return self.wavelengths.get(name),
             "update" => ParamValue::Choice(name_of(&UPDATE_TABLE, &self.update_on_change)),
             _ => return None,
         })

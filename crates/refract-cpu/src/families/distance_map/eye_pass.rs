@@ -120,7 +120,15 @@ impl EyePass<'_> {
         };
         let (mesh, triangle) = self.everything.source(t.triangle);
         let w = t.barycentrics;
-        let material = surface_material(self.scene, mesh, triangle, w, t.p_ws, t.n_ws);
+        let material = surface_material(
+            self.scene,
+            self.map.lambda_nm,
+            mesh,
+            triangle,
+            w,
+            t.p_ws,
+            t.n_ws,
+        );
         if material.ior == 0.0 {
             return (material.rgb, DistanceAov::default());
         }
@@ -169,12 +177,14 @@ mod tests {
                 camera: &camera,
                 method: MethodId::DistanceMap,
                 outputs: FrameOutputs::ColorAndAovs,
+                lambda_nm: None,
             };
             let mut frame = Frame::default();
             passes.render(&cx, &params, &mut frame).expect("frame");
             let map = MapScene {
                 map: &passes.map,
                 scene: &scene,
+                lambda_nm: None,
             };
             let eye = EyePass {
                 scene: &scene,
