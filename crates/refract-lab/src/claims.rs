@@ -22,6 +22,7 @@ use refract_scene::{
     TraceMode,
 };
 
+mod dispersion;
 mod distance_map;
 mod engine;
 mod inventory;
@@ -247,6 +248,12 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     )?);
     md.push_str(&layers::section(args, &inventory, &mut ledger)?);
     md.push_str(&rough::section(
+        args,
+        &inventory,
+        &mut ledger,
+        engines.as_ref(),
+    )?);
+    md.push_str(&dispersion::section(
         args,
         &inventory,
         &mut ledger,
