@@ -110,6 +110,21 @@ impl EngineModel {
             _ => 0.0,
         }
     }
+    /// The LOD at which this model reads the mip-mapped screen texture for a surface of
+    /// roughness `roughness` on glass of index `ior`, the screen `width` texels wide (0: one
+    /// nearest texel, as for smooth glass). three.js's model blurs as three.js does
+    /// ([`crate::screen_mips::threejs_lod`], read by [`crate::screen_mips::sample_threejs`]);
+    /// Bevy's taps, Godot's and HDRP's mip rules and Filament's LOD are not re-implemented, so
+    /// their models read no roughness.
+    pub fn rough_lod(&self, width: u32, roughness: f32, ior: f32) -> f32 {
+        match self {
+            Self::VolumeThickness {
+                reject_nearer: false,
+                ..
+            } => crate::screen_mips::threejs_lod(width, roughness, ior),
+            _ => 0.0,
+        }
+    }
 }
 
 /// The screen texture of the opaque objects, as an engine's lookup reads it: the view depth of

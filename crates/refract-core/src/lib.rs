@@ -14,6 +14,7 @@
 //!   leaves, bit-identical.
 //! * [`microfacet`]: rough interfaces: GGX, Smith masking, visible-normal sampling (Walter et al. 2007, Heitz 2018).
 //! * [`shading`]: the opaque objects' albedos and directional light.
+//! * [`screen_mips`]: the engines' mip-mapped screen texture and three.js's rough transmission lookup in it.
 //! * [`spectral`]: dispersion: wavelengths, the CIE observer, RGB↔spectrum (Jakob–Hanika), `KHR_materials_dispersion`'s IOR.
 //! * [`arctangent`]: the inlined `atan2` of the per-pixel paths.
 //! * [`distance_map`]: Umenhoffer et al. 2007, rays traced in layered distance maps (linear + secant search, min-max, multiple bounces).
@@ -74,6 +75,7 @@ pub mod optics;
 pub mod procedural_sky;
 pub mod pvrr;
 pub mod real;
+pub mod screen_mips;
 pub mod shading;
 pub mod spectral;
 pub mod vector;

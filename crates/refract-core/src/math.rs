@@ -44,6 +44,10 @@ mod imp {
     pub fn cbrt(x: f32) -> f32 {
         x.cbrt()
     }
+    #[inline]
+    pub fn log2(x: f32) -> f32 {
+        x.log2()
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -88,6 +92,10 @@ mod imp {
     pub fn cbrt(x: f32) -> f32 {
         libm::cbrtf(x)
     }
+    #[inline]
+    pub fn log2(x: f32) -> f32 {
+        libm::log2f(x)
+    }
 }
 
-pub(crate) use imp::{atan2, cbrt, exp, floor, ln, sin, sin_cos, sqrt, tan, trunc};
+pub(crate) use imp::{atan2, cbrt, exp, floor, ln, log2, sin, sin_cos, sqrt, tan, trunc};

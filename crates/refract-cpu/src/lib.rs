@@ -27,6 +27,7 @@ mod prefetch;
 pub mod raster;
 pub mod renderer;
 pub mod scene_meshes;
+pub mod screen_pyramid;
 mod shade;
 pub mod surfaces;
 

@@ -12,6 +12,7 @@ use refract_core::engine::{
     engine_path, hdrp_edge_fade, proxy_box_exit, proxy_sphere_exit, screen_offset_px, smoothstep01,
     volume_exit,
 };
+use refract_core::screen_mips::{ScreenMips, sample_threejs};
 use refract_core::{Camera, CameraDesc};
 use refract_gpu::conformance::{FamilyEvaluation, evaluate_family};
 
@@ -217,5 +218,54 @@ proptest! {
         // The screen's depth tests and fallbacks are exercised: environment-only pixels
         // (Bevy's rejection, HDRP's hit behind the eye), blends (Godot's guard, HDRP's fade).
         prop_assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
+    }
+}
+
+/// `engine_conformance.wgsl`'s analytic screen pyramid (`mip_texel`), exact in f32.
+struct AnalyticMips(UVec2);
+
+impl ScreenMips for AnalyticMips {
+    fn size(&self) -> UVec2 {
+        self.0
+    }
+
+    fn texel(&self, level: u32, texel: UVec2) -> Vec3 {
+        Vec3::new(
+            ((texel.x * 7 + texel.y * 3 + level * 5) % 11) as f32,
+            0.5 * ((texel.x ^ texel.y) % 13) as f32,
+            level as f32 + 0.25 * (texel.x % 4) as f32,
+        )
+    }
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    /// three.js's rough lookup (`screen_mips.wgsl`: the levels' sizes, the B-spline weights,
+    /// the clamped 4 × 4 sums at two levels, their mix) against
+    /// `refract_core::screen_mips::sample_threejs` over an analytic pyramid of a frame whose
+    /// sides are not powers of two, at positions inside and outside the image and LODs from 0
+    /// past the top level.
+    #[test]
+    fn threejs_rough_lookup_agrees(rows in prop::collection::vec((-0.2f32..1.2, -0.2f32..1.2, 0.0f32..9.0), ROWS)) {
+        let context = gpu_or_skip!();
+        let size = UVec2::new(75, 46);
+        let camera = Camera::new(CameraDesc {
+            width: size.x,
+            height: size.y,
+            ..CameraDesc::default()
+        })
+        .expect("camera");
+        let evaluation = FamilyEvaluation {
+            entry: "test_sample_threejs",
+            ..engine_evaluation(&camera, 1.5, &[], &[])
+        };
+        let a: Vec<Vec4> = rows.iter().map(|&(u, v, lod)| Vec4::new(u, v, lod, 0.0)).collect();
+        let gpu = evaluate_family(context, &evaluation, &a, &a).expect("gpu");
+        let mips = AnalyticMips(size);
+        for (k, &(u, v, lod)) in rows.iter().enumerate() {
+            let rust = sample_threejs(&mips, Vec2::new(u, v), lod);
+            prop_assert!(close3(gpu[k], rust, 1e-4), "uv ({u}, {v}) lod {lod}: gpu {} rust {rust}", gpu[k]);
+        }
     }
 }

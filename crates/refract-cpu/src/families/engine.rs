@@ -20,6 +20,7 @@ use refract_core::Camera;
 use refract_core::engine::{EngineModel, OpaqueDepth, engine_path_x8};
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
+use refract_core::screen_mips::sample_threejs;
 use refract_core::vector::robust_normalize;
 use refract_scene::{
     Aov, EngineParams, Environment, Frame, LayerValue, PixelLayers, RenderError, Scene,
@@ -31,6 +32,7 @@ use crate::object_surfaces::{NearbyMeshes, NearbyTexel, NearbyTexture};
 use crate::pixel_group::PixelGroup;
 use crate::raster::SurfaceBuffer;
 use crate::scene_meshes::SceneMeshes;
+use crate::screen_pyramid::ScreenPyramid;
 
 /// Per-pixel outputs beside the colour; NaN / false where they do not apply.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,10 +88,23 @@ pub struct EnginePasses {
     meshes: NearbyMeshes,
     /// Refractor `k`'s nearest front faces in `fronts[k]`.
     fronts: Vec<SurfaceBuffer>,
-    /// Refractor `k`'s model, IOR and dispersion half spread.
-    refractors: Vec<(EngineModel, f32, f32)>,
+    /// Refractor `k`'s model, IOR, dispersion half spread and rough LOD.
+    refractors: Vec<RefractorModel>,
     screen: NearbyTexture,
+    /// The screen texture's colours, mip-mapped, for rough refractors.
+    mips: ScreenPyramid,
     aovs: Vec<EngineAov>,
+}
+
+/// How one refractor is drawn: its engine model, IOR, dispersion half spread
+/// ([`EngineModel::dispersion_half_spread`]) and the LOD its roughness blurs the screen at
+/// ([`EngineModel::rough_lod`], 0: the nearest texel).
+#[derive(Clone, Copy, Debug)]
+struct RefractorModel {
+    model: EngineModel,
+    ior: f32,
+    spread: f32,
+    lod: f32,
 }
 
 impl CpuFamily for EnginePasses {
@@ -114,13 +129,31 @@ impl CpuFamily for EnginePasses {
             } else {
                 0.0
             };
-            (model, r.ior(), spread)
+            RefractorModel {
+                model,
+                ior: r.ior(),
+                spread,
+                lod: model.rough_lod(camera.width(), r.roughness(), r.ior()),
+            }
         }));
         // Without opaque objects the screen texture is the environment everywhere: not drawn.
         let screen = (!scene.objects.is_empty()).then(|| {
             self.screen.render_into(scene, &self.meshes, camera);
             &self.screen
         });
+        // The blurred screen exists where a refractor is rough: the objects, or the environment
+        // along each texel's eye ray (the engines draw the sky into the texture).
+        let rough = self.refractors.iter().any(|r| r.lod > 0.0);
+        if rough {
+            let size = glam::UVec2::new(camera.width(), camera.height());
+            self.mips
+                .build(size, |texel| match screen.and_then(|s| s.texel(texel)) {
+                    Some(t) => t.color,
+                    None => scene
+                        .environment
+                        .radiance(camera.pixel_ray(Camera::pixel_center(texel.x, texel.y)).dir),
+                });
+        }
         self.fronts
             .resize_with(scene.refractor_count(), SurfaceBuffer::default);
         for (refractor, front) in scene.refractors().zip(&mut self.fronts) {
@@ -135,6 +168,7 @@ impl CpuFamily for EnginePasses {
             refractors: &self.refractors,
             fronts: &self.fronts,
             screen,
+            mips: rough.then_some(&self.mips),
         };
         let rows = frame.color.par_chunks_mut(width as usize).enumerate();
         if cx.with_aovs() {
@@ -155,12 +189,14 @@ impl CpuFamily for EnginePasses {
 struct PixelContext<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
-    /// Refractor `k`'s model, IOR and dispersion half spread.
-    refractors: &'a [(EngineModel, f32, f32)],
+    /// How refractor `k` is drawn.
+    refractors: &'a [RefractorModel],
     /// Refractor `k`'s front faces.
     fronts: &'a [SurfaceBuffer],
     /// The opaque objects' screen texture; `None` for a scene without objects.
     screen: Option<&'a NearbyTexture>,
+    /// The screen's colours mip-mapped, where a refractor is rough.
+    mips: Option<&'a ScreenPyramid>,
 }
 
 impl PixelContext<'_> {
@@ -282,7 +318,12 @@ impl PixelContext<'_> {
         mut aovs: Option<&mut [EngineAov]>,
     ) {
         let fronts = self.fronts[k].texels_x8(&group.x, y);
-        let (model, ior, spread) = self.refractors[k];
+        let RefractorModel {
+            model,
+            ior,
+            spread,
+            lod,
+        } = self.refractors[k];
         let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
         for (i, f) in fronts.iter().enumerate() {
             p1[i] = f.p_ws;
@@ -312,17 +353,21 @@ impl PixelContext<'_> {
             } else {
                 None
             };
-            self.read_paths(group, &paths, channels, colors, lanes, aovs);
+            self.read_paths(group, &paths, channels, lod, colors, lanes, aovs);
         }
     }
 
     /// Adds the reads of `paths` (lane `i` for pixel `group.x[i]`) times `channels` to the
-    /// pixels' colours, and their AOVs when asked.
+    /// pixels' colours, and their AOVs when asked. At a rough `lod` (> 0) the screen is read
+    /// blurred, three.js's B-spline lookup in the mip-mapped screen at the projected exit point
+    /// ([`sample_threejs`]; the AOVs still name the nearest texel).
+    #[allow(clippy::too_many_arguments)]
     fn read_paths(
         &self,
         group: &PixelGroup,
         paths: &[refract_core::engine::EnginePath; LANES],
         channels: Vec3,
+        lod: f32,
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
         mut aovs: Option<&mut [EngineAov]>,
@@ -336,7 +381,23 @@ impl PixelContext<'_> {
                 ..EngineAov::NONE
             };
             if path.screen_weight > 0.0 {
-                self.screen(x, path.texel, path.screen_weight * channels, colors, lanes);
+                match self.mips.filter(|_| lod > 0.0) {
+                    Some(mips) => {
+                        let size =
+                            Vec2::new(self.camera.width() as f32, self.camera.height() as f32);
+                        let uv_px = self
+                            .camera
+                            .world_to_pixel(path.p2)
+                            .map_or(Camera::pixel_center(path.texel.x, path.texel.y), |p| {
+                                Vec2::new(p.x, p.y)
+                            });
+                        let color = sample_threejs(mips, uv_px / size, lod);
+                        colors[x as usize] += path.screen_weight * channels * color;
+                    }
+                    None => {
+                        self.screen(x, path.texel, path.screen_weight * channels, colors, lanes)
+                    }
+                }
                 if let Some(t) = self.object(path.texel) {
                     aov.p_geom = t.surface.p_ws;
                     aov.ng_texel =

@@ -13,7 +13,7 @@ use refract_scene::{
     RenderError,
 };
 
-use crate::bindings::{bind_group, uniform_entry};
+use crate::bindings::{bind_group, storage_entry, uniform_entry};
 use crate::context::{GpuContext, GpuError};
 use crate::family::{GpuFamily, GpuFrameCx};
 use crate::frame_uniforms::frame_uniforms;
@@ -29,10 +29,15 @@ use crate::shaders::{
     CORE, ENVIRONMENT, FRAME, IMAGE_SPACE, MATERIALS, OBJECT_SURFACES, OBJECT_TEXTURE,
     PROCEDURAL_SKY, ShaderModule, TWO_INTERFACE, WgslFile,
 };
+use refract_core::screen_mips::{level_count, level_size};
 
 /// Where each engine reads the screen (`engine_path`), over a `screen_depth` its includer
 /// provides.
 const ENGINE_PATH: WgslFile = ("engine_path.wgsl", include_str!("engine_path.wgsl"));
+
+/// The mip-mapped screen's levels and three.js's rough lookup, over a `mip_texel` its includer
+/// provides.
+const SCREEN_MIPS: WgslFile = ("screen_mips.wgsl", include_str!("screen_mips.wgsl"));
 
 /// The family's modules: its pass, and its conformance module.
 pub(crate) const SHADERS: &[ShaderModule] = &[SHADER, CONFORMANCE];
@@ -52,6 +57,7 @@ pub(crate) const SHADER: ShaderModule = ShaderModule {
         OBJECT_SURFACES,
         OBJECT_TEXTURE,
         ENGINE_PATH,
+        SCREEN_MIPS,
         ("engine.wgsl", include_str!("engine.wgsl")),
     ],
 };
@@ -65,6 +71,7 @@ pub(crate) const CONFORMANCE: ShaderModule = ShaderModule {
         CORE,
         FRAME,
         ENGINE_PATH,
+        SCREEN_MIPS,
         (
             "engine_conformance.wgsl",
             include_str!("engine_conformance.wgsl"),
@@ -72,15 +79,23 @@ pub(crate) const CONFORMANCE: ShaderModule = ShaderModule {
     ],
 };
 
-/// The `shade_engine` pipelines: one per engine method (`ENGINE_MODEL` fixed per method).
-pub(crate) struct EnginePipelines(MethodPipelines);
+/// The `shade_engine` pipelines: one per engine method (`ENGINE_MODEL` fixed per method), and
+/// the two passes that mip-map the screen texture for rough refractors (`screen_mip_base`,
+/// `screen_mip_levels`).
+pub(crate) struct EnginePipelines {
+    shade: MethodPipelines,
+    mip_base: wgpu::ComputePipeline,
+    mip_levels: wgpu::ComputePipeline,
+}
 
 impl EnginePipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let mut entries = nearby_layout();
         entries.push(uniform_entry(16, wgpu::ShaderStages::COMPUTE));
         entries.push(uniform_entry(17, wgpu::ShaderStages::COMPUTE));
-        Self(MethodPipelines::new(
+        entries.push(storage_entry(18, false));
+        let volume = f64::from(refract_core::engine::ENGINE_VOLUME_THICKNESS);
+        let (shade, mut passes) = MethodPipelines::with_passes(
             device,
             &SHADER,
             &entries,
@@ -88,8 +103,38 @@ impl EnginePipelines {
                 let code = f64::from(p.method.model_code());
                 ("shade_engine", vec![("ENGINE_MODEL", code)])
             },
-        ))
+            &[
+                ("screen_mip_base", vec![("ENGINE_MODEL", volume)]),
+                ("screen_mip_levels", vec![("ENGINE_MODEL", volume)]),
+            ],
+        );
+        let mip_levels = passes.pop().expect("two passes");
+        let mip_base = passes.pop().expect("two passes");
+        Self {
+            shade,
+            mip_base,
+            mip_levels,
+        }
     }
+}
+
+/// Whether a frame of `params` on `scene` reads the blurred screen: a refractor whose model
+/// blurs at its roughness ([`refract_core::engine::EngineModel::rough_lod`]).
+fn needs_mips(cx: &GpuFrameCx<'_>, params: &EngineParams) -> bool {
+    refractor_table(cx.scene, params, cx.camera)
+        .iter()
+        .any(|entry| entry[3] > 0.0)
+}
+
+/// The screen pyramid's texels above level 0 at `size`.
+fn texels_above_base((width, height): (u32, u32)) -> u64 {
+    let size = glam::UVec2::new(width, height);
+    (1..level_count(size))
+        .map(|level| {
+            let s = level_size(size, level);
+            u64::from(s.x) * u64::from(s.y)
+        })
+        .sum()
 }
 
 impl GpuFamily for EnginePipelines {
@@ -101,12 +146,16 @@ impl GpuFamily for EnginePipelines {
         Self::new(device)
     }
 
-    fn fits(&self, targets: &EngineTargets, cx: &GpuFrameCx<'_>, _: &EngineParams) -> bool {
-        targets.size == cx.size()
+    fn fits(&self, targets: &EngineTargets, cx: &GpuFrameCx<'_>, params: &EngineParams) -> bool {
+        targets.size == cx.size() && targets.mips == needs_mips(cx, params)
     }
 
-    fn allocate(&self, cx: &GpuFrameCx<'_>, _: &EngineParams) -> Result<EngineTargets, GpuError> {
-        EngineTargets::new(cx, self)
+    fn allocate(
+        &self,
+        cx: &GpuFrameCx<'_>,
+        params: &EngineParams,
+    ) -> Result<EngineTargets, GpuError> {
+        EngineTargets::new(cx, self, needs_mips(cx, params))
     }
 
     fn encode(
@@ -141,10 +190,12 @@ impl GpuFamily for EnginePipelines {
     }
 }
 
-/// Refractor `k`'s `(IOR, amount, spread, 0)` in entry `k` (`engine.wgsl`'s
+/// Refractor `k`'s `(IOR, amount, spread, LOD)` in entry `k` (`engine.wgsl`'s
 /// `engine_refractors`): the IOR, the model's `amount` ([`EngineUniforms::amount`]) of `params`
-/// on that refractor and its dispersion half spread
-/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index).
+/// on that refractor, its dispersion half spread
+/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index) and the LOD
+/// its roughness blurs the screen at ([`refract_core::engine::EngineModel::rough_lod`], 0: the
+/// nearest texel).
 fn refractor_table(
     scene: &refract_scene::Scene,
     params: &EngineParams,
@@ -159,7 +210,8 @@ fn refractor_table(
         } else {
             0.0
         };
-        *entry = [refractor.ior(), amount, spread, 0.0];
+        let lod = model.rough_lod(camera.width(), refractor.roughness(), refractor.ior());
+        *entry = [refractor.ior(), amount, spread, lod];
     }
     table
 }
@@ -173,16 +225,31 @@ pub(crate) struct EngineTargets {
     engine_uniforms: wgpu::Buffer,
     /// [`refractor_table`] (binding 17).
     refractor_table: wgpu::Buffer,
+    /// Whether the bind group's mip-mapped screen colours (binding 18, kept alive by the group)
+    /// hold the whole pyramid (a rough refractor), else one texel.
+    mips: bool,
     group: wgpu::BindGroup,
     /// Colour, T2, P2, flags (off screen, screen weight), P_geom (w: hit), texel (x, y, object).
     outputs: OutputBuffers,
 }
 
 impl EngineTargets {
-    fn new(cx: &GpuFrameCx<'_>, pipelines: &EnginePipelines) -> Result<Self, GpuError> {
+    fn new(cx: &GpuFrameCx<'_>, pipelines: &EnginePipelines, mips: bool) -> Result<Self, GpuError> {
         let (width, height) = cx.size();
         let context = cx.context;
         check_limits(context, width, height)?;
+        let mip_texels = if mips {
+            u64::from(width) * u64::from(height) + texels_above_base((width, height))
+        } else {
+            1
+        };
+        let mip_bytes = mip_texels * 16;
+        let limit = context.device.limits().max_storage_buffer_binding_size;
+        if mip_bytes > limit {
+            return Err(GpuError::Wgpu(format!(
+                "the mip-mapped screen of a rough refractor at {width} × {height} takes {mip_bytes} bytes, more than the adapter's largest storage buffer ({limit})"
+            )));
+        }
         let device = &context.device;
         let scene = cx.gpu_scene;
         context.checked(|| {
@@ -211,11 +278,18 @@ impl EngineTargets {
                 &["colour", "T2", "P2", "flags", "P_geom", "texel"],
                 u64::from(width) * u64::from(height),
             );
+            let screen_mips = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("screen mips"),
+                size: mip_bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
             let mut resources =
                 nearby_resources(&refractor, scene, &outputs, &screen, &nearby_uniforms);
             resources.push(engine_uniforms.as_entire_binding());
             resources.push(refractor_table.as_entire_binding());
-            let group = bind_group(device, "engine", &pipelines.0.layout, &resources);
+            resources.push(screen_mips.as_entire_binding());
+            let group = bind_group(device, "engine", &pipelines.shade.layout, &resources);
             Self {
                 size: (width, height),
                 refractor,
@@ -223,6 +297,7 @@ impl EngineTargets {
                 nearby_uniforms,
                 engine_uniforms,
                 refractor_table,
+                mips,
                 group,
                 outputs,
             }
@@ -277,12 +352,30 @@ impl EngineTargets {
                 timestamps.and_then(|t| t.render_pass("object surfaces")),
             );
         }
+        if self.mips {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("screen mips"),
+                timestamp_writes: timestamps.and_then(|t| t.compute_pass("screen mips")),
+            });
+            pass.set_bind_group(0, &self.group, &[]);
+            let (width, height) = self.size;
+            pass.set_pipeline(&pipelines.mip_base);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            // `screen_mip_levels` numbers its invocations x + 65535 · 64 · y.
+            let groups = texels_above_base(self.size).div_ceil(64);
+            if groups > 0 {
+                pass.set_pipeline(&pipelines.mip_levels);
+                let x = groups.min(65_535) as u32;
+                let y = groups.div_ceil(65_535) as u32;
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("engine kernel"),
                 timestamp_writes: timestamps.and_then(|t| t.compute_pass("engine kernel")),
             });
-            pass.set_pipeline(pipelines.0.get(method, outputs));
+            pass.set_pipeline(pipelines.shade.get(method, outputs));
             pass.set_bind_group(0, &self.group, &[]);
             let (width, height) = self.size;
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);

@@ -10,8 +10,12 @@
 // from `engine_refractors`, over the screen texture of the opaque objects only, as the engines
 // draw several transmissive objects.
 
-// Refractor k's (IOR, amount, dispersion half spread, 0): crates/refract-gpu/src/methods/engine.rs.
+// Refractor k's (IOR, amount, dispersion half spread, rough LOD): crates/refract-gpu/src/methods/engine.rs.
 @group(0) @binding(17) var<uniform> engine_refractors: array<vec4<f32>, MAX_REFRACTORS>;
+
+// The screen texture's colours mip-mapped (refract_core::screen_mips), level after level, for
+// rough refractors: written by screen_mip_base and screen_mip_levels before shade_engine.
+@group(0) @binding(18) var<storage, read_write> screen_mips: array<vec4<f32>>;
 
 // The screen texel: xyz = P, w = 1 where it holds an object.
 fn screen_surface(texel: vec2<i32>) -> vec4<f32> {
@@ -37,6 +41,76 @@ fn screen_color(texel: vec2<i32>) -> vec3<f32> {
         return ng_color(texel);
     }
     return environment_radiance(pixel_ray_dir(vec2<f32>(texel) + vec2<f32>(0.5)));
+}
+
+// Where level `level` starts in screen_mips.
+fn mip_level_offset(level: u32) -> u32 {
+    var offset = 0u;
+    for (var j = 0u; j < level; j++) {
+        let s = mip_level_size(j);
+        offset += s.x * s.y;
+    }
+    return offset;
+}
+
+fn mip_texel(level: u32, texel: vec2<u32>) -> vec3<f32> {
+    let s = mip_level_size(level);
+    return screen_mips[mip_level_offset(level) + texel.y * s.x + texel.x].xyz;
+}
+
+// Level 0: the screen texture's colour per texel.
+@compute @workgroup_size(8, 8)
+fn screen_mip_base(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.width || id.y >= frame.height {
+        return;
+    }
+    screen_mips[id.y * frame.width + id.x] = vec4<f32>(screen_color(vec2<i32>(id.xy)), 1.0);
+}
+
+// Levels 1 and up, one invocation per texel: the mean of its level-0 block
+// (refract_core::screen_mips::level_block).
+@compute @workgroup_size(64)
+fn screen_mip_levels(@builtin(global_invocation_id) id: vec3<u32>) {
+    var index = id.x + id.y * 65535u * 64u;
+    let levels = mip_level_count();
+    let base = frame.width * frame.height;
+    var offset = base;
+    for (var level = 1u; level < levels; level++) {
+        let s = mip_level_size(level);
+        let count = s.x * s.y;
+        if index < count {
+            let texel = vec2<u32>(index % s.x, index / s.x);
+            let size = vec2<u32>(frame.width, frame.height);
+            let start = texel << vec2<u32>(level);
+            let end = max(min((texel + vec2<u32>(1u)) << vec2<u32>(level), size), start + vec2<u32>(1u));
+            let stop = min(end, size);
+            var sum = vec3<f32>(0.0);
+            for (var y = start.y; y < stop.y; y++) {
+                for (var x = start.x; x < stop.x; x++) {
+                    sum += screen_mips[y * frame.width + x].xyz;
+                }
+            }
+            let n = f32((stop.x - start.x) * (stop.y - start.y));
+            screen_mips[offset + index] = vec4<f32>(sum / n, 1.0);
+            return;
+        }
+        index -= count;
+        offset += count;
+    }
+}
+
+// The screen colour a path reads: its nearest texel, or at a rough `lod` three.js's blurred
+// lookup at the projected exit point (the pixel centre of its texel behind the eye).
+fn read_screen(path: EnginePath, lod: f32) -> vec3<f32> {
+    if lod <= 0.0 {
+        return screen_color(path.texel);
+    }
+    let projected = world_to_pixel(path.p2);
+    var uv_px = vec2<f32>(path.texel) + vec2<f32>(0.5);
+    if projected.w > 0.5 {
+        uv_px = projected.xy;
+    }
+    return sample_threejs(uv_px / vec2<f32>(f32(frame.width), f32(frame.height)), lod);
 }
 
 fn write_engine_aovs(i: u32, path: EnginePath, covered: bool) {
@@ -106,7 +180,7 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let path = engine_path(px.uv, px.p1, n1, ior, refractor.y);
         if path.screen_weight > 0.0 {
-            color += (path.screen_weight * channels) * screen_color(path.texel);
+            color += (path.screen_weight * channels) * read_screen(path, refractor.w);
         }
         if path.screen_weight < 1.0 {
             color += ((1.0 - path.screen_weight) * channels) * environment_radiance(path.environment_dir);

@@ -106,3 +106,23 @@ fn test_engine_screen(@builtin(global_invocation_id) id: vec3<u32>) {
     let o = screen_offset_px(in_a[i].xyz, in_a[i].w, vec2<f32>(640.0, 480.0));
     out_v[i] = vec4<f32>(o, hdrp_edge_fade(in_b[i].xy), smoothstep01(in_b[i].z));
 }
+
+// The analytic screen pyramid of `test_sample_threejs` (exact in f32; the twin of
+// `AnalyticMips` in tests/engine_conformance.rs): no level is the mean of the one below, so
+// every level's texels tell apart which level and which texel were read.
+fn mip_texel(level: u32, texel: vec2<u32>) -> vec3<f32> {
+    return vec3<f32>(
+        f32((texel.x * 7u + texel.y * 3u + level * 5u) % 11u),
+        0.5 * f32((texel.x ^ texel.y) % 13u),
+        f32(level) + 0.25 * f32(texel.x % 4u),
+    );
+}
+
+// a = (u, v, lod, _) -> (three.js's blurred sample, _), the frame's size level 0's.
+@compute @workgroup_size(64)
+fn test_sample_threejs(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(sample_threejs(in_a[i].xy, in_a[i].z), 0.0);
+}
+

@@ -23,7 +23,24 @@ impl MethodPipelines {
         entries: &[wgpu::BindGroupLayoutEntry],
         entry: impl Fn(&P) -> (&'static str, Vec<(&'static str, f64)>),
     ) -> Self {
+        Self::with_passes(device, module, entries, entry, &[]).0
+    }
+
+    /// [`Self::new`], and one colour-only pipeline of the same module and layout for each of
+    /// `passes` (an entry point with its override constants), in their order: the family's
+    /// passes that run before its method's.
+    pub(crate) fn with_passes<P: TryFrom<MethodParams>>(
+        device: &wgpu::Device,
+        module: &ShaderModule,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        entry: impl Fn(&P) -> (&'static str, Vec<(&'static str, f64)>),
+        passes: &[(&'static str, Vec<(&'static str, f64)>)],
+    ) -> (Self, Vec<wgpu::ComputePipeline>) {
         let compiler = PipelineCompiler::new(device, module, entries);
+        let extra = passes
+            .iter()
+            .map(|(name, constants)| compiler.compile(name, name, FrameOutputs::Color, constants))
+            .collect();
         let mut pipelines = Vec::new();
         let rows = REGISTRY
             .iter()
@@ -36,10 +53,13 @@ impl MethodPipelines {
                 pipelines.push((id, outputs, pipeline));
             }
         }
-        Self {
-            layout: compiler.layout,
-            pipelines,
-        }
+        (
+            Self {
+                layout: compiler.layout,
+                pipelines,
+            },
+            extra,
+        )
     }
 
     /// The pipeline of `method` for `outputs`.

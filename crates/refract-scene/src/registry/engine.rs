@@ -206,14 +206,15 @@ const ENGINE_AOVS: &[Aov] = &[
 ];
 
 /// The opaque objects' surface pass at the frame's size (the nearby-geometry family's, 40
-/// bytes a texel) and the refractor's front faces; the per-pixel figures are the
-/// nearby-geometry family's, whose passes these are a subset of (not measured separately:
-/// an upper bound).
+/// bytes a texel), for rough glass its colours mip-mapped (12 bytes a texel, 4/3 of the
+/// frame's texels: 16 a pixel, counted for every scene), and the refractor's front faces; the
+/// per-pixel figures are the nearby-geometry family's, whose passes these are a subset of (not
+/// measured separately: an upper bound).
 const ENGINE_MEMORY: MemoryModel = MemoryModel {
     color_bytes_per_pixel: 47,
     layers_bytes_per_pixel: 275,
     texels: |_, width, height| u64::from(width) * u64::from(height),
-    bytes_per_texel: 40,
+    bytes_per_texel: 56,
 };
 
 /// The engines that ship `screen-offset`.

@@ -1,0 +1,65 @@
+// The engines' mip-mapped screen texture (refract_core::screen_mips): its levels' sizes and
+// three.js's rough transmission lookup in it, written against `frame` (its size is level 0's)
+// and a `mip_texel(level, texel)` the including module provides: the screen pyramid's buffer in
+// engine.wgsl, an analytic pyramid in engine_conformance.wgsl.
+
+// refract_core::screen_mips::level_count for the frame's size.
+fn mip_level_count() -> u32 {
+    return 32u - countLeadingZeros(max(max(frame.width, frame.height), 1u));
+}
+
+// refract_core::screen_mips::level_size.
+fn mip_level_size(level: u32) -> vec2<u32> {
+    return max(vec2<u32>(frame.width >> level, frame.height >> level), vec2<u32>(1u));
+}
+
+// refract_core::screen_mips::bspline_weights.
+fn bspline_weights(a: f32) -> vec4<f32> {
+    let a2 = a * a;
+    let a3 = a2 * a;
+    let b = 1.0 - a;
+    return vec4<f32>(
+        b * b * b / 6.0,
+        (3.0 * a3 - 6.0 * a2 + 4.0) / 6.0,
+        (-3.0 * a3 + 3.0 * a2 + 3.0 * a + 1.0) / 6.0,
+        a3 / 6.0,
+    );
+}
+
+// refract_core::screen_mips::sample_bspline: the 4 × 4 B-spline sample of `level` at `uv`.
+fn sample_bspline(uv: vec2<f32>, level: u32) -> vec3<f32> {
+    let size = mip_level_size(level);
+    let t = uv * vec2<f32>(size) - vec2<f32>(0.5);
+    let base = floor(t);
+    let f = t - base;
+    let wx = bspline_weights(f.x);
+    let wy = bspline_weights(f.y);
+    let top = vec2<i32>(size) - vec2<i32>(1);
+    var sum = vec3<f32>(0.0);
+    for (var j = 0; j < 4; j++) {
+        let y = u32(clamp(i32(base.y) - 1 + j, 0, top.y));
+        var row = vec3<f32>(0.0);
+        for (var i = 0; i < 4; i++) {
+            let x = u32(clamp(i32(base.x) - 1 + i, 0, top.x));
+            row += wx[i] * mip_texel(level, vec2<u32>(x, y));
+        }
+        sum += wy[j] * row;
+    }
+    return sum;
+}
+
+// refract_core::screen_mips::sample_threejs: three.js's textureBicubic at `lod`.
+fn sample_threejs(uv: vec2<f32>, lod_in: f32) -> vec3<f32> {
+    let top = mip_level_count() - 1u;
+    let lod = max(lod_in, 0.0);
+    let low_f = floor(lod);
+    let fraction = lod - low_f;
+    let low = min(u32(low_f), top);
+    let high = min(low + select(0u, 1u, fraction > 0.0), top);
+    let fine = sample_bspline(uv, low);
+    if high == low {
+        return fine;
+    }
+    let coarse = sample_bspline(uv, high);
+    return fine + (coarse - fine) * fraction;
+}
