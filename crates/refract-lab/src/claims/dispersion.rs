@@ -29,22 +29,46 @@ const SPP: u32 = 64;
 /// The wavelengths of the convergence test (B12) beside the default 3.
 const MANY_WAVELENGTHS: u32 = 16;
 
-/// `Δx`: the centroid along x of the red channel minus that of the blue channel, over the
-/// pixels `mask` selects, each channel clamped at 0 (`None` where a channel has no light).
-pub(crate) fn fringe_offset(colors: &[Vec3], width: u32, mask: &[bool]) -> Option<f64> {
-    let (mut red, mut blue) = ((0.0, 0.0), (0.0, 0.0));
-    for (i, (c, _)) in colors
-        .iter()
-        .zip(mask)
-        .enumerate()
-        .filter(|(_, (_, m))| **m)
-    {
-        let x = f64::from(i as u32 % width) + 0.5;
-        let (r, b) = (f64::from(c.x.max(0.0)), f64::from(c.z.max(0.0)));
-        red = (red.0 + r * x, red.1 + r);
-        blue = (blue.0 + b * x, blue.1 + b);
+/// `Δx` per slit image: in each row, each run of lit pixels (largest channel ≥ `lit`) inside
+/// `mask` and bounded on both sides by unlit pixels of `mask` (a slit image whole on the prism,
+/// not cut by its edge), its red channel's centroid along x minus its blue channel's (each
+/// clamped at 0); the mean over the runs weighted by their red plus blue light. `None` without a
+/// run (a renderer that shows no slit through the prism).
+pub(crate) fn fringe_offset(colors: &[Vec3], width: u32, mask: &[bool], lit: f32) -> Option<f64> {
+    let width = width as usize;
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for (row, row_mask) in colors.chunks(width).zip(mask.chunks(width)) {
+        let is_lit = |x: usize| row_mask[x] && row[x].max_element() >= lit;
+        let is_dark = |x: usize| row_mask[x] && row[x].max_element() < lit;
+        let mut x = 0;
+        while x < row.len() {
+            if !is_lit(x) {
+                x += 1;
+                continue;
+            }
+            let start = x;
+            while x < row.len() && is_lit(x) {
+                x += 1;
+            }
+            // Bounded by unlit prism pixels on both sides.
+            if start == 0 || x == row.len() || !is_dark(start - 1) || !is_dark(x) {
+                continue;
+            }
+            let (mut red, mut blue) = ((0.0, 0.0), (0.0, 0.0));
+            for (i, c) in row[start..x].iter().enumerate() {
+                let px = (start + i) as f64 + 0.5;
+                let (r, b) = (f64::from(c.x.max(0.0)), f64::from(c.z.max(0.0)));
+                red = (red.0 + r * px, red.1 + r);
+                blue = (blue.0 + b * px, blue.1 + b);
+            }
+            if red.1 > 0.0 && blue.1 > 0.0 {
+                let light = red.1 + blue.1;
+                sum += (red.0 / red.1 - blue.0 / blue.1) * light;
+                weight += light;
+            }
+        }
     }
-    (red.1 > 0.0 && blue.1 > 0.0).then(|| red.0 / red.1 - blue.0 / blue.1)
+    (weight > 0.0).then(|| sum / weight)
 }
 
 /// B10: the renderer's `Δx` has the reference's sign and is at least `min_px` (inconclusive
@@ -105,6 +129,7 @@ pub fn section(
 ) -> crate::Result<String> {
     let mut b10 = inventory.claim("B10")?;
     let min_px = b10.threshold("min_px")?;
+    let lit = b10.threshold("lit")? as f32;
     let mut b11 = inventory.claim("B11")?;
     let rise = b11.threshold("rise")?;
     let mut b12 = inventory.claim("B12")?;
@@ -131,14 +156,14 @@ pub fn section(
         .ok_or_else(|| crate::LabError::invalid("the reference wrote no covered layer"))?
         .to_vec();
     let pixels = mask.iter().filter(|&&m| m).count();
-    let reference = fringe_offset(&truth.color, width, &mask);
+    let reference = fringe_offset(&truth.color, width, &mask, lit);
 
     let mut cpu = CpuRenderer::new();
     cpu.prepare(&scene)?;
     let mut frame = Frame::default();
     let mut offset = |params: &MethodParams| -> crate::Result<Option<f64>> {
         cpu.render(&camera, params, FrameOutputs::Color, &mut frame)?;
-        Ok(fringe_offset(&frame.color, width, &mask))
+        Ok(fringe_offset(&frame.color, width, &mask, lit))
     };
     let mut rows = Vec::new();
     for id in MethodId::approximations() {
@@ -167,7 +192,7 @@ pub fn section(
             for e in engines.render(&scene, &truth, width, height)? {
                 rows.push(Row {
                     label: format!("`{}` (the engine itself)", e.label),
-                    three: fringe_offset(&e.frame.color, width, &mask),
+                    three: fringe_offset(&e.frame.color, width, &mask, lit),
                     many: None,
                     wavelengths: false,
                 });
@@ -217,9 +242,12 @@ pub fn section(
          `prism` at {width} × {height}: a glass prism (n_d 1.5, Abbe number 30: `n(λ)` from 1.529 \
          at 400 nm to 1.493 at 700 nm) before fifteen white slits on a black wall, the reference \
          in transmission mode at {SPP} samples a pixel, four wavelengths each (`docs/reference.md`). \
-         The fringe is Δx, the red channel's centroid minus the blue channel's along x (each \
-         clamped at 0), in pixels, over the {pixels} pixels whose pixel-centre path the reference \
-         finds on the prism: reference {} px. The methods run on the CPU backend, those with the \
+         The fringe is Δx per slit image: on the {pixels} pixels whose pixel-centre path the \
+         reference finds on the prism, in each row each run of lit pixels (largest channel ≥ \
+         {lit}) with unlit prism pixels on both sides (a slit's image not cut by the prism's \
+         edge), the red channel's centroid minus the blue channel's along x (each clamped at 0), \
+         in pixels, averaged over the runs weighted by their red plus blue light: reference {} px \
+         (– where a renderer shows no whole slit image on the prism). The methods run on the CPU backend, those with the \
          `wavelengths` parameter at 3 (their default) and {MANY_WAVELENGTHS} wavelengths \
          (`docs/methods.md`, \"Dispersion\"); the engines render the exported glTF with its \
          `KHR_materials_dispersion`.\n",
@@ -253,23 +281,33 @@ pub fn section(
 mod tests {
     use super::*;
 
-    /// The fringe of a frame made for it: red two pixels right of blue.
+    /// The fringe of rows made for it: a slit image with red two pixels right of blue, one
+    /// cut by the mask's edge (ignored) and one touching the frame's edge (ignored).
     #[test]
-    fn fringe_offset_is_red_minus_blue() {
-        let width = 8;
-        let mut colors = vec![Vec3::ZERO; 16];
+    fn fringe_offset_is_red_minus_blue_per_whole_slit_image() {
+        let width = 10;
+        let dark = Vec3::ZERO;
+        let mut colors = vec![dark; 30];
+        // Row 0: a whole image at x 3..6: blue at 3, green at 4, red at 5.
         colors[3] = Vec3::new(0.0, 0.0, 1.0);
-        colors[5] = Vec3::new(1.0, 0.0, -0.5); // negative blue is clamped away
-        colors[8 + 3] = Vec3::new(0.0, 1.0, 2.0);
-        colors[8 + 5] = Vec3::new(2.0, 0.0, 0.0);
-        let mask = vec![true; 16];
-        let dx = fringe_offset(&colors, width, &mask).expect("light");
+        colors[4] = Vec3::new(0.0, 1.0, -0.5); // negative blue is clamped away
+        colors[5] = Vec3::new(1.0, 0.0, 0.0);
+        // Row 1: an image cut by the mask (mask starts at x 2, image at 2..4).
+        colors[10 + 2] = Vec3::new(0.0, 0.0, 1.0);
+        colors[10 + 3] = Vec3::new(1.0, 0.0, 0.0);
+        // Row 2: an image running off the frame's right edge.
+        colors[20 + 8] = Vec3::new(0.0, 0.0, 1.0);
+        colors[20 + 9] = Vec3::new(3.0, 0.0, 0.0);
+        let mut mask = vec![true; 30];
+        mask[10] = false;
+        mask[11] = false;
+        let dx = fringe_offset(&colors, width, &mask, 0.01).expect("a whole image");
         assert!((dx - 2.0).abs() < 1e-12, "{dx}");
-        // Masked out: no red left.
-        let mut only_blue = mask.clone();
-        only_blue[5] = false;
-        only_blue[13] = false;
-        assert_eq!(fringe_offset(&colors, width, &only_blue), None);
+        // Without row 0's image, no whole image is left.
+        colors[3] = dark;
+        colors[4] = dark;
+        colors[5] = dark;
+        assert_eq!(fringe_offset(&colors, width, &mask, 0.01), None);
     }
 
     /// The verdicts hold, fail and stay inconclusive on numbers made for each case.

@@ -1,6 +1,6 @@
 //! The rough-glass section of `docs/claims.md` (issue 52): on `rough-glass` (four spheres of
 //! roughness 0, 0.1, 0.3 and 0.6), each sphere's error against the reference for the engines
-//! themselves and for `volume-thickness` (three.js's formula, which reads no roughness), and
+//! themselves and for `volume-thickness` (three.js's formula and LOD rule, re-implemented), and
 //! what roughness changes in each renderer's image (its frame against its frame of the same
 //! spheres at roughness 0), at 256² and at 1024² box-filtered to 256² (B8, B9).
 
@@ -227,7 +227,7 @@ pub fn section(
         res,
         &masks,
     )];
-    // The re-implementation, which reads no roughness.
+    // The re-implementation: three.js's LOD rule on the material's roughness.
     let mut cpu = CpuRenderer::new();
     let params = MethodParams::defaults(MethodId::VolumeThickness);
     let mut cpu_frame = |scene: &Arc<Scene>, camera: &Camera| -> crate::Result<Vec<Vec3>> {
@@ -243,7 +243,7 @@ pub fn section(
         smooth_high: cpu_frame(&smooth, &camera_high)?,
     };
     rows.push(Row::new(
-        "`volume-thickness` (reads no roughness)".to_owned(),
+        "`volume-thickness` (three.js's LOD rule, re-implemented)".to_owned(),
         Kind::Method,
         &truth.color,
         &frames,
