@@ -12,7 +12,7 @@ use std::sync::Arc;
 use refract_cpu::CpuRenderer;
 use refract_eval::load_scene;
 use refract_gpu::GpuRenderer;
-use refract_scene::{BackendId, Family, Frame, MethodId, REGISTRY, Renderer, Scene};
+use refract_scene::{BackendId, Family, Frame, MethodId, MethodParams, REGISTRY, Renderer, Scene};
 use refract_tests::scenes::{method, render};
 use refract_trace::ReferenceRenderer;
 
@@ -55,9 +55,12 @@ fn check(backend: &str, renderer: &mut dyn Renderer, id: BackendId) {
         let camera = with.camera(WIDTH, HEIGHT).expect("camera");
         let mut checked = 0;
         for info in REGISTRY.iter().filter(|m| m.backends.contains(&id)) {
-            // three.js's model (`volume-thickness` at its defaults) blurs rough glass and
-            // disperses: its own tests below.
-            if info.family == Family::Reference || info.id == MethodId::VolumeThickness {
+            // The engine models blur rough glass as their engines do (three.js's, Godot's,
+            // HDRP's) and three.js's disperses: their own tests below.
+            if info.family == Family::Reference
+                || (feature == "roughness" && info.family == Family::Engine)
+                || (feature == "dispersion" && info.id == MethodId::VolumeThickness)
+            {
                 continue;
             }
             let mut params = method(info.id);
@@ -73,7 +76,7 @@ fn check(backend: &str, renderer: &mut dyn Renderer, id: BackendId) {
             );
             checked += 1;
         }
-        assert!(checked >= 10, "{backend} {feature}: {checked} methods");
+        assert!(checked >= 8, "{backend} {feature}: {checked} methods");
     }
 }
 
@@ -308,84 +311,125 @@ fn wavelengths_sum_the_frames_at_their_indices_on_the_gpu() {
     check_wavelength_sums("gpu", &mut gpu, BackendId::Gpu);
 }
 
-/// three.js's rough transmission (`volume-thickness` at its defaults, `docs/methods.md`, "Rough
-/// surfaces"): on `rough-glass` with one sphere rough at a time (the others at 0), the frame
-/// differs from the all-smooth frame only by that sphere's blur, and more the rougher it is:
-/// the mean |change| over the frame rises with roughness 0.1, 0.3, 0.6, and a sphere at
-/// roughness 0 changes nothing. Bevy's model (`depth-test=reject`) reads no roughness.
-fn check_threejs_blur(backend: &str, renderer: &mut dyn Renderer) {
+/// The engine models that blur rough glass, with the settings that select them: three.js's
+/// (`volume-thickness`), Godot's (`screen-offset`), HDRP's (`proxy-sphere`, `proxy-box`,
+/// `proxy-thin` with HDRP's lookup).
+fn blurring_models() -> Vec<(&'static str, MethodParams)> {
+    let mut models = vec![
+        ("three.js", method(MethodId::VolumeThickness)),
+        ("Godot", method(MethodId::ScreenOffset)),
+    ];
+    for id in [
+        MethodId::ProxySphere,
+        MethodId::ProxyBox,
+        MethodId::ProxyThin,
+    ] {
+        let mut params = method(id);
+        params.set("lookup", "hdrp", "test").expect("lookup");
+        models.push(("HDRP", params));
+    }
+    models
+}
+
+/// The engines' rough models (`docs/methods.md`, "Rough surfaces"): on `rough-glass` with one
+/// sphere rough at a time (the others at 0), each blurring model's frame differs from its
+/// all-smooth frame only by that sphere's blur, and more the rougher it is: the mean |change|
+/// over the frame rises with roughness 0.1, 0.3, 0.6, and a sphere at roughness 0 changes
+/// nothing. Bevy's model (`depth-test=reject`) and Filament's lookup read no roughness.
+fn check_engine_blur(backend: &str, renderer: &mut dyn Renderer) {
     let (rough, smooth) = scenes();
     let camera = rough.camera(128, 96).expect("camera");
-    let params = method(MethodId::VolumeThickness);
-    let plain = render(renderer, &smooth, &camera, &params);
-    let mut changes = Vec::new();
-    for k in 0..4 {
-        let roughness = rough.refractor_at(k).expect("sphere").roughness();
-        let mut one = (*smooth).clone();
-        let sphere = if k == 0 {
-            &mut one.refractor
-        } else {
-            &mut one.other_refractors[k - 1]
-        };
-        sphere.set_roughness(roughness).expect("roughness");
-        let frame = render(renderer, &Arc::new(one), &camera, &params);
-        let change = frame
-            .color
-            .iter()
-            .zip(&plain.color)
-            .map(|(a, b)| f64::from((*a - *b).abs().element_sum()))
-            .sum::<f64>()
-            / frame.color.len() as f64;
-        println!("{backend}: sphere {k} at roughness {roughness}: mean |change| {change:.5}");
-        changes.push(change);
+    for (engine, params) in blurring_models() {
+        let plain = render(renderer, &smooth, &camera, &params);
+        let mut changes = Vec::new();
+        for k in 0..4 {
+            let roughness = rough.refractor_at(k).expect("sphere").roughness();
+            let mut one = (*smooth).clone();
+            let sphere = if k == 0 {
+                &mut one.refractor
+            } else {
+                &mut one.other_refractors[k - 1]
+            };
+            sphere.set_roughness(roughness).expect("roughness");
+            let frame = render(renderer, &Arc::new(one), &camera, &params);
+            let change = frame
+                .color
+                .iter()
+                .zip(&plain.color)
+                .map(|(a, b)| f64::from((*a - *b).abs().element_sum()))
+                .sum::<f64>()
+                / frame.color.len() as f64;
+            changes.push(change);
+        }
+        println!(
+            "{backend} {engine} {}: mean |change| {changes:.5?}",
+            params.id()
+        );
+        assert_eq!(
+            changes[0], 0.0,
+            "{backend} {engine}: roughness 0 changed the frame"
+        );
+        assert!(
+            changes[1] > 0.0 && changes[1] < changes[2] && changes[2] < changes[3],
+            "{backend} {engine} {}: {changes:?}",
+            params.id()
+        );
     }
-    assert_eq!(changes[0], 0.0, "{backend}: roughness 0 changed the frame");
-    assert!(
-        changes[1] > 0.0 && changes[1] < changes[2] && changes[2] < changes[3],
-        "{backend}: {changes:?}"
-    );
     let mut bevy = method(MethodId::VolumeThickness);
     bevy.set("depth-test", "reject", "test")
         .expect("depth-test");
-    let a = render(renderer, &rough, &camera, &bevy);
-    let b = render(renderer, &smooth, &camera, &bevy);
-    assert!(bits(&a) == bits(&b), "{backend}: Bevy's model blurred");
+    let mut filament = method(MethodId::ProxySphere);
+    filament.set("lookup", "filament", "test").expect("lookup");
+    for (engine, params) in [("Bevy", bevy), ("Filament", filament)] {
+        let a = render(renderer, &rough, &camera, &params);
+        let b = render(renderer, &smooth, &camera, &params);
+        assert!(bits(&a) == bits(&b), "{backend}: {engine}'s model blurred");
+    }
 }
 
 #[test]
-fn threejs_blurs_rough_glass_by_its_roughness_on_the_cpu() {
-    check_threejs_blur("cpu", &mut CpuRenderer::new());
+fn engines_blur_rough_glass_by_its_roughness_on_the_cpu() {
+    check_engine_blur("cpu", &mut CpuRenderer::new());
 }
 
 #[test]
-fn threejs_blurs_rough_glass_by_its_roughness_on_the_gpu() {
+fn engines_blur_rough_glass_by_its_roughness_on_the_gpu() {
     let Some(mut gpu) = GpuRenderer::for_tests() else {
         return;
     };
-    check_threejs_blur("gpu", &mut gpu);
+    check_engine_blur("gpu", &mut gpu);
 }
 
-/// three.js's blurred frames agree between the backends: on `rough-glass` at 128 × 96, colours
-/// differ by more than 2e-3 in any channel on at most 1 % of the pixels (the B-spline sums
-/// run in the same order; the pyramid's block sums in another, and the lat-long environment
-/// seen through the screen texture differs by float rounding).
+/// The engines' blurred frames agree between the backends: on `rough-glass` at 128 × 96,
+/// colours differ by more than 2e-3 in any channel on at most 1 % of the pixels, for each
+/// blurring model (the filters' sums run in the same order; the pyramid's block sums in
+/// another, and the lat-long environment seen through the screen texture differs by float
+/// rounding).
 #[test]
-fn threejs_blur_agrees_between_the_backends() {
+fn engine_blur_agrees_between_the_backends() {
     let Some(mut gpu) = GpuRenderer::for_tests() else {
         return;
     };
     let (rough, _) = scenes();
     let camera = rough.camera(128, 96).expect("camera");
-    let params = method(MethodId::VolumeThickness);
-    let a = render(&mut CpuRenderer::new(), &rough, &camera, &params);
-    let b = render(&mut gpu, &rough, &camera, &params);
-    let differ = a
-        .color
-        .iter()
-        .zip(&b.color)
-        .filter(|(a, b)| (**a - **b).abs().max_element() > 2e-3)
-        .count();
-    let share = differ as f64 / a.color.len() as f64;
-    println!("three.js on rough-glass: {differ} pixels differ by > 2e-3 ({share:.4})");
-    assert!(share <= 0.01, "{differ} of {} pixels", a.color.len());
+    for (engine, params) in blurring_models() {
+        let a = render(&mut CpuRenderer::new(), &rough, &camera, &params);
+        let b = render(&mut gpu, &rough, &camera, &params);
+        let differ = a
+            .color
+            .iter()
+            .zip(&b.color)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 2e-3)
+            .count();
+        let share = differ as f64 / a.color.len() as f64;
+        println!(
+            "{engine} {} on rough-glass: {differ} pixels differ by > 2e-3 ({share:.4})",
+            params.id()
+        );
+        assert!(
+            share <= 0.01,
+            "{engine}: {differ} of {} pixels",
+            a.color.len()
+        );
+    }
 }

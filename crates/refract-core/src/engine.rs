@@ -26,6 +26,7 @@ use crate::camera::Camera;
 use crate::lanes::{LANES, Vec2x8, Vec3x8, mask_lanes};
 use crate::optics::refract;
 use crate::real::{LaneMask, Msk, Real, Vector3};
+use crate::screen_mips::{self, ScreenMips};
 
 /// HDRP's thin refraction model: the slab thickness (5 mm), `REFRACTION_THIN_DISTANCE`.
 pub const THIN_THICKNESS: f32 = 0.005;
@@ -110,19 +111,60 @@ impl EngineModel {
             _ => 0.0,
         }
     }
-    /// The LOD at which this model reads the mip-mapped screen texture for a surface of
-    /// roughness `roughness` on glass of index `ior`, the screen `width` texels wide (0: one
-    /// nearest texel, as for smooth glass). three.js's model blurs as three.js does
-    /// ([`crate::screen_mips::threejs_lod`], read by [`crate::screen_mips::sample_threejs`]);
-    /// Bevy's taps, Godot's and HDRP's mip rules and Filament's LOD are not re-implemented, so
-    /// their models read no roughness.
-    pub fn rough_lod(&self, width: u32, roughness: f32, ior: f32) -> f32 {
+    /// The LOD at which this model reads the mip-mapped screen texture
+    /// ([`crate::screen_mips`]) for a surface of roughness `roughness` on glass of index `ior`,
+    /// the screen `size` texels (0: one nearest texel, as for smooth glass): three.js's
+    /// [`screen_mips::threejs_lod`], Godot's [`screen_mips::godot_lod`], HDRP's
+    /// [`screen_mips::hdrp_mip`]. Bevy's taps and Filament's LOD are not re-implemented: their
+    /// models read no roughness.
+    pub fn rough_lod(&self, size: UVec2, roughness: f32, ior: f32) -> f32 {
         match self {
             Self::VolumeThickness {
                 reject_nearer: false,
                 ..
-            } => crate::screen_mips::threejs_lod(width, roughness, ior),
+            } => screen_mips::threejs_lod(size.x, roughness, ior),
+            Self::ScreenOffset { .. } => screen_mips::godot_lod(roughness),
+            Self::Proxy {
+                lookup: ProxyLookup::Hdrp,
+                ..
+            } => screen_mips::hdrp_mip(roughness, screen_mips::level_count(size)),
             _ => 0.0,
+        }
+    }
+
+    /// The blurred screen this model reads for `path` (the pixel at `uv_px`) at a rough `lod`
+    /// (> 0, [`Self::rough_lod`]), before [`EnginePath::screen_weight`]: three.js's B-spline
+    /// reads ([`screen_mips::sample_threejs`]) at the projected exit point `proj(P + T d)` (the
+    /// texel's centre behind the eye); Godot's trilinear read at the centre of the texel its
+    /// smooth lookup reads; HDRP's trilinear read at `lerp(fragment, texel, k)`,
+    /// `k = `[`screen_mips::hdrp_hit_share`]`(lod)` (the fragment's own texel where the depth
+    /// test refused the hit). Godot and HDRP read the texel's centre, not their continuous
+    /// position: within half a texel of level 0.
+    pub fn read_rough<M: ScreenMips>(
+        &self,
+        camera: &Camera,
+        mips: &M,
+        uv_px: Vec2,
+        path: &EnginePath,
+        lod: f32,
+    ) -> Vec3 {
+        let size = mips.size().as_vec2();
+        let texel_px = path.texel.as_vec2() + Vec2::splat(0.5);
+        match self {
+            Self::VolumeThickness { .. } => {
+                let read = camera
+                    .world_to_pixel(path.p2)
+                    .map_or(texel_px, |p| Vec2::new(p.x, p.y));
+                screen_mips::sample_threejs(mips, read / size, lod)
+            }
+            Self::Proxy {
+                lookup: ProxyLookup::Hdrp,
+                ..
+            } => {
+                let k = screen_mips::hdrp_hit_share(lod);
+                screen_mips::sample_trilinear(mips, uv_px.lerp(texel_px, k) / size, lod)
+            }
+            _ => screen_mips::sample_trilinear(mips, texel_px / size, lod),
         }
     }
 }

@@ -48,6 +48,31 @@ pub fn threejs_lod(width: u32, roughness: f32, ior: f32) -> f32 {
     math::log2(width.max(1) as f32) * roughness * (2.0 * ior - 2.0).clamp(0.0, 1.0)
 }
 
+/// Godot 4's screen-texture LOD for roughness `roughness`: `8 r` (`BaseMaterial3D`'s
+/// refraction, `textureLod(screen_texture, uv, ROUGHNESS * 8.0)`), read trilinearly
+/// ([`sample_trilinear`]).
+#[inline]
+pub fn godot_lod(roughness: f32) -> f32 {
+    8.0 * roughness
+}
+
+/// Unity HDRP's colour-pyramid mip for roughness `roughness` in a pyramid of `levels` levels:
+/// `r^1.3 · (levels − 1)` (`transparentSSMipLevel`), read trilinearly.
+#[inline]
+pub fn hdrp_mip(roughness: f32, levels: u32) -> f32 {
+    if roughness <= 0.0 {
+        return 0.0;
+    }
+    math::exp(1.3 * math::ln(roughness)) * levels.saturating_sub(1) as f32
+}
+
+/// How far HDRP's rough lookup moves from the fragment toward the hit:
+/// `k = max(0, 1 − 0.08 · mip)` (`EvaluateBSDF_ScreenspaceRefraction`), `uv = lerp(frag, hit, k)`.
+#[inline]
+pub fn hdrp_hit_share(mip: f32) -> f32 {
+    (1.0 - 0.08 * mip).max(0.0)
+}
+
 /// The uniform cubic B-spline's weights of the four texels around a sample at fraction `a` in
 /// `[0, 1)` past the second: `(1 − a)³/6`, `(3a³ − 6a² + 4)/6`, `(−3a³ + 3a² + 3a + 1)/6`,
 /// `a³/6` (three.js's `w0`–`w3`); they sum to 1.
@@ -95,21 +120,50 @@ pub fn sample_bspline<M: ScreenMips>(mips: &M, uv: Vec2, level: u32) -> Vec3 {
     sum
 }
 
-/// three.js's `textureBicubic(map, uv, lod)`: the B-spline samples at levels `⌊lod⌋` and
-/// `⌈lod⌉` (each clamped to the pyramid), mixed by `fract(lod)`.
-pub fn sample_threejs<M: ScreenMips>(mips: &M, uv: Vec2, lod: f32) -> Vec3 {
+/// The bilinear sample of level `level` at `uv` (`[0, 1]²`, `y` down), edges clamped.
+pub fn sample_bilinear<M: ScreenMips>(mips: &M, uv: Vec2, level: u32) -> Vec3 {
+    let size = level_size(mips.size(), level);
+    let t = uv * size.as_vec2() - Vec2::splat(0.5);
+    let base = Vec2::new(math::floor(t.x), math::floor(t.y));
+    let f = t - base;
+    let max = size.as_ivec2() - glam::IVec2::ONE;
+    let at = |dx: i32, dy: i32| {
+        let x = (base.x as i32 + dx).clamp(0, max.x) as u32;
+        let y = (base.y as i32 + dy).clamp(0, max.y) as u32;
+        mips.texel(level, UVec2::new(x, y))
+    };
+    let top = at(0, 0) + (at(1, 0) - at(0, 0)) * f.x;
+    let bottom = at(0, 1) + (at(1, 1) - at(0, 1)) * f.x;
+    top + (bottom - top) * f.y
+}
+
+/// A trilinear sample at `lod` (`textureLod` with linear filtering between and within levels,
+/// as Godot's screen texture and HDRP's colour pyramid are read): the bilinear samples at
+/// levels `⌊lod⌋` and `⌈lod⌉` (clamped to the pyramid) mixed by `fract(lod)`.
+pub fn sample_trilinear<M: ScreenMips>(mips: &M, uv: Vec2, lod: f32) -> Vec3 {
+    between_levels(mips, lod, |level| sample_bilinear(mips, uv, level))
+}
+
+/// `sample(⌊lod⌋)` and `sample(⌈lod⌉)` (levels clamped to the pyramid) mixed by `fract(lod)`.
+fn between_levels<M: ScreenMips>(mips: &M, lod: f32, sample: impl Fn(u32) -> Vec3) -> Vec3 {
     let top = level_count(mips.size()) - 1;
     let lod = lod.max(0.0);
     let floor = math::floor(lod);
     let fraction = lod - floor;
     let low = (floor as u32).min(top);
     let high = (low + u32::from(fraction > 0.0)).min(top);
-    let fine = sample_bspline(mips, uv, low);
+    let fine = sample(low);
     if high == low {
         return fine;
     }
-    let coarse = sample_bspline(mips, uv, high);
+    let coarse = sample(high);
     fine + (coarse - fine) * fraction
+}
+
+/// three.js's `textureBicubic(map, uv, lod)`: the B-spline samples at levels `⌊lod⌋` and
+/// `⌈lod⌉` (each clamped to the pyramid), mixed by `fract(lod)`.
+pub fn sample_threejs<M: ScreenMips>(mips: &M, uv: Vec2, lod: f32) -> Vec3 {
+    between_levels(mips, lod, |level| sample_bspline(mips, uv, level))
 }
 
 #[cfg(test)]
@@ -180,6 +234,18 @@ mod tests {
         assert_eq!(threejs_lod(1024, 0.0, 1.5), 0.0);
     }
 
+    /// Godot's `8 r`; HDRP's `r^1.3 (levels − 1)` and the share of the hit it keeps.
+    #[test]
+    fn godot_and_hdrp_rules() {
+        assert_eq!(godot_lod(0.25), 2.0);
+        assert_eq!(hdrp_mip(0.0, 9), 0.0);
+        assert!((hdrp_mip(1.0, 9) - 8.0).abs() < 1e-5);
+        assert!((hdrp_mip(0.5, 9) - 8.0 * 0.5f32.powf(1.3)).abs() < 1e-5);
+        assert_eq!(hdrp_hit_share(0.0), 1.0);
+        assert!((hdrp_hit_share(5.0) - 0.6).abs() < 1e-6);
+        assert_eq!(hdrp_hit_share(20.0), 0.0);
+    }
+
     #[test]
     fn bspline_weights_sum_to_one_and_reproduce_lines() {
         for k in 0..16 {
@@ -217,6 +283,14 @@ mod tests {
                 );
             }
         }
+        for level in 0..3 {
+            let uv = Vec2::new(0.41, 0.37);
+            let c = sample_bilinear(&ramp, uv, level);
+            let expected = Vec3::new(uv.x * 64.0, uv.y * 32.0, 1.0);
+            assert!((c - expected).abs().max_element() < 1e-3, "{level}: {c}");
+        }
+        let trilinear = sample_trilinear(&ramp, Vec2::new(0.3, 0.6), 1.5);
+        assert!((trilinear - Vec3::new(19.2, 19.2, 1.0)).abs().max_element() < 1e-3);
         let mixed = sample_threejs(&ramp, Vec2::new(0.3, 0.6), 1.25);
         assert!(
             (mixed - Vec3::new(19.2, 19.2, 1.0)).abs().max_element() < 1e-3,
@@ -226,6 +300,11 @@ mod tests {
         for lod in [0.0, 0.5, 3.7, 6.0, 40.0] {
             for uv in [Vec2::ZERO, Vec2::ONE, Vec2::new(-0.5, 2.0)] {
                 let c = sample_threejs(&grey, uv, lod);
+                assert!(
+                    (c - Vec3::splat(0.25)).abs().max_element() < 1e-6,
+                    "{lod} {uv}"
+                );
+                let c = sample_trilinear(&grey, uv, lod);
                 assert!(
                     (c - Vec3::splat(0.25)).abs().max_element() < 1e-6,
                     "{lod} {uv}"

@@ -12,7 +12,7 @@ use refract_core::engine::{
     engine_path, hdrp_edge_fade, proxy_box_exit, proxy_sphere_exit, screen_offset_px, smoothstep01,
     volume_exit,
 };
-use refract_core::screen_mips::{ScreenMips, sample_threejs};
+use refract_core::screen_mips::{ScreenMips, sample_threejs, sample_trilinear};
 use refract_core::{Camera, CameraDesc};
 use refract_gpu::conformance::{FamilyEvaluation, evaluate_family};
 
@@ -221,6 +221,9 @@ proptest! {
     }
 }
 
+/// A rough lookup of `refract_core::screen_mips` over the analytic pyramid.
+type Sampler = fn(&AnalyticMips, Vec2, f32) -> Vec3;
+
 /// `engine_conformance.wgsl`'s analytic screen pyramid (`mip_texel`), exact in f32.
 struct AnalyticMips(UVec2);
 
@@ -241,9 +244,10 @@ impl ScreenMips for AnalyticMips {
 proptest! {
     #![proptest_config(config())]
 
-    /// three.js's rough lookup (`screen_mips.wgsl`: the levels' sizes, the B-spline weights,
-    /// the clamped 4 × 4 sums at two levels, their mix) against
-    /// `refract_core::screen_mips::sample_threejs` over an analytic pyramid of a frame whose
+    /// The rough lookups (`screen_mips.wgsl`: the levels' sizes, three.js's B-spline weights and
+    /// clamped 4 × 4 sums, Godot's and HDRP's clamped bilinear reads, the mix of two levels)
+    /// against `refract_core::screen_mips::{sample_threejs, sample_trilinear}` over an analytic
+    /// pyramid of a frame whose
     /// sides are not powers of two, at positions inside and outside the image and LODs from 0
     /// past the top level.
     #[test]
@@ -256,16 +260,22 @@ proptest! {
             ..CameraDesc::default()
         })
         .expect("camera");
-        let evaluation = FamilyEvaluation {
-            entry: "test_sample_threejs",
-            ..engine_evaluation(&camera, 1.5, &[], &[])
-        };
         let a: Vec<Vec4> = rows.iter().map(|&(u, v, lod)| Vec4::new(u, v, lod, 0.0)).collect();
-        let gpu = evaluate_family(context, &evaluation, &a, &a).expect("gpu");
         let mips = AnalyticMips(size);
-        for (k, &(u, v, lod)) in rows.iter().enumerate() {
-            let rust = sample_threejs(&mips, Vec2::new(u, v), lod);
-            prop_assert!(close3(gpu[k], rust, 1e-4), "uv ({u}, {v}) lod {lod}: gpu {} rust {rust}", gpu[k]);
+        let samplers: [(&str, Sampler); 2] = [
+            ("test_sample_threejs", sample_threejs),
+            ("test_sample_trilinear", sample_trilinear),
+        ];
+        for (entry, sample) in samplers {
+            let evaluation = FamilyEvaluation {
+                entry,
+                ..engine_evaluation(&camera, 1.5, &[], &[])
+            };
+            let gpu = evaluate_family(context, &evaluation, &a, &a).expect("gpu");
+            for (k, &(u, v, lod)) in rows.iter().enumerate() {
+                let rust = sample(&mips, Vec2::new(u, v), lod);
+                prop_assert!(close3(gpu[k], rust, 1e-4), "{entry}: uv ({u}, {v}) lod {lod}: gpu {} rust {rust}", gpu[k]);
+            }
         }
     }
 }

@@ -20,7 +20,6 @@ use refract_core::Camera;
 use refract_core::engine::{EngineModel, OpaqueDepth, engine_path_x8};
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
-use refract_core::screen_mips::sample_threejs;
 use refract_core::vector::robust_normalize;
 use refract_scene::{
     Aov, EngineParams, Environment, Frame, LayerValue, PixelLayers, RenderError, Scene,
@@ -96,6 +95,14 @@ pub struct EnginePasses {
     aovs: Vec<EngineAov>,
 }
 
+/// A rough refractor's blurred reads in row `y`: its model and LOD.
+#[derive(Clone, Copy, Debug)]
+struct Rough {
+    model: EngineModel,
+    lod: f32,
+    y: u32,
+}
+
 /// How one refractor is drawn: its engine model, IOR, dispersion half spread
 /// ([`EngineModel::dispersion_half_spread`]) and the LOD its roughness blurs the screen at
 /// ([`EngineModel::rough_lod`], 0: the nearest texel).
@@ -133,7 +140,11 @@ impl CpuFamily for EnginePasses {
                 model,
                 ior: r.ior(),
                 spread,
-                lod: model.rough_lod(camera.width(), r.roughness(), r.ior()),
+                lod: model.rough_lod(
+                    glam::UVec2::new(camera.width(), camera.height()),
+                    r.roughness(),
+                    r.ior(),
+                ),
             }
         }));
         // Without opaque objects the screen texture is the environment everywhere: not drawn.
@@ -353,21 +364,22 @@ impl PixelContext<'_> {
             } else {
                 None
             };
-            self.read_paths(group, &paths, channels, lod, colors, lanes, aovs);
+            let rough = (lod > 0.0).then_some(Rough { model, lod, y });
+            self.read_paths(group, &paths, channels, rough, colors, lanes, aovs);
         }
     }
 
     /// Adds the reads of `paths` (lane `i` for pixel `group.x[i]`) times `channels` to the
-    /// pixels' colours, and their AOVs when asked. At a rough `lod` (> 0) the screen is read
-    /// blurred, three.js's B-spline lookup in the mip-mapped screen at the projected exit point
-    /// ([`sample_threejs`]; the AOVs still name the nearest texel).
+    /// pixels' colours, and their AOVs when asked. On a `rough` refractor the screen is read
+    /// blurred, as its model reads the mip-mapped screen ([`EngineModel::read_rough`]; the AOVs
+    /// still name the nearest texel).
     #[allow(clippy::too_many_arguments)]
     fn read_paths(
         &self,
         group: &PixelGroup,
         paths: &[refract_core::engine::EnginePath; LANES],
         channels: Vec3,
-        lod: f32,
+        rough: Option<Rough>,
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
         mut aovs: Option<&mut [EngineAov]>,
@@ -381,22 +393,13 @@ impl PixelContext<'_> {
                 ..EngineAov::NONE
             };
             if path.screen_weight > 0.0 {
-                match self.mips.filter(|_| lod > 0.0) {
-                    Some(mips) => {
-                        let size =
-                            Vec2::new(self.camera.width() as f32, self.camera.height() as f32);
-                        let uv_px = self
-                            .camera
-                            .world_to_pixel(path.p2)
-                            .map_or(Camera::pixel_center(path.texel.x, path.texel.y), |p| {
-                                Vec2::new(p.x, p.y)
-                            });
-                        let color = sample_threejs(mips, uv_px / size, lod);
+                match (self.mips, rough) {
+                    (Some(mips), Some(r)) => {
+                        let uv_px = Camera::pixel_center(x, r.y);
+                        let color = r.model.read_rough(self.camera, mips, uv_px, path, r.lod);
                         colors[x as usize] += path.screen_weight * channels * color;
                     }
-                    None => {
-                        self.screen(x, path.texel, path.screen_weight * channels, colors, lanes)
-                    }
+                    _ => self.screen(x, path.texel, path.screen_weight * channels, colors, lanes),
                 }
                 if let Some(t) = self.object(path.texel) {
                     aov.p_geom = t.surface.p_ws;

@@ -210,7 +210,8 @@ fn refractor_table(
         } else {
             0.0
         };
-        let lod = model.rough_lod(camera.width(), refractor.roughness(), refractor.ior());
+        let size = glam::UVec2::new(camera.width(), camera.height());
+        let lod = model.rough_lod(size, refractor.roughness(), refractor.ior());
         *entry = [refractor.ior(), amount, spread, lod];
     }
     table

@@ -99,18 +99,29 @@ fn screen_mip_levels(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// The screen colour a path reads: its nearest texel, or at a rough `lod` three.js's blurred
-// lookup at the projected exit point (the pixel centre of its texel behind the eye).
-fn read_screen(path: EnginePath, lod: f32) -> vec3<f32> {
+// The screen colour a path reads (refract_core::engine::EngineModel::read_rough): its nearest
+// texel, or at a rough `lod` the blurred screen as the model reads it: three.js's B-spline at
+// the projected exit point (its texel's centre behind the eye), Godot's trilinear read at the
+// texel's centre, HDRP's at lerp(fragment, texel centre, hdrp_hit_share(lod)).
+fn read_screen(path: EnginePath, uv_px: vec2<f32>, lod: f32) -> vec3<f32> {
     if lod <= 0.0 {
         return screen_color(path.texel);
     }
-    let projected = world_to_pixel(path.p2);
-    var uv_px = vec2<f32>(path.texel) + vec2<f32>(0.5);
-    if projected.w > 0.5 {
-        uv_px = projected.xy;
+    let size = vec2<f32>(f32(frame.width), f32(frame.height));
+    let texel_px = vec2<f32>(path.texel) + vec2<f32>(0.5);
+    if ENGINE_MODEL == ENGINE_VOLUME_THICKNESS {
+        let projected = world_to_pixel(path.p2);
+        var read = texel_px;
+        if projected.w > 0.5 {
+            read = projected.xy;
+        }
+        return sample_threejs(read / size, lod);
     }
-    return sample_threejs(uv_px / vec2<f32>(f32(frame.width), f32(frame.height)), lod);
+    if ENGINE_MODEL >= ENGINE_PROXY_SPHERE && engine.filament_lookup == 0u {
+        let k = hdrp_hit_share(lod);
+        return sample_trilinear(mix(uv_px, texel_px, k) / size, lod);
+    }
+    return sample_trilinear(texel_px / size, lod);
 }
 
 fn write_engine_aovs(i: u32, path: EnginePath, covered: bool) {
@@ -180,7 +191,7 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let path = engine_path(px.uv, px.p1, n1, ior, refractor.y);
         if path.screen_weight > 0.0 {
-            color += (path.screen_weight * channels) * read_screen(path, refractor.w);
+            color += (path.screen_weight * channels) * read_screen(path, px.uv, refractor.w);
         }
         if path.screen_weight < 1.0 {
             color += ((1.0 - path.screen_weight) * channels) * environment_radiance(path.environment_dir);

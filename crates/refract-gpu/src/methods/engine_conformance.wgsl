@@ -126,3 +126,11 @@ fn test_sample_threejs(@builtin(global_invocation_id) id: vec3<u32>) {
     out_v[i] = vec4<f32>(sample_threejs(in_a[i].xy, in_a[i].z), 0.0);
 }
 
+// a = (u, v, lod, _) -> (the trilinear sample of Godot and HDRP, _).
+@compute @workgroup_size(64)
+fn test_sample_trilinear(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = vec4<f32>(sample_trilinear(in_a[i].xy, in_a[i].z), 0.0);
+}
+

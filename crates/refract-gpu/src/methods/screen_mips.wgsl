@@ -48,18 +48,65 @@ fn sample_bspline(uv: vec2<f32>, level: u32) -> vec3<f32> {
     return sum;
 }
 
-// refract_core::screen_mips::sample_threejs: three.js's textureBicubic at `lod`.
-fn sample_threejs(uv: vec2<f32>, lod_in: f32) -> vec3<f32> {
+// refract_core::screen_mips::hdrp_hit_share.
+fn hdrp_hit_share(mip: f32) -> f32 {
+    return max(1.0 - 0.08 * mip, 0.0);
+}
+
+// refract_core::screen_mips::sample_bilinear.
+fn sample_bilinear(uv: vec2<f32>, level: u32) -> vec3<f32> {
+    let size = mip_level_size(level);
+    let t = uv * vec2<f32>(size) - vec2<f32>(0.5);
+    let base = floor(t);
+    let f = t - base;
+    let top = vec2<i32>(size) - vec2<i32>(1);
+    let x0 = u32(clamp(i32(base.x), 0, top.x));
+    let x1 = u32(clamp(i32(base.x) + 1, 0, top.x));
+    let y0 = u32(clamp(i32(base.y), 0, top.y));
+    let y1 = u32(clamp(i32(base.y) + 1, 0, top.y));
+    let a = mip_texel(level, vec2<u32>(x0, y0));
+    let b = mip_texel(level, vec2<u32>(x1, y0));
+    let c = mip_texel(level, vec2<u32>(x0, y1));
+    let d = mip_texel(level, vec2<u32>(x1, y1));
+    let upper = a + (b - a) * f.x;
+    let lower = c + (d - c) * f.x;
+    return upper + (lower - upper) * f.y;
+}
+
+// The levels ⌊lod⌋ and ⌈lod⌉ (clamped to the pyramid) and fract(lod)
+// (refract_core::screen_mips::between_levels).
+struct Levels {
+    low: u32,
+    high: u32,
+    fraction: f32,
+}
+
+fn levels_of(lod_in: f32) -> Levels {
     let top = mip_level_count() - 1u;
     let lod = max(lod_in, 0.0);
     let low_f = floor(lod);
     let fraction = lod - low_f;
     let low = min(u32(low_f), top);
     let high = min(low + select(0u, 1u, fraction > 0.0), top);
-    let fine = sample_bspline(uv, low);
-    if high == low {
+    return Levels(low, high, fraction);
+}
+
+// refract_core::screen_mips::sample_trilinear.
+fn sample_trilinear(uv: vec2<f32>, lod: f32) -> vec3<f32> {
+    let l = levels_of(lod);
+    let fine = sample_bilinear(uv, l.low);
+    if l.high == l.low {
         return fine;
     }
-    let coarse = sample_bspline(uv, high);
-    return fine + (coarse - fine) * fraction;
+    return fine + (sample_bilinear(uv, l.high) - fine) * l.fraction;
+}
+
+// refract_core::screen_mips::sample_threejs: three.js's textureBicubic at `lod`.
+fn sample_threejs(uv: vec2<f32>, lod: f32) -> vec3<f32> {
+    let l = levels_of(lod);
+    let fine = sample_bspline(uv, l.low);
+    if l.high == l.low {
+        return fine;
+    }
+    return fine + (sample_bspline(uv, l.high) - fine) * l.fraction;
 }
