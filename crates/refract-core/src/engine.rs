@@ -24,6 +24,7 @@ use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::Camera;
 use crate::lanes::{LANES, Vec2x8, Vec3x8, mask_lanes};
+use crate::math;
 use crate::optics::refract;
 use crate::real::{LaneMask, Msk, Real, Vector3};
 use crate::screen_mips::{self, ScreenMips};
@@ -115,10 +116,14 @@ impl EngineModel {
     /// ([`crate::screen_mips`]) for a surface of roughness `roughness` on glass of index `ior`,
     /// the screen `size` texels (0: one nearest texel, as for smooth glass): three.js's
     /// [`screen_mips::threejs_lod`], Godot's [`screen_mips::godot_lod`], HDRP's
-    /// [`screen_mips::hdrp_mip`]. Bevy's taps and Filament's LOD are not re-implemented: their
-    /// models read no roughness.
+    /// [`screen_mips::hdrp_mip`]; for Bevy, whose taps are not a LOD, the roughness itself
+    /// ([`bevy_blurred`]). Filament's LOD is not re-implemented: its model reads no roughness.
     pub fn rough_lod(&self, size: UVec2, roughness: f32, ior: f32) -> f32 {
         match self {
+            Self::VolumeThickness {
+                reject_nearer: true,
+                ..
+            } => roughness,
             Self::VolumeThickness {
                 reject_nearer: false,
                 ..
@@ -132,39 +137,72 @@ impl EngineModel {
         }
     }
 
-    /// The blurred screen this model reads for `path` (the pixel at `uv_px`) at a rough `lod`
-    /// (> 0, [`Self::rough_lod`]), before [`EnginePath::screen_weight`]: three.js's B-spline
-    /// reads ([`screen_mips::sample_threejs`]) at the projected exit point `proj(P + T d)` (the
-    /// texel's centre behind the eye); Godot's trilinear read at the centre of the texel its
-    /// smooth lookup reads; HDRP's trilinear read at `lerp(fragment, texel, k)`,
-    /// `k = `[`screen_mips::hdrp_hit_share`]`(lod)` (the fragment's own texel where the depth
-    /// test refused the hit). Godot and HDRP read the texel's centre, not their continuous
-    /// position: within half a texel of level 0.
-    pub fn read_rough<M: ScreenMips>(
+    /// The blurred screen this model reads for `path` (the pixel at `uv_px`, its front surface
+    /// at `p1_ws`) at a rough `lod` (> 0, [`Self::rough_lod`]), and the
+    /// share of the pixel it takes (the rest is the environment along the model's fallback):
+    /// three.js's B-spline reads ([`screen_mips::sample_threejs`]) at the projected exit point
+    /// `proj(P + T d)` (the texel's centre behind the eye); Bevy's taps around the same point
+    /// ([`bevy_blurred`]; the share is the accepted taps'); Godot's trilinear read at the centre
+    /// of the texel its smooth lookup reads; HDRP's trilinear read at `lerp(fragment, texel,
+    /// k)`, `k = `[`screen_mips::hdrp_hit_share`]`(lod)` (the fragment's own texel where the
+    /// depth test refused the hit). Godot and HDRP read the texel's centre, not their
+    /// continuous position: within half a texel of level 0. Except Bevy's, the share and the
+    /// fallback are the path's ([`EnginePath::screen_weight`], [`EnginePath::environment_dir`]);
+    /// Bevy's fallback is [`bevy_fallback_dir`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn read_rough<M: ScreenMips, S: OpaqueDepth>(
         &self,
         camera: &Camera,
         mips: &M,
+        screen: &S,
         uv_px: Vec2,
+        p1_ws: Vec3,
         path: &EnginePath,
         lod: f32,
-    ) -> Vec3 {
+    ) -> RoughRead {
         let size = mips.size().as_vec2();
         let texel_px = path.texel.as_vec2() + Vec2::splat(0.5);
-        match self {
+        let exit_px = || {
+            camera
+                .world_to_pixel(path.p2)
+                .map_or(texel_px, |p| Vec2::new(p.x, p.y))
+        };
+        let of_path = |color| RoughRead {
+            color,
+            screen_weight: path.screen_weight,
+            environment_dir: path.environment_dir,
+        };
+        match *self {
+            Self::VolumeThickness {
+                reject_nearer: true,
+                thickness,
+            } => {
+                let from_eye = p1_ws - camera.eye();
+                let fragment_depth = from_eye.dot(camera.look_dir());
+                let (color, screen_weight) =
+                    bevy_blurred(mips, screen, uv_px, exit_px() / size, lod, fragment_depth);
+                RoughRead {
+                    color,
+                    screen_weight,
+                    environment_dir: bevy_fallback_dir(
+                        from_eye.normalize_or_zero(),
+                        path.t2,
+                        thickness,
+                    ),
+                }
+            }
             Self::VolumeThickness { .. } => {
-                let read = camera
-                    .world_to_pixel(path.p2)
-                    .map_or(texel_px, |p| Vec2::new(p.x, p.y));
-                screen_mips::sample_threejs(mips, read / size, lod)
+                of_path(screen_mips::sample_threejs(mips, exit_px() / size, lod))
             }
             Self::Proxy {
                 lookup: ProxyLookup::Hdrp,
                 ..
             } => {
                 let k = screen_mips::hdrp_hit_share(lod);
-                screen_mips::sample_trilinear(mips, uv_px.lerp(texel_px, k) / size, lod)
+                let read = uv_px.lerp(texel_px, k) / size;
+                of_path(screen_mips::sample_trilinear(mips, read, lod))
             }
-            _ => screen_mips::sample_trilinear(mips, texel_px / size, lod),
+            _ => of_path(screen_mips::sample_trilinear(mips, texel_px / size, lod)),
         }
     }
 }
@@ -194,6 +232,18 @@ pub struct EnginePath {
     /// The lookup position fell outside the frame (or behind the eye): clamped to the edge, or
     /// faded to the environment (HDRP).
     pub off_screen: bool,
+}
+
+/// What a rough refractor's pixel reads ([`EngineModel::read_rough`]): the blurred screen's
+/// colour, its share of the pixel, and the environment's direction for the rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoughRead {
+    /// The blurred screen colour.
+    pub color: Vec3,
+    /// Its share of the pixel, in `[0, 1]`.
+    pub screen_weight: f32,
+    /// The environment's direction for `1 − screen_weight` (`NaN` where that is 0).
+    pub environment_dir: Vec3,
 }
 
 /// `T = refract(I, N, 1/ior)` and `cos θt = −N·T` (never TIR when entering glass, `ior ≥ 1`).
@@ -242,6 +292,79 @@ pub fn volume_exit<V: Vector3>(p: V, n: V, incident: V, ior: V::Real, d: V::Real
 #[inline]
 pub fn bevy_fallback_dir(incident: Vec3, t: Vec3, d: f32) -> Vec3 {
     (incident + t * d).normalize_or_zero()
+}
+
+/// Bevy's blur taps (`screen_space_specular_transmission_quality` Medium, its default).
+pub const BEVY_TAPS: u32 = 8;
+
+/// Jimenez's spiral offset `k` (*Next Generation Post Processing in Call of Duty: Advanced
+/// Warfare*, 2014, Bevy's `SPIRAL_OFFSET_k_`): `(1 − k/8) (cos, sin)(135° (k + 1))`.
+#[inline]
+pub fn spiral_offset(k: u32) -> Vec2 {
+    let (sin, cos) = math::sin_cos(core::f32::consts::FRAC_PI_4 * 3.0 * (k + 1) as f32);
+    Vec2::new(cos, sin) * (1.0 - k as f32 / 8.0)
+}
+
+/// Jimenez's interleaved gradient noise at pixel position `frag_px` (frame 0):
+/// `fract(52.9829189 fract(0.06711056 x + 0.00583715 y))`.
+#[inline]
+pub fn interleaved_gradient_noise(frag_px: Vec2) -> f32 {
+    let fract = |v: f32| v - math::floor(v);
+    fract(52.982_918 * fract(0.067_110_56 * frag_px.x + 0.005_837_15 * frag_px.y))
+}
+
+/// Bevy's rough transmission (`fetch_transmissive_background`): [`BEVY_TAPS`] bilinear taps of
+/// the screen texture's level 0 around `read_uv` (the projected exit point, `[0, 1]²`), on
+/// Jimenez's spiral (offsets taken in the order 0, 2, 4, 6, 1, 3, 5, 7, shrunk by
+/// `1 − ½ (j + 1)/S` for spiral `j` of `S = ⌈taps/8⌉`) rotated by
+/// `2π (`[`interleaved_gradient_noise`]`(frag_px) + j/S)`, scaled by `(1, W/H)` and by
+/// `b (1 − 0.1 c)`, `c = (x + y) mod 2` the pixel's checkerboard, with
+/// `b = r² / z_view`: Bevy's `view_z` is the view-space `z`, negative in front of the camera, so
+/// `b = −r² / fragment_depth` (the spiral turned half a turn; Bevy's firefly clamp
+/// `min(rgb, normalize(rgb) / saturate(b/2))` then divides by 0 and never clamps). A tap whose
+/// texel holds an opaque surface nearer than the fragment (`fragment_depth`) is rejected (its
+/// colour and alpha 0, Bevy's prepass test). Returns `(Σ accepted colours / taps, accepted /
+/// taps)`: Bevy mixes the environment in by `1 − alpha` and keeps the sum as it is.
+pub fn bevy_blurred<M: ScreenMips, S: OpaqueDepth>(
+    mips: &M,
+    screen: &S,
+    frag_px: Vec2,
+    read_uv: Vec2,
+    roughness: f32,
+    fragment_depth: f32,
+) -> (Vec3, f32) {
+    const ORDER: [u32; 8] = [0, 2, 4, 6, 1, 3, 5, 7];
+    let size = mips.size();
+    let aspect = size.x as f32 / size.y as f32;
+    let blur = -(roughness * roughness) / fragment_depth;
+    let spirals = BEVY_TAPS.div_ceil(8);
+    let noise = interleaved_gradient_noise(frag_px);
+    let checker = ((frag_px.x as i32 + frag_px.y as i32) % 2) as f32;
+    let (mut sum, mut accepted) = (Vec3::ZERO, 0u32);
+    for i in 0..BEVY_TAPS {
+        let spiral = i >> 3;
+        let angle = (noise + spiral as f32 / spirals as f32) * core::f32::consts::TAU;
+        let (sin, cos) = math::sin_cos(angle);
+        let offset = spiral_offset(ORDER[(i & 7) as usize])
+            * (1.0 - 0.5 * (spiral + 1) as f32 / spirals as f32);
+        // Bevy's `mat2x2(m.y, −m.x, m.x, m.y) * offset` with m = (sin, cos).
+        let rotated = Vec2::new(
+            cos * offset.x + sin * offset.y,
+            -sin * offset.x + cos * offset.y,
+        );
+        let uv = read_uv + rotated * Vec2::new(1.0, aspect) * blur * (1.0 - checker * 0.1);
+        let texel = (uv * size.as_vec2())
+            .floor()
+            .max(Vec2::ZERO)
+            .min((size - UVec2::ONE).as_vec2())
+            .as_uvec2();
+        if screen.view_depth(texel) < fragment_depth {
+            continue;
+        }
+        sum += screen_mips::sample_bilinear(mips, uv, 0);
+        accepted += 1;
+    }
+    (sum / BEVY_TAPS as f32, accepted as f32 / BEVY_TAPS as f32)
 }
 
 /// Godot's offset in pixels: `−n_view.xy · scale` of `SCREEN_UV`, i.e.

@@ -9,8 +9,8 @@ use proptest::prelude::*;
 use refract_core::engine::{
     ENGINE_PROXY_BOX, ENGINE_PROXY_SPHERE, ENGINE_PROXY_THIN, ENGINE_SCREEN_OFFSET,
     ENGINE_VOLUME_THICKNESS, EngineModel, EngineUniforms, OpaqueDepth, ProxyLookup, ProxyShape,
-    engine_path, hdrp_edge_fade, proxy_box_exit, proxy_sphere_exit, screen_offset_px, smoothstep01,
-    volume_exit,
+    bevy_blurred, engine_path, hdrp_edge_fade, proxy_box_exit, proxy_sphere_exit, screen_offset_px,
+    smoothstep01, volume_exit,
 };
 use refract_core::screen_mips::{ScreenMips, sample_threejs, sample_trilinear};
 use refract_core::{Camera, CameraDesc};
@@ -277,5 +277,47 @@ proptest! {
                 prop_assert!(close3(gpu[k], rust, 1e-4), "{entry}: uv ({u}, {v}) lod {lod}: gpu {} rust {rust}", gpu[k]);
             }
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    /// Bevy's taps (`screen_mips.wgsl`'s `bevy_blurred`: the noise, the spiral, the rotation,
+    /// the checkerboard, the per-tap depth test, the bilinear reads) against
+    /// `refract_core::engine::bevy_blurred` over the analytic pyramid and screen, with
+    /// fragments in front of and behind the screen's surfaces so that taps are both kept and
+    /// rejected. Where a tap's texel sits within rounding of a texel edge the two may test
+    /// different texels: at most 3 % of the rows may differ.
+    #[test]
+    fn bevy_taps_agree(rows in prop::collection::vec((0.0f32..1.0, 0.0f32..1.0, 0.05f32..1.0, 0.5f32..4.0, 0u32..75, 0u32..46), ROWS)) {
+        let context = gpu_or_skip!();
+        let size = UVec2::new(75, 46);
+        let camera = Camera::new(CameraDesc {
+            width: size.x,
+            height: size.y,
+            ..CameraDesc::default()
+        })
+        .expect("camera");
+        let evaluation = FamilyEvaluation {
+            entry: "test_bevy_blurred",
+            ..engine_evaluation(&camera, 1.5, &[], &[])
+        };
+        let frag = |x: u32, y: u32| Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let a: Vec<Vec4> = rows.iter().map(|&(u, v, r, d, _, _)| Vec4::new(u, v, r, d)).collect();
+        let b: Vec<Vec4> = rows.iter().map(|&(.., x, y)| frag(x, y).extend(0.0).extend(0.0)).collect();
+        let gpu = evaluate_family(context, &evaluation, &a, &b).expect("gpu");
+        let mips = AnalyticMips(size);
+        let mut mismatches = 0;
+        let mut rejected = 0;
+        for (k, &(u, v, r, d, x, y)) in rows.iter().enumerate() {
+            let (color, share) = bevy_blurred(&mips, &AnalyticScreen, frag(x, y), Vec2::new(u, v), r, d);
+            rejected += usize::from(share < 1.0);
+            if !(close3(gpu[k], color, 1e-3) && (gpu[k].w - share).abs() < 1e-6) {
+                mismatches += 1;
+            }
+        }
+        prop_assert!(mismatches * 100 <= 3 * rows.len(), "{mismatches} of {} rows differ", rows.len());
+        prop_assert!(rejected > 0, "no tap was rejected");
     }
 }

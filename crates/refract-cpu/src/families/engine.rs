@@ -365,7 +365,7 @@ impl PixelContext<'_> {
                 None
             };
             let rough = (lod > 0.0).then_some(Rough { model, lod, y });
-            self.read_paths(group, &paths, channels, rough, colors, lanes, aovs);
+            self.read_paths(group, &paths, p1, channels, rough, colors, lanes, aovs);
         }
     }
 
@@ -378,13 +378,14 @@ impl PixelContext<'_> {
         &self,
         group: &PixelGroup,
         paths: &[refract_core::engine::EnginePath; LANES],
+        p1: &[Vec3; LANES],
         channels: Vec3,
         rough: Option<Rough>,
         colors: &mut [Vec3],
         lanes: &mut EnvironmentLanes<'_>,
         mut aovs: Option<&mut [EngineAov]>,
     ) {
-        for (&x, path) in group.x.iter().zip(paths).take(group.len) {
+        for ((&x, path), p1) in group.x.iter().zip(paths).zip(p1).take(group.len) {
             let mut aov = EngineAov {
                 covered: true,
                 p2: path.p2,
@@ -392,24 +393,35 @@ impl PixelContext<'_> {
                 off_screen: path.off_screen,
                 ..EngineAov::NONE
             };
-            if path.screen_weight > 0.0 {
-                match (self.mips, rough) {
-                    (Some(mips), Some(r)) => {
-                        let uv_px = Camera::pixel_center(x, r.y);
-                        let color = r.model.read_rough(self.camera, mips, uv_px, path, r.lod);
-                        colors[x as usize] += path.screen_weight * channels * color;
-                    }
-                    _ => self.screen(x, path.texel, path.screen_weight * channels, colors, lanes),
-                }
-                if let Some(t) = self.object(path.texel) {
-                    aov.p_geom = t.surface.p_ws;
-                    aov.ng_texel =
-                        Vec3::new(path.texel.x as f32, path.texel.y as f32, t.object as f32);
-                }
+            if path.screen_weight > 0.0
+                && let Some(t) = self.object(path.texel)
+            {
+                aov.p_geom = t.surface.p_ws;
+                aov.ng_texel = Vec3::new(path.texel.x as f32, path.texel.y as f32, t.object as f32);
             }
-            if path.screen_weight < 1.0 {
-                let weight = (1.0 - path.screen_weight) * channels;
-                lanes.push(x, path.environment_dir, weight, colors);
+            let (screen_weight, environment_dir) = match (self.mips, rough) {
+                (Some(mips), Some(r)) => {
+                    let uv_px = Camera::pixel_center(x, r.y);
+                    let screen = ScreenDepth(self.screen);
+                    let read =
+                        r.model
+                            .read_rough(self.camera, mips, &screen, uv_px, *p1, path, r.lod);
+                    if read.screen_weight > 0.0 {
+                        colors[x as usize] += read.screen_weight * channels * read.color;
+                    }
+                    (read.screen_weight, read.environment_dir)
+                }
+                _ => {
+                    if path.screen_weight > 0.0 {
+                        let weight = path.screen_weight * channels;
+                        self.screen(x, path.texel, weight, colors, lanes);
+                    }
+                    (path.screen_weight, path.environment_dir)
+                }
+            };
+            if screen_weight < 1.0 {
+                let weight = (1.0 - screen_weight) * channels;
+                lanes.push(x, environment_dir, weight, colors);
             }
             if let Some(aovs) = aovs.as_deref_mut() {
                 aovs[x as usize] = aov;

@@ -99,29 +99,47 @@ fn screen_mip_levels(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// The screen colour a path reads (refract_core::engine::EngineModel::read_rough): its nearest
-// texel, or at a rough `lod` the blurred screen as the model reads it: three.js's B-spline at
-// the projected exit point (its texel's centre behind the eye), Godot's trilinear read at the
-// texel's centre, HDRP's at lerp(fragment, texel centre, hdrp_hit_share(lod)).
-fn read_screen(path: EnginePath, uv_px: vec2<f32>, lod: f32) -> vec3<f32> {
-    if lod <= 0.0 {
-        return screen_color(path.texel);
-    }
+// What a rough refractor's pixel reads (refract_core::engine::RoughRead).
+struct RoughRead {
+    color: vec3<f32>,
+    screen_weight: f32,
+    environment_dir: vec3<f32>,
+}
+
+// refract_core::engine::EngineModel::read_rough: the blurred screen as the model reads it at a
+// rough `lod` (> 0) for `path` of the pixel at `uv_px` whose front surface is `p1`: three.js's
+// B-spline at the projected exit point (its texel's centre behind the eye), Bevy's taps around
+// it, Godot's trilinear read at the texel's centre, HDRP's at lerp(fragment, texel centre,
+// hdrp_hit_share(lod)).
+fn read_rough(path: EnginePath, uv_px: vec2<f32>, p1: vec3<f32>, lod: f32) -> RoughRead {
     let size = vec2<f32>(f32(frame.width), f32(frame.height));
     let texel_px = vec2<f32>(path.texel) + vec2<f32>(0.5);
+    var out = RoughRead(vec3<f32>(0.0), path.screen_weight, path.environment_dir);
     if ENGINE_MODEL == ENGINE_VOLUME_THICKNESS {
         let projected = world_to_pixel(path.p2);
         var read = texel_px;
         if projected.w > 0.5 {
             read = projected.xy;
         }
-        return sample_threejs(read / size, lod);
+        if engine.depth_test != 0u {
+            let from_eye = p1 - frame.eye.xyz;
+            let fragment_depth = eye_view_depth(p1);
+            let taps = bevy_blurred(uv_px, read / size, lod, fragment_depth);
+            out.color = taps.xyz;
+            out.screen_weight = taps.w;
+            out.environment_dir = bevy_fallback_dir(normalize(from_eye), path.t2, engine.amount);
+            return out;
+        }
+        out.color = sample_threejs(read / size, lod);
+        return out;
     }
     if ENGINE_MODEL >= ENGINE_PROXY_SPHERE && engine.filament_lookup == 0u {
         let k = hdrp_hit_share(lod);
-        return sample_trilinear(mix(uv_px, texel_px, k) / size, lod);
+        out.color = sample_trilinear(mix(uv_px, texel_px, k) / size, lod);
+        return out;
     }
-    return sample_trilinear(texel_px / size, lod);
+    out.color = sample_trilinear(texel_px / size, lod);
+    return out;
 }
 
 fn write_engine_aovs(i: u32, path: EnginePath, covered: bool) {
@@ -190,11 +208,20 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
             channels[lookup] = 1.0;
         }
         let path = engine_path(px.uv, px.p1, n1, ior, refractor.y);
-        if path.screen_weight > 0.0 {
-            color += (path.screen_weight * channels) * read_screen(path, px.uv, refractor.w);
+        var weight = path.screen_weight;
+        var environment_dir = path.environment_dir;
+        if refractor.w > 0.0 {
+            let read = read_rough(path, px.uv, px.p1, refractor.w);
+            weight = read.screen_weight;
+            environment_dir = read.environment_dir;
+            if weight > 0.0 {
+                color += (weight * channels) * read.color;
+            }
+        } else if weight > 0.0 {
+            color += (weight * channels) * screen_color(path.texel);
         }
-        if path.screen_weight < 1.0 {
-            color += ((1.0 - path.screen_weight) * channels) * environment_radiance(path.environment_dir);
+        if weight < 1.0 {
+            color += ((1.0 - weight) * channels) * environment_radiance(environment_dir);
         }
         if lookup == passes / 2u {
             middle = path;

@@ -134,3 +134,12 @@ fn test_sample_trilinear(@builtin(global_invocation_id) id: vec3<u32>) {
     out_v[i] = vec4<f32>(sample_trilinear(in_a[i].xy, in_a[i].z), 0.0);
 }
 
+// a = (u, v, roughness, fragment depth), b = (frag x, frag y, _, _) -> (Bevy's taps: colour
+// sum over the taps, accepted share) over the analytic pyramid and screen.
+@compute @workgroup_size(64)
+fn test_bevy_blurred(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&out_v) { return; }
+    out_v[i] = bevy_blurred(in_b[i].xy, in_a[i].xy, in_a[i].z, in_a[i].w);
+}
+

@@ -1,7 +1,9 @@
-// The engines' mip-mapped screen texture (refract_core::screen_mips): its levels' sizes and
-// three.js's rough transmission lookup in it, written against `frame` (its size is level 0's)
-// and a `mip_texel(level, texel)` the including module provides: the screen pyramid's buffer in
-// engine.wgsl, an analytic pyramid in engine_conformance.wgsl.
+// The engines' mip-mapped screen texture (refract_core::screen_mips): its levels' sizes and the
+// engines' rough transmission lookups in it (three.js's B-spline, Godot's and HDRP's trilinear
+// reads, Bevy's taps: refract_core::engine::bevy_blurred), written against `frame` (its size is
+// level 0's), a `mip_texel(level, texel)` and a `screen_depth(texel)` the including module
+// provides: the screen pyramid's buffer and the opaque objects' depths in engine.wgsl, analytic
+// ones in engine_conformance.wgsl.
 
 // refract_core::screen_mips::level_count for the frame's size.
 fn mip_level_count() -> u32 {
@@ -110,3 +112,48 @@ fn sample_threejs(uv: vec2<f32>, lod: f32) -> vec3<f32> {
     }
     return fine + (sample_bspline(uv, l.high) - fine) * l.fraction;
 }
+
+// refract_core::engine::spiral_offset: Jimenez's spiral offset k.
+fn spiral_offset(k: u32) -> vec2<f32> {
+    let angle = 0.75 * PI * f32(k + 1u);
+    return vec2<f32>(cos(angle), sin(angle)) * (1.0 - f32(k) / 8.0);
+}
+
+// refract_core::engine::interleaved_gradient_noise (frame 0).
+fn interleaved_gradient_noise(frag_px: vec2<f32>) -> f32 {
+    return fract(52.982918 * fract(0.06711056 * frag_px.x + 0.00583715 * frag_px.y));
+}
+
+// refract_core::engine::BEVY_TAPS.
+const BEVY_TAPS: u32 = 8u;
+
+// refract_core::engine::bevy_blurred: Bevy's taps around `read_uv`; xyz = the accepted taps'
+// colours summed over the taps, w = the accepted share.
+fn bevy_blurred(frag_px: vec2<f32>, read_uv: vec2<f32>, roughness: f32, fragment_depth: f32) -> vec4<f32> {
+    var order = array<u32, 8>(0u, 2u, 4u, 6u, 1u, 3u, 5u, 7u);
+    let size = vec2<f32>(f32(frame.width), f32(frame.height));
+    let aspect = size.x / size.y;
+    let blur = -(roughness * roughness) / fragment_depth;
+    let spirals = (BEVY_TAPS + 7u) / 8u;
+    let noise = interleaved_gradient_noise(frag_px);
+    let checker = f32((i32(frag_px.x) + i32(frag_px.y)) % 2);
+    var sum = vec3<f32>(0.0);
+    var accepted = 0u;
+    for (var i = 0u; i < BEVY_TAPS; i++) {
+        let spiral = i >> 3u;
+        let angle = (noise + f32(spiral) / f32(spirals)) * TAU;
+        let s = sin(angle);
+        let c = cos(angle);
+        let offset = spiral_offset(order[i & 7u]) * (1.0 - 0.5 * f32(spiral + 1u) / f32(spirals));
+        let rotated = vec2<f32>(c * offset.x + s * offset.y, -s * offset.x + c * offset.y);
+        let uv = read_uv + rotated * vec2<f32>(1.0, aspect) * blur * (1.0 - checker * 0.1);
+        let texel = vec2<i32>(clamp(floor(uv * size), vec2<f32>(0.0), size - vec2<f32>(1.0)));
+        if screen_depth(texel) < fragment_depth {
+            continue;
+        }
+        sum += sample_bilinear(uv, 0u);
+        accepted += 1u;
+    }
+    return vec4<f32>(sum / f32(BEVY_TAPS), f32(accepted) / f32(BEVY_TAPS));
+}
+
