@@ -1,6 +1,6 @@
 //! The rough-glass section of `docs/claims.md` (issue 52): on `rough-glass` (four spheres of
 //! roughness 0, 0.1, 0.3 and 0.6), each sphere's error against the reference for the engines
-//! themselves and for `volume-thickness` (three.js's formula and LOD rule, re-implemented), and
+//! themselves and for the re-implementations of three.js's, Bevy's, Godot's and HDRP's rough models, and
 //! what roughness changes in each renderer's image (its frame against its frame of the same
 //! spheres at roughness 0), at 256² and at 1024² box-filtered to 256² (B8, B9).
 
@@ -227,29 +227,56 @@ pub fn section(
         res,
         &masks,
     )];
-    // The re-implementation: three.js's LOD rule on the material's roughness.
+    // The re-implementations of the engines' rough models (`docs/methods.md`, "Rough
+    // surfaces"): three.js's, Bevy's, Godot's and HDRP's.
     let mut cpu = CpuRenderer::new();
-    let params = MethodParams::defaults(MethodId::VolumeThickness);
-    let mut cpu_frame = |scene: &Arc<Scene>, camera: &Camera| -> crate::Result<Vec<Vec3>> {
-        cpu.prepare(scene)?;
-        let mut frame = Frame::default();
-        cpu.render(camera, &params, FrameOutputs::Color, &mut frame)?;
-        Ok(frame.color)
-    };
-    let frames = Frames {
-        rough: cpu_frame(&rough, &camera)?,
-        smooth: cpu_frame(&smooth, &camera)?,
-        rough_high: cpu_frame(&rough, &camera_high)?,
-        smooth_high: cpu_frame(&smooth, &camera_high)?,
-    };
-    rows.push(Row::new(
-        "`volume-thickness` (three.js's LOD rule, re-implemented)".to_owned(),
-        Kind::Method,
-        &truth.color,
-        &frames,
-        res,
-        &masks,
-    ));
+    for (label, id, settings) in [
+        (
+            "`volume-thickness` (three.js's LOD rule, re-implemented)",
+            MethodId::VolumeThickness,
+            &[][..],
+        ),
+        (
+            "`volume-thickness`, `depth-test=reject` (Bevy's taps, re-implemented)",
+            MethodId::VolumeThickness,
+            &[("depth-test", "reject")][..],
+        ),
+        (
+            "`screen-offset` (Godot's LOD rule, re-implemented)",
+            MethodId::ScreenOffset,
+            &[][..],
+        ),
+        (
+            "`proxy-sphere` (HDRP's mip rule, re-implemented)",
+            MethodId::ProxySphere,
+            &[("lookup", "hdrp")][..],
+        ),
+    ] {
+        let mut params = MethodParams::defaults(id);
+        for (name, value) in settings {
+            params.set(name, value, "claims")?;
+        }
+        let mut cpu_frame = |scene: &Arc<Scene>, camera: &Camera| -> crate::Result<Vec<Vec3>> {
+            cpu.prepare(scene)?;
+            let mut frame = Frame::default();
+            cpu.render(camera, &params, FrameOutputs::Color, &mut frame)?;
+            Ok(frame.color)
+        };
+        let frames = Frames {
+            rough: cpu_frame(&rough, &camera)?,
+            smooth: cpu_frame(&smooth, &camera)?,
+            rough_high: cpu_frame(&rough, &camera_high)?,
+            smooth_high: cpu_frame(&smooth, &camera_high)?,
+        };
+        rows.push(Row::new(
+            label.to_owned(),
+            Kind::Method,
+            &truth.color,
+            &frames,
+            res,
+            &masks,
+        ));
+    }
     let mut notes = Vec::new();
     match engines {
         Some(engines) => {
