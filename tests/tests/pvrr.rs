@@ -56,6 +56,7 @@ fn pvrr(scene: &Arc<Scene>, camera: &Camera, p: &PvrrParams) -> (PvrrPasses, Fra
         method: MethodId::Pvrr,
         outputs: FrameOutputs::ColorAndAovs,
         lambda_nm: None,
+        repeat: false,
     };
     passes.render(&cx, p, &mut frame).expect("pvrr frame");
     (passes, frame)

@@ -70,13 +70,14 @@ impl Renderer for CpuRenderer {
             outputs,
             frame,
             &mut self.wavelength_frame,
-            |lambda_nm, outputs, frame| {
+            |lambda_nm, outputs, frame, repeat| {
                 let cx = FrameCx {
                     scene,
                     camera,
                     method: id,
                     outputs,
                     lambda_nm,
+                    repeat,
                 };
                 let start = Instant::now();
                 families.render(&cx, method, frame)?;

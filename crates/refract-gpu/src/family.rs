@@ -42,6 +42,10 @@ pub(crate) struct GpuFrameCx<'a> {
     /// The wavelength the frame traces (nm), `None` for the d line: every refractor's index is
     /// [`Refractor::ior_at`] it ([`refract_scene::render_dispersive`]).
     pub lambda_nm: Option<f32>,
+    /// The previous frame rendered the same scene, camera and method at another wavelength of
+    /// one dispersive frame: the family may keep the passes that do not depend on the index
+    /// (the distance map's layers, the depth-peeled layers).
+    pub repeat: bool,
 }
 
 impl GpuFrameCx<'_> {

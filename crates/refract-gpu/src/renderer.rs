@@ -152,7 +152,7 @@ impl Renderer for GpuRenderer {
             outputs,
             frame,
             &mut self.wavelength_frame,
-            |lambda_nm, outputs, frame| {
+            |lambda_nm, outputs, frame, repeat| {
                 let cx = GpuFrameCx {
                     context,
                     raster,
@@ -165,6 +165,7 @@ impl Renderer for GpuRenderer {
                     timestamps,
                     readback: true,
                     lambda_nm,
+                    repeat,
                 };
                 families.render(&cx, method, Some(frame))
             },
@@ -211,6 +212,7 @@ impl GpuRenderer {
             timestamps: self.timestamps.as_ref(),
             readback: false,
             lambda_nm: None,
+            repeat: false,
         };
         let timing = self.families.render(&cx, method, None)?;
         let color = self

@@ -221,6 +221,18 @@ proptest! {
     }
 }
 
+/// A 75 × 46 frame (sides that are not powers of two) and its camera, for the rough lookups.
+fn odd_frame() -> (UVec2, Camera) {
+    let size = UVec2::new(75, 46);
+    let camera = Camera::new(CameraDesc {
+        width: size.x,
+        height: size.y,
+        ..CameraDesc::default()
+    })
+    .expect("camera");
+    (size, camera)
+}
+
 /// A rough lookup of `refract_core::screen_mips` over the analytic pyramid.
 type Sampler = fn(&AnalyticMips, Vec2, f32) -> Vec3;
 
@@ -247,19 +259,12 @@ proptest! {
     /// The rough lookups (`screen_mips.wgsl`: the levels' sizes, three.js's B-spline weights and
     /// clamped 4 × 4 sums, Godot's and HDRP's clamped bilinear reads, the mix of two levels)
     /// against `refract_core::screen_mips::{sample_threejs, sample_trilinear}` over an analytic
-    /// pyramid of a frame whose
-    /// sides are not powers of two, at positions inside and outside the image and LODs from 0
-    /// past the top level.
+    /// pyramid of a frame whose sides are not powers of two, at positions inside and outside
+    /// the image and LODs from 0 past the top level.
     #[test]
-    fn threejs_rough_lookup_agrees(rows in prop::collection::vec((-0.2f32..1.2, -0.2f32..1.2, 0.0f32..9.0), ROWS)) {
+    fn rough_lookups_agree(rows in prop::collection::vec((-0.2f32..1.2, -0.2f32..1.2, 0.0f32..9.0), ROWS)) {
         let context = gpu_or_skip!();
-        let size = UVec2::new(75, 46);
-        let camera = Camera::new(CameraDesc {
-            width: size.x,
-            height: size.y,
-            ..CameraDesc::default()
-        })
-        .expect("camera");
+        let (size, camera) = odd_frame();
         let a: Vec<Vec4> = rows.iter().map(|&(u, v, lod)| Vec4::new(u, v, lod, 0.0)).collect();
         let mips = AnalyticMips(size);
         let samplers: [(&str, Sampler); 2] = [
@@ -292,13 +297,7 @@ proptest! {
     #[test]
     fn bevy_taps_agree(rows in prop::collection::vec((0.0f32..1.0, 0.0f32..1.0, 0.05f32..1.0, 0.5f32..4.0, 0u32..75, 0u32..46), ROWS)) {
         let context = gpu_or_skip!();
-        let size = UVec2::new(75, 46);
-        let camera = Camera::new(CameraDesc {
-            width: size.x,
-            height: size.y,
-            ..CameraDesc::default()
-        })
-        .expect("camera");
+        let (size, camera) = odd_frame();
         let evaluation = FamilyEvaluation {
             entry: "test_bevy_blurred",
             ..engine_evaluation(&camera, 1.5, &[], &[])

@@ -20,23 +20,29 @@ pub fn dispersion_bins(scene: &Scene, method: &MethodParams) -> Option<Wavelengt
     method.wavelengths().and_then(DispersionWavelengths::bins)
 }
 
-/// Renders a frame of `method` into `frame` through `render_at(lambda_nm, outputs, frame)`,
-/// which renders one frame with every refractor at its index at `lambda_nm` (`None`: at the d
-/// line, [`crate::Refractor::ior_at`]). Without [`dispersion_bins`] that is one call. With
-/// them, a [`FrameOutputs::ColorAndAovs`] frame first renders the d line for the layers, then
-/// each bin's wavelength renders colour only into `scratch` (its memory kept between frames)
-/// and `frame`'s colour becomes `Σᵢ Wᵢ ⊙ Cᵢ`. The time is the sum of the frames' times: the
-/// cost of `N` frames (an engine would share the passes that do not depend on the index).
+/// Renders a frame of `method` into `frame` through `render_at(lambda_nm, outputs, frame,
+/// repeat)`, which renders one frame with every refractor at its index at `lambda_nm` (`None`:
+/// at the d line, [`crate::Refractor::ior_at`]); `repeat` says that the previous call rendered
+/// the same scene, camera and method at another wavelength of this frame, so that the passes
+/// that do not depend on the index may be kept. Without [`dispersion_bins`] that is one call.
+/// With them, a [`FrameOutputs::ColorAndAovs`] frame first renders the d line for the layers,
+/// then each bin's wavelength renders colour only into `scratch` (its memory kept between
+/// frames) and `frame`'s colour becomes `Σᵢ Wᵢ ⊙ Cᵢ`. The time is the sum of the calls' times.
 pub fn render_dispersive(
     scene: &Scene,
     method: &MethodParams,
     outputs: FrameOutputs,
     frame: &mut Frame,
     scratch: &mut Frame,
-    mut render_at: impl FnMut(Option<f32>, FrameOutputs, &mut Frame) -> Result<FrameTiming, RenderError>,
+    mut render_at: impl FnMut(
+        Option<f32>,
+        FrameOutputs,
+        &mut Frame,
+        bool,
+    ) -> Result<FrameTiming, RenderError>,
 ) -> Result<FrameTiming, RenderError> {
     let Some(bins) = dispersion_bins(scene, method) else {
-        return render_at(None, outputs, frame);
+        return render_at(None, outputs, frame, false);
     };
     let mut total: Option<FrameTiming> = None;
     let mut add = |timing: FrameTiming| {
@@ -48,11 +54,18 @@ pub fn render_dispersive(
             None => timing,
         });
     };
-    if outputs == FrameOutputs::ColorAndAovs {
-        add(render_at(None, FrameOutputs::ColorAndAovs, frame)?);
+    let with_aovs = outputs == FrameOutputs::ColorAndAovs;
+    if with_aovs {
+        add(render_at(None, FrameOutputs::ColorAndAovs, frame, false)?);
     }
     for (i, bin) in bins.as_slice().iter().enumerate() {
-        add(render_at(Some(bin.lambda), FrameOutputs::Color, scratch)?);
+        let repeat = with_aovs || i > 0;
+        add(render_at(
+            Some(bin.lambda),
+            FrameOutputs::Color,
+            scratch,
+            repeat,
+        )?);
         if i == 0 {
             if outputs == FrameOutputs::Color {
                 frame.resize_for_overwrite(scratch.width, scratch.height);

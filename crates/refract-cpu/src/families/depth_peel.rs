@@ -285,7 +285,13 @@ impl CpuFamily for DepthPeelPasses {
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
         let FrameCx { scene, camera, .. } = *cx;
+        // The peeled layers and the objects' surfaces (with their planes) do not depend on the
+        // index: kept for the other wavelengths of a dispersive frame.
+        let repeat = cx.repeat;
         let screen = (!scene.objects.is_empty()).then(|| {
+            if repeat {
+                return;
+            }
             self.screen.render_into(scene, &self.objects, camera);
             self.screen.normals_into(&mut self.screen_normals);
             let (screen, eye, width) = (&self.screen, camera.eye(), camera.width());
@@ -302,7 +308,9 @@ impl CpuFamily for DepthPeelPasses {
                         .map_or(Vec4::NAN, |s| facing_plane(s.p_ws, *n, eye));
                 });
         });
-        self.peel(camera, params.layers);
+        if !repeat {
+            self.peel(camera, params.layers);
+        }
         let media = params.media(scene, cx.lambda_nm);
         let pixels = PixelContext {
             scene,

@@ -453,19 +453,23 @@ impl CpuFamily for DistancePasses {
             outputs,
             ..
         } = *cx;
-        self.map
-            .render(scene, params.layers as usize, params.resolution)?;
         let (width, height) = (camera.width(), camera.height());
         let n = (width * height) as usize;
         frame.resize_for_overwrite(width, height);
-        let raster = self.everything.raster();
-        rasterize_into(
-            &raster,
-            camera,
-            Faces::Front,
-            DepthTest::Nearest,
-            &mut self.camera,
-        );
+        // The layers and the eye's surfaces do not depend on the index: kept for the other
+        // wavelengths of a dispersive frame.
+        if !cx.repeat {
+            self.map
+                .render(scene, params.layers as usize, params.resolution)?;
+            let raster = self.everything.raster();
+            rasterize_into(
+                &raster,
+                camera,
+                Faces::Front,
+                DepthTest::Nearest,
+                &mut self.camera,
+            );
+        }
         let with_aovs = outputs == FrameOutputs::ColorAndAovs;
         self.aovs
             .resize(if with_aovs { n } else { 0 }, DistanceAov::default());

@@ -630,6 +630,7 @@ mod tests {
             method: MethodId::Pvrr,
             outputs: FrameOutputs::Color,
             lambda_nm: None,
+            repeat: false,
         }
     }
 

@@ -359,36 +359,44 @@ impl DepthPeelTargets {
         let refractors: Vec<_> = std::iter::once(&gpu_scene.refractor)
             .chain(&gpu_scene.other_refractors)
             .collect();
-        for (k, slice) in self.slices.iter().enumerate() {
-            let (kind, peel) = match k {
-                0 => (RasterKind::SurfaceBoth, None),
-                _ => (RasterKind::SurfacePeel, Some(&self.peel_groups[k - 1])),
-            };
-            raster.encode(
-                encoder,
-                &RasterPass {
-                    kind,
+        // The peeled layers and the objects' surfaces do not depend on the index: kept for the
+        // other wavelengths of a dispersive frame (the kernel's uniforms are rewritten).
+        if cx.repeat {
+            if !scene.objects.is_empty() {
+                queue.write_buffer(self.screen.uniforms(), 0, bytemuck::bytes_of(&uniforms));
+            }
+        } else {
+            for (k, slice) in self.slices.iter().enumerate() {
+                let (kind, peel) = match k {
+                    0 => (RasterKind::SurfaceBoth, None),
+                    _ => (RasterKind::SurfacePeel, Some(&self.peel_groups[k - 1])),
+                };
+                raster.encode(
+                    encoder,
+                    &RasterPass {
+                        kind,
+                        camera,
+                        uniforms: &self.raster_group,
+                        peel,
+                        meshes: &refractors,
+                        targets: &[&slice[0], &slice[1], &slice[2]],
+                        depth: &self.depth,
+                    },
+                    timestamps.and_then(|t| t.render_pass("peeled layers")),
+                );
+            }
+            if !scene.objects.is_empty() {
+                let objects: Vec<_> = gpu_scene.objects.iter().collect();
+                self.screen.encode(
+                    queue,
+                    raster,
+                    encoder,
                     camera,
-                    uniforms: &self.raster_group,
-                    peel,
-                    meshes: &refractors,
-                    targets: &[&slice[0], &slice[1], &slice[2]],
-                    depth: &self.depth,
-                },
-                timestamps.and_then(|t| t.render_pass("peeled layers")),
-            );
-        }
-        if !scene.objects.is_empty() {
-            let objects: Vec<_> = gpu_scene.objects.iter().collect();
-            self.screen.encode(
-                queue,
-                raster,
-                encoder,
-                camera,
-                &uniforms,
-                &objects,
-                timestamps.and_then(|t| t.render_pass("object surfaces")),
-            );
+                    &uniforms,
+                    &objects,
+                    timestamps.and_then(|t| t.render_pass("object surfaces")),
+                );
+            }
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -410,58 +410,65 @@ impl DistanceMapTargets {
             fresnel: fresnel_code(params.path.fresnel),
         };
         queue.write_buffer(&self.dm_uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let cleared: Vec<u32> = (0..MAX_LAYERS)
-            .flat_map(|_| [f32::INFINITY.to_bits(), 0])
-            .collect();
-        queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
+        // The layers, their ranges and the eye's surfaces do not depend on the index: kept for
+        // the other wavelengths of a dispersive frame (the kernel's uniforms are rewritten).
+        if cx.repeat {
+            queue.write_buffer(self.eye.uniforms(), 0, bytemuck::bytes_of(&frame));
+        } else {
+            let cleared: Vec<u32> = (0..MAX_LAYERS)
+                .flat_map(|_| [f32::INFINITY.to_bits(), 0])
+                .collect();
+            queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
 
-        let objects: Vec<_> = gpu_scene.objects.iter().collect();
-        for layer in 0..layers {
-            let (kind, meshes): (RasterKind, Vec<_>) = match layer {
-                0 => (RasterKind::Surface, vec![&gpu_scene.refractor]),
-                1 => (RasterKind::SurfaceBack, vec![&gpu_scene.refractor]),
-                2 => (RasterKind::Surface, objects.clone()),
-                _ => (RasterKind::SurfacePeel, objects.clone()),
-            };
-            for face in CubeFace::ALL {
-                let f = face as usize;
-                let slice = &self.slices[(layer * 6) as usize + f];
-                let peel = (layer >= 3).then(|| &self.peel_groups[((layer - 3) * 6) as usize + f]);
-                raster.encode(
-                    encoder,
-                    &RasterPass {
-                        kind,
-                        camera: &face_cameras[f],
-                        uniforms: &self.face_groups[f],
-                        peel,
-                        meshes: &meshes,
-                        targets: &[&slice[0], &slice[1], &slice[2]],
-                        depth: &self.face_depth,
-                    },
-                    timestamps.and_then(|t| t.render_pass("cube-map faces")),
-                );
+            let objects: Vec<_> = gpu_scene.objects.iter().collect();
+            for layer in 0..layers {
+                let (kind, meshes): (RasterKind, Vec<_>) = match layer {
+                    0 => (RasterKind::Surface, vec![&gpu_scene.refractor]),
+                    1 => (RasterKind::SurfaceBack, vec![&gpu_scene.refractor]),
+                    2 => (RasterKind::Surface, objects.clone()),
+                    _ => (RasterKind::SurfacePeel, objects.clone()),
+                };
+                for face in CubeFace::ALL {
+                    let f = face as usize;
+                    let slice = &self.slices[(layer * 6) as usize + f];
+                    let peel =
+                        (layer >= 3).then(|| &self.peel_groups[((layer - 3) * 6) as usize + f]);
+                    raster.encode(
+                        encoder,
+                        &RasterPass {
+                            kind,
+                            camera: &face_cameras[f],
+                            uniforms: &self.face_groups[f],
+                            peel,
+                            meshes: &meshes,
+                            targets: &[&slice[0], &slice[1], &slice[2]],
+                            depth: &self.face_depth,
+                        },
+                        timestamps.and_then(|t| t.render_pass("cube-map faces")),
+                    );
+                }
             }
-        }
-        let everything: Vec<_> = std::iter::once(&gpu_scene.refractor)
-            .chain(gpu_scene.objects.iter())
-            .collect();
-        self.eye.encode(
-            queue,
-            raster,
-            encoder,
-            camera,
-            &frame,
-            &everything,
-            timestamps.and_then(|t| t.render_pass("eye surfaces")),
-        );
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("distance-map ranges"),
-                timestamp_writes: timestamps.and_then(|t| t.compute_pass("min-max ranges")),
-            });
-            pass.set_pipeline(&pipelines.ranges);
-            pass.set_bind_group(0, &self.shade_group, &[]);
-            pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6 * layers);
+            let everything: Vec<_> = std::iter::once(&gpu_scene.refractor)
+                .chain(gpu_scene.objects.iter())
+                .collect();
+            self.eye.encode(
+                queue,
+                raster,
+                encoder,
+                camera,
+                &frame,
+                &everything,
+                timestamps.and_then(|t| t.render_pass("eye surfaces")),
+            );
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("distance-map ranges"),
+                    timestamp_writes: timestamps.and_then(|t| t.compute_pass("min-max ranges")),
+                });
+                pass.set_pipeline(&pipelines.ranges);
+                pass.set_bind_group(0, &self.shade_group, &[]);
+                pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6 * layers);
+            }
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

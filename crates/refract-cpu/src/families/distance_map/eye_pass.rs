@@ -178,6 +178,7 @@ mod tests {
                 method: MethodId::DistanceMap,
                 outputs: FrameOutputs::ColorAndAovs,
                 lambda_nm: None,
+                repeat: false,
             };
             let mut frame = Frame::default();
             passes.render(&cx, &params, &mut frame).expect("frame");
