@@ -87,7 +87,7 @@ pub struct EnginePasses {
     meshes: NearbyMeshes,
     /// Refractor `k`'s nearest front faces in `fronts[k]`.
     fronts: Vec<SurfaceBuffer>,
-    /// Refractor `k`'s model, IOR, dispersion half spread and rough LOD.
+    /// Refractor `k`'s model, IOR, dispersion half spread and rough parameter.
     refractors: Vec<RefractorModel>,
     screen: NearbyTexture,
     /// The screen texture's colours, mip-mapped, for rough refractors.
@@ -104,8 +104,8 @@ struct Rough {
 }
 
 /// How one refractor is drawn: its engine model, IOR, dispersion half spread
-/// ([`EngineModel::dispersion_half_spread`]) and the LOD its roughness blurs the screen at
-/// ([`EngineModel::rough_lod`], 0: the nearest texel).
+/// ([`EngineModel::dispersion_half_spread`]) and how its roughness blurs the screen
+/// ([`EngineModel::rough_lod`]: a LOD, Bevy's roughness; 0: the nearest texel).
 #[derive(Clone, Copy, Debug)]
 struct RefractorModel {
     model: EngineModel,

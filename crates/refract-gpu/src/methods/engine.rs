@@ -193,9 +193,9 @@ impl GpuFamily for EnginePipelines {
 /// Refractor `k`'s `(IOR, amount, spread, LOD)` in entry `k` (`engine.wgsl`'s
 /// `engine_refractors`): the IOR, the model's `amount` ([`EngineUniforms::amount`]) of `params`
 /// on that refractor, its dispersion half spread
-/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index) and the LOD
-/// its roughness blurs the screen at ([`refract_core::engine::EngineModel::rough_lod`], 0: the
-/// nearest texel).
+/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index) and how its
+/// roughness blurs the screen ([`refract_core::engine::EngineModel::rough_lod`]: a LOD, Bevy's
+/// roughness; 0: the nearest texel).
 fn refractor_table(
     scene: &refract_scene::Scene,
     params: &EngineParams,

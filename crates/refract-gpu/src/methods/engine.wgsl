@@ -10,7 +10,7 @@
 // from `engine_refractors`, over the screen texture of the opaque objects only, as the engines
 // draw several transmissive objects.
 
-// Refractor k's (IOR, amount, dispersion half spread, rough LOD): crates/refract-gpu/src/methods/engine.rs.
+// Refractor k's (IOR, amount, dispersion half spread, rough LOD or Bevy's roughness): crates/refract-gpu/src/methods/engine.rs.
 @group(0) @binding(17) var<uniform> engine_refractors: array<vec4<f32>, MAX_REFRACTORS>;
 
 // The screen texture's colours mip-mapped (refract_core::screen_mips), level after level, for
