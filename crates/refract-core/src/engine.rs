@@ -113,12 +113,16 @@ impl EngineModel {
         }
     }
     /// The LOD at which this model reads the mip-mapped screen texture
-    /// ([`crate::screen_mips`]) for a surface of roughness `roughness` on glass of index `ior`,
-    /// the screen `size` texels (0: one nearest texel, as for smooth glass): three.js's
-    /// [`screen_mips::threejs_lod`], Godot's [`screen_mips::godot_lod`], HDRP's
-    /// [`screen_mips::hdrp_mip`]; for Bevy, whose taps are not a LOD, the roughness itself
-    /// ([`bevy_blurred`]). Filament's LOD is not re-implemented: its model reads no roughness.
-    pub fn rough_lod(&self, size: UVec2, roughness: f32, ior: f32) -> f32 {
+    /// ([`crate::screen_mips`]) for a surface of roughness `roughness` on glass of index `ior`
+    /// seen through `camera` (its frame's size and field of view; 0: one nearest texel, as for
+    /// smooth glass): three.js's [`screen_mips::threejs_lod`], Godot's
+    /// [`screen_mips::godot_lod`], HDRP's [`screen_mips::hdrp_mip`], Filament's
+    /// [`screen_mips::filament_lod`]; for Bevy, whose taps are not a LOD, the roughness itself
+    /// ([`bevy_blurred`]). Where Filament's LOD comes to 0 on a rough surface (a roughness below
+    /// `2^(−offset/2)`, 0.14 at 256 × 256 under 45°) its model reads the nearest texel, as at
+    /// roughness 0, where Filament reads level 0 bilinearly.
+    pub fn rough_lod(&self, camera: &Camera, roughness: f32, ior: f32) -> f32 {
+        let size = UVec2::new(camera.width(), camera.height());
         match self {
             Self::VolumeThickness {
                 reject_nearer: true,
@@ -133,7 +137,10 @@ impl EngineModel {
                 lookup: ProxyLookup::Hdrp,
                 ..
             } => screen_mips::hdrp_mip(roughness, screen_mips::level_count(size)),
-            _ => 0.0,
+            Self::Proxy {
+                lookup: ProxyLookup::Filament,
+                ..
+            } => screen_mips::filament_lod(size, camera.desc().fov_y, roughness, ior),
         }
     }
 
@@ -145,8 +152,9 @@ impl EngineModel {
     /// ([`bevy_blurred`]; the share is the accepted taps'); Godot's trilinear read at the centre
     /// of the texel its smooth lookup reads; HDRP's trilinear read at `lerp(fragment, texel,
     /// k)`, `k = `[`screen_mips::hdrp_hit_share`]`(lod)` (the fragment's own texel where the
-    /// depth test refused the hit). Godot and HDRP read the texel's centre, not their
-    /// continuous position: within half a texel of level 0. Except Bevy's, the share and the
+    /// depth test refused the hit); Filament's trilinear read at the projected exit point
+    /// `proj(P1)` (its texel's centre behind the eye). Godot and HDRP read the texel's centre,
+    /// not their continuous position: within half a texel of level 0. Except Bevy's, the share and the
     /// fallback are the path's ([`EnginePath::screen_weight`], [`EnginePath::environment_dir`]);
     /// Bevy's fallback is [`bevy_fallback_dir`].
     #[allow(clippy::too_many_arguments)]
@@ -202,7 +210,13 @@ impl EngineModel {
                 let read = uv_px.lerp(texel_px, k) / size;
                 of_path(screen_mips::sample_trilinear(mips, read, lod))
             }
-            _ => of_path(screen_mips::sample_trilinear(mips, texel_px / size, lod)),
+            Self::Proxy {
+                lookup: ProxyLookup::Filament,
+                ..
+            } => of_path(screen_mips::sample_trilinear(mips, exit_px() / size, lod)),
+            Self::ScreenOffset { .. } => {
+                of_path(screen_mips::sample_trilinear(mips, texel_px / size, lod))
+            }
         }
     }
 }

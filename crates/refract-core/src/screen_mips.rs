@@ -66,6 +66,51 @@ pub fn hdrp_mip(roughness: f32, levels: u32) -> f32 {
     math::exp(1.3 * math::ln(roughness)) * levels.saturating_sub(1) as f32
 }
 
+/// The standard deviation, in texels, of the Gaussian Filament blurs each level of its
+/// refraction pyramid with: `σ0 = (21 + 1)/6` for its 21-tap kernel
+/// (`PostProcessManager::prepareMipmapSSR`).
+pub const FILAMENT_SIGMA0: f32 = 22.0 / 6.0;
+
+/// Filament's `1 / log2 √5`: the standard deviation of its pyramid grows by `√5` a level (a
+/// level's blur adds to the previous one's), so `lod = log2(σ / σ0) · 0.8614`.
+pub const FILAMENT_LOD_SCALE: f32 = 0.8614;
+
+/// Filament's per-view `refractionLodOffset` for a frame `height` texels tall under the vertical
+/// field of view `fov_y` (radians): `−log2(√2 σ0 s)`, with `s = tan(fov_y) / height` the size of
+/// a texel at 1 m as Filament writes it (the tangent of the whole angle;
+/// `PostProcessManager::prepareMipmapSSR`).
+#[inline]
+pub fn filament_lod_offset(height: u32, fov_y: f32) -> f32 {
+    let texel_at_one_meter = math::tan(fov_y) / height.max(1) as f32;
+    -math::log2(core::f32::consts::SQRT_2 * FILAMENT_SIGMA0 * texel_at_one_meter)
+}
+
+/// The levels Filament's refraction pyramid keeps of a `size` frame: `max(min(4, L), L − 4)` of
+/// the `L` down to `1 × 1` (`prepareMipmapSSR`: never below 16 texels a side where it can).
+#[inline]
+pub fn filament_level_count(size: UVec2) -> u32 {
+    let levels = level_count(size);
+    levels.min(4).max(levels.saturating_sub(4))
+}
+
+/// Filament's refraction LOD for roughness `roughness` on glass of index `ior`, a `size` frame
+/// under the vertical field of view `fov_y` (`light_indirect.fs`, `evaluateRefraction`): the
+/// roughness remapped to 0 at index 1 and kept whole from 1.5, `r' = mix(r, 0, saturate(3/ior −
+/// 2))`; `lod = max(0, (2 log2 r' + offset) · 0.8614)` with the offset of
+/// [`filament_lod_offset`], clamped to the last level Filament keeps
+/// ([`filament_level_count`]), as `textureLod` clamps it. It depends on the field of view and the
+/// height, not on the distance: Filament's blur is a fixed angle on screen.
+#[inline]
+pub fn filament_lod(size: UVec2, fov_y: f32, roughness: f32, ior: f32) -> f32 {
+    let remapped = roughness * (1.0 - (3.0 / ior - 2.0).clamp(0.0, 1.0));
+    if remapped <= 0.0 {
+        return 0.0;
+    }
+    let lod =
+        (2.0 * math::log2(remapped) + filament_lod_offset(size.y, fov_y)) * FILAMENT_LOD_SCALE;
+    lod.clamp(0.0, filament_level_count(size).saturating_sub(1) as f32)
+}
+
 /// How far HDRP's rough lookup moves from the fragment toward the hit:
 /// `k = max(0, 1 − 0.08 · mip)` (`EvaluateBSDF_ScreenspaceRefraction`), `uv = lerp(frag, hit, k)`.
 #[inline]
@@ -244,6 +289,33 @@ mod tests {
         assert_eq!(hdrp_hit_share(0.0), 1.0);
         assert!((hdrp_hit_share(5.0) - 0.6).abs() < 1e-6);
         assert_eq!(hdrp_hit_share(20.0), 0.0);
+    }
+
+    /// Filament's offset, level count and LOD, from its formulas written out by hand.
+    #[test]
+    fn filament_rule() {
+        // A 45° field of view, 256 texels tall: s = 1/256.
+        let offset = filament_lod_offset(256, core::f32::consts::FRAC_PI_4);
+        let expected = -(2.0f32.sqrt() * 22.0 / 6.0 / 256.0).log2();
+        assert!((offset - expected).abs() < 1e-5, "{offset} vs {expected}");
+        // L = 9 levels at 256: Filament keeps 5; at 8 × 8 (L = 4) all 4; at 4 × 4, 3.
+        assert_eq!(filament_level_count(UVec2::new(256, 256)), 5);
+        assert_eq!(filament_level_count(UVec2::new(8, 8)), 4);
+        assert_eq!(filament_level_count(UVec2::new(4, 4)), 3);
+        let size = UVec2::new(256, 256);
+        let fov = core::f32::consts::FRAC_PI_4;
+        let lod = filament_lod(size, fov, 0.5, 1.5);
+        assert!((lod - (offset - 2.0) * 0.8614).abs() < 1e-5, "{lod}");
+        // Index 1 and roughness 0 do not blur; below 1.5 the roughness shrinks; clamped at the
+        // last kept level; a smaller roughness reads no mip at all.
+        assert_eq!(filament_lod(size, fov, 0.5, 1.0), 0.0);
+        assert_eq!(filament_lod(size, fov, 0.0, 1.5), 0.0);
+        assert!(filament_lod(size, fov, 0.5, 1.25) < lod);
+        assert_eq!(filament_lod(size, fov, 1.0, 1.5), 4.0);
+        assert_eq!(filament_lod(size, fov, 0.05, 1.5), 0.0);
+        // A narrower field of view or a taller frame: more texels for the same angle.
+        assert!(filament_lod(UVec2::new(512, 512), fov, 0.5, 1.5) > lod);
+        assert!(filament_lod(size, fov / 2.0, 0.5, 1.5) > lod);
     }
 
     #[test]

@@ -140,11 +140,7 @@ impl CpuFamily for EnginePasses {
                 model,
                 ior: r.ior(),
                 spread,
-                lod: model.rough_lod(
-                    glam::UVec2::new(camera.width(), camera.height()),
-                    r.roughness(),
-                    r.ior(),
-                ),
+                lod: model.rough_lod(camera, r.roughness(), r.ior()),
             }
         }));
         // Without opaque objects the screen texture is the environment everywhere: not drawn.

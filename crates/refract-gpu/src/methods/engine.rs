@@ -210,8 +210,7 @@ fn refractor_table(
         } else {
             0.0
         };
-        let size = glam::UVec2::new(camera.width(), camera.height());
-        let lod = model.rough_lod(size, refractor.roughness(), refractor.ior());
+        let lod = model.rough_lod(camera, refractor.roughness(), refractor.ior());
         *entry = [refractor.ior(), amount, spread, lod];
     }
     table

@@ -110,7 +110,8 @@ struct RoughRead {
 // rough `lod` (> 0) for `path` of the pixel at `uv_px` whose front surface is `p1`: three.js's
 // B-spline at the projected exit point (its texel's centre behind the eye), Bevy's taps around
 // it, Godot's trilinear read at the texel's centre, HDRP's at lerp(fragment, texel centre,
-// hdrp_hit_share(lod)).
+// hdrp_hit_share(lod)), Filament's at the projected exit point (its texel's centre behind the
+// eye).
 fn read_rough(path: EnginePath, uv_px: vec2<f32>, p1: vec3<f32>, lod: f32) -> RoughRead {
     let size = vec2<f32>(f32(frame.width), f32(frame.height));
     let texel_px = vec2<f32>(path.texel) + vec2<f32>(0.5);
@@ -133,7 +134,16 @@ fn read_rough(path: EnginePath, uv_px: vec2<f32>, p1: vec3<f32>, lod: f32) -> Ro
         out.color = sample_threejs(read / size, lod);
         return out;
     }
-    if ENGINE_MODEL >= ENGINE_PROXY_SPHERE && engine.filament_lookup == 0u {
+    if ENGINE_MODEL >= ENGINE_PROXY_SPHERE {
+        if engine.filament_lookup != 0u {
+            let projected = world_to_pixel(path.p2);
+            var read = texel_px;
+            if projected.w > 0.5 {
+                read = projected.xy;
+            }
+            out.color = sample_trilinear(read / size, lod);
+            return out;
+        }
         let k = hdrp_hit_share(lod);
         out.color = sample_trilinear(mix(uv_px, texel_px, k) / size, lod);
         return out;

@@ -1,8 +1,9 @@
 //! The rough-glass section of `docs/claims.md` (issue 52): on `rough-glass` (four spheres of
 //! roughness 0, 0.1, 0.3 and 0.6), each sphere's error against the reference for the engines
-//! themselves and for the re-implementations of three.js's, Bevy's, Godot's and HDRP's rough models, and
-//! what roughness changes in each renderer's image (its frame against its frame of the same
-//! spheres at roughness 0), at 256² and at 1024² box-filtered to 256² (B8, B9).
+//! themselves and for the re-implementations of three.js's, Bevy's, Godot's, HDRP's and
+//! Filament's rough models, and what roughness changes in each renderer's image (its frame
+//! against its frame of the same spheres at roughness 0), at 256² and at 1024² box-filtered to
+//! 256² (B8, B9).
 
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -228,7 +229,7 @@ pub fn section(
         &masks,
     )];
     // The re-implementations of the engines' rough models (`docs/methods.md`, "Rough
-    // surfaces"): three.js's, Bevy's, Godot's and HDRP's.
+    // surfaces"): three.js's, Bevy's, Godot's, HDRP's and Filament's.
     let mut cpu = CpuRenderer::new();
     for (label, id, settings) in [
         (
@@ -250,6 +251,11 @@ pub fn section(
             "`proxy-sphere` (HDRP's mip rule, re-implemented)",
             MethodId::ProxySphere,
             &[("lookup", "hdrp")][..],
+        ),
+        (
+            "`proxy-sphere`, `lookup=filament` (Filament's LOD rule, re-implemented)",
+            MethodId::ProxySphere,
+            &[("lookup", "filament")][..],
         ),
     ] {
         let mut params = MethodParams::defaults(id);
