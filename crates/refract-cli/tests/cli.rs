@@ -976,7 +976,7 @@ fn claims_are_measured_and_written() {
     };
     assert_eq!(
         (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
-        (13, 16, 14, 21, 12)
+        (13, 16, 14, 21, 13)
     );
     // One timing round of the five U12 states: inconclusive, whatever the speed-up.
     assert!(
