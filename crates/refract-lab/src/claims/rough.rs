@@ -3,7 +3,7 @@
 //! themselves and for the re-implementations of three.js's, Bevy's, Godot's, HDRP's and
 //! Filament's rough models, and what roughness changes in each renderer's image (its frame
 //! against its frame of the same spheres at roughness 0), at 256² and at 1024² box-filtered to
-//! 256² (B8, B9).
+//! 256² (B8, B9), and from the camera at twice its distance (B13).
 
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -34,6 +34,9 @@ const SPP: u32 = 256;
 /// `SPP / FACTOR²` samples there, so that a box-filtered pixel has as many as a low one.
 const FACTOR: u32 = 4;
 
+/// B13 moves the camera back along its view to this many times its distance from its target.
+const DISTANCE: u32 = 2;
+
 /// `colors` (`width × height`) averaged over `factor × factor` blocks.
 fn box_down(colors: &[Vec3], width: u32, height: u32, factor: u32) -> Vec<Vec3> {
     let (w, h) = (width / factor, height / factor);
@@ -51,6 +54,40 @@ fn box_down(colors: &[Vec3], width: u32, height: u32, factor: u32) -> Vec<Vec3> 
             })
         })
         .collect()
+}
+
+/// The centre `width / factor × height / factor` of `values` (`width × height`): what a camera
+/// `factor` times as far sees of the near camera's frame at its target's depth.
+fn centre<T: Copy>(values: &[T], width: u32, height: u32, factor: u32) -> Vec<T> {
+    let (w, h) = (width / factor, height / factor);
+    let (x0, y0) = ((width - w) / 2, (height - h) / 2);
+    (y0..y0 + h)
+        .flat_map(|y| (x0..x0 + w).map(move |x| values[(y * width + x) as usize]))
+        .collect()
+}
+
+/// `mask` (`width × height`) on `factor × factor` blocks: a block is in where all its pixels are.
+fn mask_down(mask: &[bool], width: u32, height: u32, factor: u32) -> Vec<bool> {
+    (0..height / factor)
+        .flat_map(|y| {
+            (0..width / factor).map(move |x| {
+                (0..factor).all(|dy| {
+                    (0..factor)
+                        .all(|dx| mask[((y * factor + dy) * width + x * factor + dx) as usize])
+                })
+            })
+        })
+        .collect()
+}
+
+/// `scene` from its camera moved back along its view to `factor` times its distance from its
+/// target, the far plane `factor` times as far.
+fn moved_back(scene: &Scene, factor: f32) -> Scene {
+    let mut far = scene.clone();
+    let camera = &mut far.camera;
+    camera.eye = camera.target + (camera.eye - camera.target) * factor;
+    camera.far *= factor;
+    far
 }
 
 /// The mean of `flip` over the pixels `mask` selects (`None` for none).
@@ -91,17 +128,31 @@ struct Frames {
     smooth: Vec<Vec3>,
     rough_high: Vec<Vec3>,
     smooth_high: Vec<Vec3>,
+    /// From the camera [`DISTANCE`] times as far, at the section's resolution.
+    rough_far: Vec<Vec3>,
+    smooth_far: Vec<Vec3>,
+}
+
+/// Per sphere, the pixels of the section's frame ([`sphere_masks`]), and at
+/// `res / DISTANCE` those of the near frame's blocks and of the far frame's centre.
+struct Masks {
+    frame: Vec<Vec<bool>>,
+    near: Vec<Vec<bool>>,
+    far: Vec<Vec<bool>>,
 }
 
 /// One renderer's numbers, per sphere: FLIP against the reference's rough frame, and the change
-/// roughness makes (its rough frame against its smooth twin's) at the low resolution and at the
-/// high one box-filtered.
+/// roughness makes (its rough frame against its smooth twin's) at the low resolution, at the
+/// high one box-filtered, and at `res / DISTANCE` from the near camera (box-filtered) and from
+/// the far one (its centre).
 struct Row {
     label: String,
     kind: Kind,
     flip: Vec<Option<f64>>,
     change: Vec<Option<f64>>,
     change_high: Vec<Option<f64>>,
+    change_near: Vec<Option<f64>>,
+    change_far: Vec<Option<f64>>,
 }
 
 impl Row {
@@ -111,29 +162,43 @@ impl Row {
         reference: &[Vec3],
         f: &Frames,
         res: u32,
-        masks: &[Vec<bool>],
+        masks: &Masks,
     ) -> Self {
-        let per_sphere = |flip: Vec<f32>| -> Vec<Option<f64>> {
+        let per_sphere = |flip: Vec<f32>, masks: &[Vec<bool>]| -> Vec<Option<f64>> {
             masks.iter().map(|m| mean_over(&flip, m)).collect()
         };
         let down = |colors: &[Vec3]| box_down(colors, res * FACTOR, res * FACTOR, FACTOR);
+        let small = res / DISTANCE;
+        let near = |colors: &[Vec3]| box_down(colors, res, res, DISTANCE);
+        let far = |colors: &[Vec3]| centre(colors, res, res, DISTANCE);
         Self {
             label,
             kind,
-            flip: per_sphere(flip_map(reference, &f.rough, res, res)),
-            change: per_sphere(flip_map(&f.smooth, &f.rough, res, res)),
-            change_high: per_sphere(flip_map(
-                &down(&f.smooth_high),
-                &down(&f.rough_high),
-                res,
-                res,
-            )),
+            flip: per_sphere(flip_map(reference, &f.rough, res, res), &masks.frame),
+            change: per_sphere(flip_map(&f.smooth, &f.rough, res, res), &masks.frame),
+            change_high: per_sphere(
+                flip_map(&down(&f.smooth_high), &down(&f.rough_high), res, res),
+                &masks.frame,
+            ),
+            change_near: per_sphere(
+                flip_map(&near(&f.smooth), &near(&f.rough), small, small),
+                &masks.near,
+            ),
+            change_far: per_sphere(
+                flip_map(&far(&f.smooth_far), &far(&f.rough_far), small, small),
+                &masks.far,
+            ),
         }
     }
 
     /// |change at the high resolution − change at the low one| of sphere `k`.
     fn resolution_shift(&self, k: usize) -> Option<f64> {
         Some((self.change_high[k]? - self.change[k]?).abs())
+    }
+
+    /// |change from the far camera − change from the near one| of sphere `k`.
+    fn distance_shift(&self, k: usize) -> Option<f64> {
+        Some((self.change_far[k]? - self.change_near[k]?).abs())
     }
 }
 
@@ -153,6 +218,16 @@ pub(crate) fn b9_verdict(engine: Option<f64>, reference: Option<f64>, tolerance:
         (Some(e), Some(r)) => Verdict::from(e <= r + tolerance),
         _ => Verdict::Inconclusive,
     }
+}
+
+/// B13 for one rough sphere: the renderer's distance shift ≤ the reference's + `tolerance`
+/// (inconclusive where either is missing); the test B9's verdict makes.
+pub(crate) fn b13_verdict(
+    renderer: Option<f64>,
+    reference: Option<f64>,
+    tolerance: f64,
+) -> Verdict {
+    b9_verdict(renderer, reference, tolerance)
 }
 
 /// The reference of `scene` through `camera` at `spp` samples a pixel, transmission mode.
@@ -200,23 +275,43 @@ pub fn section(
     let factor = b8.threshold("factor")?;
     let mut b9 = inventory.claim("B9")?;
     let tolerance = b9.threshold("tolerance")?;
+    let mut b13 = inventory.claim("B13")?;
+    let distance_tolerance = b13.threshold("tolerance")?;
     let res = args.res;
     let high = res * FACTOR;
     let high_spp = (SPP / (FACTOR * FACTOR)).max(1);
     let rough = Arc::new(load_scene(SCENE)?.scene);
     let smooth = Arc::new(smooth_twin(&rough)?);
+    let rough_far = Arc::new(moved_back(&rough, DISTANCE as f32));
+    let smooth_far = Arc::new(moved_back(&smooth, DISTANCE as f32));
     let (camera, camera_high) = (rough.camera(res, res)?, rough.camera(high, high)?);
+    let camera_far = rough_far.camera(res, res)?;
     let mut tracer = args.reference_backend.renderer()?;
     let truth = reference(tracer.as_mut(), &rough, &camera, SPP)?;
     let truth_high = reference(tracer.as_mut(), &rough, &camera_high, high_spp)?;
+    let truth_far = reference(tracer.as_mut(), &rough_far, &camera_far, SPP)?;
     let reference_frames = Frames {
         smooth: reference(tracer.as_mut(), &smooth, &camera, SPP)?.color,
         smooth_high: reference(tracer.as_mut(), &smooth, &camera_high, high_spp)?.color,
+        smooth_far: reference(tracer.as_mut(), &smooth_far, &camera_far, SPP)?.color,
         rough: truth.color.clone(),
         rough_high: truth_high.color.clone(),
+        rough_far: truth_far.color.clone(),
     };
-    let masks = sphere_masks(&truth)?;
+    let frame_masks = sphere_masks(&truth)?;
+    let masks = Masks {
+        near: frame_masks
+            .iter()
+            .map(|m| mask_down(m, res, res, DISTANCE))
+            .collect(),
+        far: sphere_masks(&truth_far)?
+            .iter()
+            .map(|m| centre(m, res, res, DISTANCE))
+            .collect(),
+        frame: frame_masks,
+    };
     let pixels: Vec<usize> = masks
+        .frame
         .iter()
         .map(|m| m.iter().filter(|&&b| b).count())
         .collect();
@@ -273,6 +368,8 @@ pub fn section(
             smooth: cpu_frame(&smooth, &camera)?,
             rough_high: cpu_frame(&rough, &camera_high)?,
             smooth_high: cpu_frame(&smooth, &camera_high)?,
+            rough_far: cpu_frame(&rough_far, &camera_far)?,
+            smooth_far: cpu_frame(&smooth_far, &camera_far)?,
         };
         rows.push(Row::new(
             label.to_owned(),
@@ -297,12 +394,16 @@ pub fn section(
             let smooth_low = colors(&smooth, &truth, res)?;
             let rough_high = colors(&rough, &truth_high, high)?;
             let smooth_high = colors(&smooth, &truth_high, high)?;
+            let rough_far = colors(&rough_far, &truth_far, res)?;
+            let smooth_far = colors(&smooth_far, &truth_far, res)?;
             for (k, (label, color)) in rough_low.into_iter().enumerate() {
                 let frames = Frames {
                     rough: color,
                     smooth: smooth_low[k].1.clone(),
                     rough_high: rough_high[k].1.clone(),
                     smooth_high: smooth_high[k].1.clone(),
+                    rough_far: rough_far[k].1.clone(),
+                    smooth_far: smooth_far[k].1.clone(),
                 };
                 rows.push(Row::new(
                     format!("`{label}` (the engine itself)"),
@@ -316,7 +417,8 @@ pub fn section(
         }
         None => notes.push(
             "the engines themselves did not run (Node, Chromium or `npm ci --prefix engines` is \
-             missing: see the run's notes); B8 and B9 have no rows.",
+             missing: see the run's notes); B8 and B9 have no rows, B13 the re-implemented \
+             rules' only.",
         ),
     }
     let reference_row = &rows[0];
@@ -345,6 +447,26 @@ pub fn section(
                     value(row.change[k], 3),
                     value(row.resolution_shift(k), 3),
                     value(reference_row.resolution_shift(k), 3),
+                ),
+            ));
+        }
+    }
+    for row in rows.iter().filter(|r| r.kind != Kind::Reference) {
+        for (k, roughness) in ROUGHNESS.iter().enumerate().skip(1) {
+            b13.push((
+                format!("{SCENE}: {}, roughness {roughness}", row.label),
+                b13_verdict(
+                    row.distance_shift(k),
+                    reference_row.distance_shift(k),
+                    distance_tolerance,
+                ),
+                format!(
+                    "change from {DISTANCE}× as far {} vs near {}: shift {} (renderer) vs {} \
+                     (reference)",
+                    value(row.change_far[k], 3),
+                    value(row.change_near[k], 3),
+                    value(row.distance_shift(k), 3),
+                    value(reference_row.distance_shift(k), 3),
                 ),
             ));
         }
@@ -407,8 +529,37 @@ pub fn section(
             cells(&row.change_high[1..])
         );
     }
+    let small = res / DISTANCE;
+    let _ = writeln!(
+        md,
+        "\nFrom the camera moved back along its view to {DISTANCE} times its distance from its \
+         target (far plane {DISTANCE} times as far), the same resolution: the change roughness \
+         makes at {small}², the near frame box-filtered, the far frame's centre {small}² (the \
+         same world area at the target's depth; per sphere, the near frame's blocks whose every \
+         pixel meets it and the far frame's pixels that do).\n\n\
+         | renderer | {} |\n|---|{}",
+        ROUGHNESS[1..]
+            .iter()
+            .map(|r| format!("near, roughness {r} | far, roughness {r}"))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(2 * (ROUGHNESS.len() - 1))
+    );
+    for row in &rows {
+        let cells = (1..ROUGHNESS.len())
+            .map(|k| {
+                format!(
+                    "{} | {}",
+                    value(row.change_near[k], 3),
+                    value(row.change_far[k], 3)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(" | ");
+        let _ = writeln!(md, "| {} | {cells} |", row.label);
+    }
     md.push_str("\n| claim | scene | measured | verdict |\n|---|---|---|---|\n");
-    ledger.rows(&mut md, heading, &[b8, b9]);
+    ledger.rows(&mut md, heading, &[b8, b9, b13]);
     Ok(md)
 }
 
@@ -446,8 +597,48 @@ mod tests {
             flip: vec![],
             change: vec![Some(0.0), Some(0.2)],
             change_high: vec![Some(0.0), Some(0.05)],
+            change_near: vec![Some(0.0), Some(0.1)],
+            change_far: vec![Some(0.0), Some(0.16)],
         };
         assert!((row.resolution_shift(1).expect("shift") - 0.15).abs() < 1e-12);
+        assert!((row.distance_shift(1).expect("shift") - 0.06).abs() < 1e-12);
+        // B13: the shift across distances against the reference's.
+        assert_eq!(
+            b13_verdict(row.distance_shift(1), Some(0.05), 0.02),
+            Verdict::Confirmed
+        );
+        assert_eq!(
+            b13_verdict(row.distance_shift(1), Some(0.01), 0.02),
+            Verdict::NotConfirmed
+        );
+        assert_eq!(b13_verdict(None, Some(0.01), 0.02), Verdict::Inconclusive);
+    }
+
+    /// The far camera's centre and the near frame's blocks.
+    #[test]
+    fn centre_and_blocks() {
+        let values: Vec<u32> = (0..16).collect();
+        assert_eq!(centre(&values, 4, 4, 2), vec![5, 6, 9, 10]);
+        let mask = [
+            true, true, false, true, //
+            true, true, true, true, //
+            false, false, true, true, //
+            false, true, true, true,
+        ];
+        assert_eq!(mask_down(&mask, 4, 4, 2), vec![true, false, false, true]);
+    }
+
+    /// The far camera looks at the same target along the same view, twice as far.
+    #[test]
+    fn moved_back_doubles_the_distance() {
+        let scene = load_scene(SCENE).expect("scene").scene;
+        let far = moved_back(&scene, 2.0);
+        let (near_cam, far_cam) = (scene.camera, far.camera);
+        assert_eq!(far_cam.target, near_cam.target);
+        let (a, b) = (near_cam.eye - near_cam.target, far_cam.eye - far_cam.target);
+        assert!((b - 2.0 * a).length() < 1e-5);
+        assert_eq!(far_cam.far, 2.0 * near_cam.far);
+        assert_eq!(far_cam.fov_y, near_cam.fov_y);
     }
 
     #[test]
