@@ -15,7 +15,9 @@ use refract_core::Camera;
 use refract_cpu::CpuRenderer;
 use refract_eval::load_scene;
 use refract_gpu::GpuRenderer;
-use refract_scene::{BackendId, Family, Frame, MethodId, MethodParams, REGISTRY, Renderer, Scene};
+use refract_scene::{
+    Aov, BackendId, Family, Frame, MethodId, MethodParams, REGISTRY, Renderer, Scene,
+};
 use refract_tests::scenes::{method, render};
 use refract_trace::ReferenceRenderer;
 
@@ -225,6 +227,90 @@ fn threejs_disperses_through_three_indices_on_the_gpu() {
         return;
     };
     check_threejs_dispersion("gpu", &mut gpu);
+}
+
+/// Filament's dispersion (`docs/methods.md`, "Dispersion";
+/// `refract_core::engine_dispersion`): on `prism`, `proxy-sphere` with Filament's lookup reads
+/// four paths per pixel at `n_j = n + f o_j + ξ(pixel)`, `f = (n − 1)/V_d`, and its colour is
+/// `max(Σ_j K_j C_j, 0)` with `C_j` the pixel's colour in the model's frame of the clear prism
+/// at `n_j`: held on every pixel the dispersion moves and 24 others (bit for bit on the CPU, to
+/// 1e-5 on the GPU, whose matrix products may fuse); the dispersion changes more than 20 pixels of 256 × 192 by more than
+/// 1e-3, and Filament's box model (no `solid` refraction) does not disperse.
+fn check_filament_dispersion(backend: &str, renderer: &mut dyn Renderer, exact: bool) {
+    use refract_core::engine_dispersion::EngineDispersion;
+    let (dispersive, clear) = prisms();
+    let camera = dispersive.camera(256, 192).expect("camera");
+    let mut params = method(MethodId::ProxySphere);
+    params.set("lookup", "filament", "test").expect("lookup");
+    let frame = render(renderer, &dispersive, &camera, &params);
+    let plain = render(renderer, &clear, &camera, &params);
+    let covered = frame.flag(Aov::Covered).expect("covered").to_vec();
+    let prism: Vec<usize> = (0..covered.len()).filter(|&i| covered[i]).collect();
+    assert!(
+        prism.len() > 2000,
+        "{backend}: {} prism pixels",
+        prism.len()
+    );
+    let ior = dispersive.refractor.ior();
+    let scheme = EngineDispersion::filament(ior, dispersive.refractor.abbe());
+    assert_eq!(scheme.lookups(), 4);
+    // The pixels the dispersion moves (whose four reads differ), and 24 others.
+    let moved = (0..frame.color.len())
+        .filter(|&i| (frame.color[i] - plain.color[i]).abs().max_element() > 1e-3);
+    let mut checked: Vec<usize> = prism.iter().copied().step_by(prism.len() / 24).collect();
+    checked.extend(moved);
+    for &i in &checked {
+        let (x, y) = (i as u32 % camera.width(), i as u32 / camera.width());
+        let uv = Camera::pixel_center(x, y);
+        let mut sum = glam::Vec3::ZERO;
+        for j in 0..4 {
+            let (n_j, matrix) = scheme.lookup(ior, j, uv);
+            let mut at = (*clear).clone();
+            at.refractor.set_ior(n_j).expect("ior");
+            let single = render(renderer, &Arc::new(at), &camera, &params);
+            sum += matrix * single.color[i];
+        }
+        let expected = sum.max(glam::Vec3::ZERO);
+        let got = frame.color[i];
+        if exact {
+            assert_eq!(
+                got.to_array().map(f32::to_bits),
+                expected.to_array().map(f32::to_bits),
+                "{backend}: pixel ({x}, {y}): {got} vs {expected}"
+            );
+        } else {
+            assert!(
+                (got - expected).abs().max_element() <= 1e-5,
+                "{backend}: pixel ({x}, {y}): {got} vs {expected}"
+            );
+        }
+    }
+    let changed = frame
+        .color
+        .iter()
+        .zip(&plain.color)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3)
+        .count();
+    println!("{backend}: Filament's dispersion changed {changed} pixels");
+    assert!(changed > 20, "{backend}: {changed} pixels changed");
+    let mut the_box = method(MethodId::ProxyBox);
+    the_box.set("lookup", "filament", "test").expect("lookup");
+    let a = render(renderer, &dispersive, &camera, &the_box);
+    let b = render(renderer, &clear, &camera, &the_box);
+    assert!(bits(&a) == bits(&b), "{backend}: Filament's box dispersed");
+}
+
+#[test]
+fn filament_disperses_through_four_wavelengths_on_the_cpu() {
+    check_filament_dispersion("cpu", &mut CpuRenderer::new(), true);
+}
+
+#[test]
+fn filament_disperses_through_four_wavelengths_on_the_gpu() {
+    let Some(mut gpu) = GpuRenderer::for_tests() else {
+        return;
+    };
+    check_filament_dispersion("gpu", &mut gpu, false);
 }
 
 /// `wavelengths = N` on `prism` (`refract_scene::render_dispersive`): the colour is

@@ -23,7 +23,8 @@
 use glam::{UVec2, Vec2, Vec3};
 
 use crate::camera::Camera;
-use crate::lanes::{LANES, Vec2x8, Vec3x8, mask_lanes};
+use crate::engine_dispersion::EngineDispersion;
+use crate::lanes::{F32x8, LANES, Vec2x8, Vec3x8, mask_lanes};
 use crate::math;
 use crate::optics::refract;
 use crate::real::{LaneMask, Msk, Real, Vector3};
@@ -96,22 +97,25 @@ pub enum EngineModel {
 }
 
 impl EngineModel {
-    /// Half the spread of the three indices this model refracts with on glass of index `ior`
-    /// and Abbe number `abbe` (0: one index, no dispersion). Only three.js disperses among the
-    /// models here: its `transmission_pars_fragment` (r163 on, `USE_DISPERSION`) refracts each
-    /// RGB channel with its own index, `ior − s`, `ior`, `ior + s` for red, green, blue, with
-    /// `s = (ior − 1) · 0.025 · dispersion` and glTF's `dispersion = 20 / V_d`, and reads
-    /// channel `i` of lookup `i`. Bevy, Godot and HDRP have no dispersion; Filament's
-    /// (four wavelengths, `solid` only) is not re-implemented.
-    pub fn dispersion_half_spread(&self, ior: f32, abbe: f32) -> f32 {
+    /// How this model disperses on glass of index `ior` and Abbe number `abbe`
+    /// ([`EngineDispersion`]): three.js's model by its three indices, Filament's `solid` model
+    /// (the sphere with Filament's lookup) by its four wavelengths; Bevy, Godot, HDRP and
+    /// Filament's box and thin models not at all.
+    pub fn dispersion(&self, ior: f32, abbe: f32) -> EngineDispersion {
         match self {
             Self::VolumeThickness {
                 reject_nearer: false,
                 ..
-            } if abbe.is_finite() => (ior - 1.0) * 0.025 * (20.0 / abbe),
-            _ => 0.0,
+            } => EngineDispersion::threejs(ior, abbe),
+            Self::Proxy {
+                shape: ProxyShape::Sphere,
+                lookup: ProxyLookup::Filament,
+                ..
+            } => EngineDispersion::filament(ior, abbe),
+            _ => EngineDispersion::None,
         }
     }
+
     /// The LOD at which this model reads the mip-mapped screen texture
     /// ([`crate::screen_mips`]) for a surface of roughness `roughness` on glass of index `ior`
     /// seen through `camera` (its frame's size and field of view; 0: one nearest texel, as for
@@ -448,7 +452,7 @@ fn geometry<V: Vector3>(
     uv_px: (V::Real, V::Real),
     p1_ws: V,
     n1_ws: V,
-    ior: f32,
+    ior: V::Real,
     model: EngineModel,
 ) -> Geometry<V> {
     let splat = V::Real::splat;
@@ -467,7 +471,6 @@ fn geometry<V: Vector3>(
             in_front,
         }
     };
-    let ior = splat(ior);
     match model {
         EngineModel::ScreenOffset { scale, .. } => {
             // `screen_offset_px`: (−n_x scale W, −n_y scale H).
@@ -611,7 +614,7 @@ pub fn engine_path<S: OpaqueDepth>(
 }
 
 /// [`engine_path`] for eight pixels: lane `i` is `engine_path(camera, screen, uv_px[i],
-/// p1_ws[i], n1_ws[i], ior, model)`, bit for bit (tested). The geometry runs on eight lanes;
+/// p1_ws[i], n1_ws[i], ior[i], model)`, bit for bit (tested). The geometry runs on eight lanes;
 /// the reads of the screen's depth run per lane.
 pub fn engine_path_x8<S: OpaqueDepth>(
     camera: &Camera,
@@ -619,12 +622,12 @@ pub fn engine_path_x8<S: OpaqueDepth>(
     uv_px: &[Vec2; LANES],
     p1_ws: &[Vec3; LANES],
     n1_ws: &[Vec3; LANES],
-    ior: f32,
+    ior: &[f32; LANES],
     model: EngineModel,
 ) -> [EnginePath; LANES] {
     let uv = Vec2x8::from_lanes(uv_px);
     let (p, n) = (Vec3x8::from_lanes(p1_ws), Vec3x8::from_lanes(n1_ws));
-    let g = geometry(camera, (uv.x, uv.y), p, n, ior, model);
+    let g = geometry(camera, (uv.x, uv.y), p, n, F32x8::from(*ior), model);
     let size = UVec2::new(camera.width(), camera.height());
     // Each vector taken apart once, each lane's geometry built where it is finished.
     let (incident, p2, t2) = (g.incident.to_lanes(), g.p2.to_lanes(), g.t2.to_lanes());
@@ -708,15 +711,30 @@ impl EngineUniforms {
 #[cfg(test)]
 mod tests {
 
-    /// three.js's half spread `(ior − 1) · 0.025 · 20 / V_d` on its model only.
+    /// three.js's model disperses by its three indices, Filament's sphere by its four; the
+    /// others not at all.
     #[test]
-    fn only_threejs_disperses() {
+    fn which_models_disperse() {
         let three = EngineModel::VolumeThickness {
             thickness: 1.0,
             reject_nearer: false,
         };
-        assert!((three.dispersion_half_spread(1.5, 30.0) - 0.5 * 0.025 * 20.0 / 30.0).abs() < 1e-9);
-        assert_eq!(three.dispersion_half_spread(1.5, f32::INFINITY), 0.0);
+        assert_eq!(
+            three.dispersion(1.5, 30.0),
+            EngineDispersion::ThreeJs {
+                half_spread: 0.5 * 0.025 * 20.0 / 30.0
+            }
+        );
+        assert_eq!(three.dispersion(1.5, f32::INFINITY), EngineDispersion::None);
+        let filament = |shape| EngineModel::Proxy {
+            shape,
+            thickness: 1.0,
+            lookup: ProxyLookup::Filament,
+        };
+        assert_eq!(
+            filament(ProxyShape::Sphere).dispersion(1.5, 30.0),
+            EngineDispersion::Filament { factor: 0.5 / 30.0 }
+        );
         let bevy = EngineModel::VolumeThickness {
             thickness: 1.0,
             reject_nearer: true,
@@ -730,8 +748,18 @@ mod tests {
             thickness: 1.0,
             lookup: ProxyLookup::Hdrp,
         };
-        for other in [bevy, godot, hdrp] {
-            assert_eq!(other.dispersion_half_spread(1.5, 30.0), 0.0, "{other:?}");
+        for other in [
+            bevy,
+            godot,
+            hdrp,
+            filament(ProxyShape::Box),
+            filament(ProxyShape::Thin),
+        ] {
+            assert_eq!(
+                other.dispersion(1.5, 30.0),
+                EngineDispersion::None,
+                "{other:?}"
+            );
         }
     }
 
@@ -829,7 +857,7 @@ mod tests {
                     let jitter = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.5;
                     (toward_eye + jitter).normalize()
                 });
-                let lanes = engine_path_x8(&camera, &Ramp, &uv, &p, &n, 1.5, model);
+                let lanes = engine_path_x8(&camera, &Ramp, &uv, &p, &n, &[1.5; LANES], model);
                 for i in 0..LANES {
                     let scalar = engine_path(&camera, &Ramp, uv[i], p[i], n[i], 1.5, model);
                     assert_eq!(

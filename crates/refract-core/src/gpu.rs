@@ -5,6 +5,7 @@
 
 use alloc::format;
 use alloc::string::String;
+use alloc::vec::Vec;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -332,6 +333,29 @@ pub fn wgsl_constants() -> String {
         format!(
             "const HDRP_MIN_COS: f32 = {};",
             f(crate::engine::HDRP_MIN_COS)
+        ),
+        format!(
+            "const FILAMENT_JITTER: f32 = {};",
+            f(crate::engine_dispersion::FILAMENT_JITTER)
+        ),
+        format!(
+            "const FILAMENT_OFFSETS: array<f32, 4> = array<f32, 4>({});",
+            crate::engine_dispersion::FILAMENT_OFFSETS
+                .iter()
+                .map(|&v| f(v))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        format!(
+            "const FILAMENT_MATRICES: array<mat3x3<f32>, 4> = array<mat3x3<f32>, 4>({});",
+            crate::engine_dispersion::FILAMENT_MATRICES
+                .iter()
+                .map(|m| format!(
+                    "mat3x3<f32>({})",
+                    m.iter().map(|&v| f(v)).collect::<Vec<_>>().join(", ")
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
         crate::spectral::wgsl_tables(),
     ]

@@ -59,6 +59,7 @@ pub mod camera;
 pub mod depth_peel;
 pub mod distance_map;
 pub mod engine;
+pub mod engine_dispersion;
 pub mod environment;
 pub mod exit;
 pub mod fresnel;

@@ -14,10 +14,11 @@
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{Mat3, UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use refract_core::Camera;
 use refract_core::engine::{EngineModel, OpaqueDepth, engine_path_x8};
+use refract_core::engine_dispersion::EngineDispersion;
 use refract_core::lanes::{LANES, Vec2x8, Vec3x8};
 use refract_core::nearby_geometry::{NearbyGeometryTexture, view_depth};
 use refract_core::vector::robust_normalize;
@@ -87,12 +88,24 @@ pub struct EnginePasses {
     meshes: NearbyMeshes,
     /// Refractor `k`'s nearest front faces in `fronts[k]`.
     fronts: Vec<SurfaceBuffer>,
-    /// Refractor `k`'s model, IOR, dispersion half spread and rough parameter.
+    /// Refractor `k`'s model, IOR, dispersion and rough parameter.
     refractors: Vec<RefractorModel>,
     screen: NearbyTexture,
     /// The screen texture's colours, mip-mapped, for rough refractors.
     mips: ScreenPyramid,
     aovs: Vec<EngineAov>,
+}
+
+/// What [`EnginePasses::mixed_lookups`] reads for eight pixels: the refractor's dispersion,
+/// index, model and rough reads, and the pixels' centres and front surfaces.
+struct Lookups<'a> {
+    dispersion: EngineDispersion,
+    ior: f32,
+    uv: &'a [Vec2; LANES],
+    p1: &'a [Vec3; LANES],
+    n1: &'a [Vec3; LANES],
+    model: EngineModel,
+    rough: Option<Rough>,
 }
 
 /// A rough refractor's blurred reads in row `y`: its model and LOD.
@@ -103,14 +116,14 @@ struct Rough {
     y: u32,
 }
 
-/// How one refractor is drawn: its engine model, IOR, dispersion half spread
-/// ([`EngineModel::dispersion_half_spread`]) and how its roughness blurs the screen
+/// How one refractor is drawn: its engine model, IOR, dispersion
+/// ([`EngineModel::dispersion`]) and how its roughness blurs the screen
 /// ([`EngineModel::rough_lod`]: a LOD, Bevy's roughness; 0: the nearest texel).
 #[derive(Clone, Copy, Debug)]
 struct RefractorModel {
     model: EngineModel,
     ior: f32,
-    spread: f32,
+    dispersion: EngineDispersion,
     lod: f32,
 }
 
@@ -131,15 +144,15 @@ impl CpuFamily for EnginePasses {
         self.refractors.clear();
         self.refractors.extend(scene.refractors().map(|r| {
             let model = params.model(r);
-            let spread = if r.is_dispersive() {
-                model.dispersion_half_spread(r.ior(), r.abbe())
+            let dispersion = if r.is_dispersive() {
+                model.dispersion(r.ior(), r.abbe())
             } else {
-                0.0
+                EngineDispersion::None
             };
             RefractorModel {
                 model,
                 ior: r.ior(),
-                spread,
+                dispersion,
                 lod: model.rough_lod(camera, r.roughness(), r.ior()),
             }
         }));
@@ -312,9 +325,10 @@ impl PixelContext<'_> {
 
     /// Eight pixels of row `y` where refractor `k` is drawn (padding repeats lane 0): their
     /// front surfaces eight at a time (bit-identical to one at a time), the engine's path with
-    /// refractor `k`'s model and IOR, then its reads; a dispersive model (three.js's,
-    /// [`EngineModel::dispersion_half_spread`]) takes one path per channel, each channel read
-    /// from its own, the AOVs from the middle one.
+    /// refractor `k`'s model and IOR, then its reads; a dispersive model
+    /// ([`EngineModel::dispersion`]) takes one path per lookup at the lookup's index, the AOVs
+    /// from [`EngineDispersion::aov_lookup`]'s: three.js's reads each channel from its own,
+    /// Filament's mixes its four full reads by their matrices ([`Self::mixed_lookups`]).
     fn refractor(
         &self,
         group: &PixelGroup,
@@ -328,7 +342,7 @@ impl PixelContext<'_> {
         let RefractorModel {
             model,
             ior,
-            spread,
+            dispersion,
             lod,
         } = self.refractors[k];
         let (mut p1, mut n1) = ([Vec3::ZERO; LANES], [Vec3::Z; LANES]);
@@ -338,30 +352,84 @@ impl PixelContext<'_> {
         }
         let (p1, n1) = (&p1, &n1);
         let uv: [Vec2; LANES] = core::array::from_fn(|i| Camera::pixel_center(group.x[i], y));
-        let one = [(ior, Vec3::ONE)];
-        let per_channel = [
-            (ior - spread, Vec3::X),
-            (ior, Vec3::Y),
-            (ior + spread, Vec3::Z),
-        ];
-        let passes: &[(f32, Vec3)] = if spread > 0.0 { &per_channel } else { &one };
-        for (pass, &(ior, channels)) in passes.iter().enumerate() {
+        let rough = (lod > 0.0).then_some(Rough { model, lod, y });
+        if !dispersion.is_diagonal() {
+            let lookups = Lookups {
+                dispersion,
+                ior,
+                uv: &uv,
+                p1,
+                n1,
+                model,
+                rough,
+            };
+            self.mixed_lookups(group, &lookups, colors, lanes, aovs);
+            return;
+        }
+        for j in 0..dispersion.lookups() {
+            // Diagonal schemes: the index is the pixel's own only through the jitter, which
+            // they have not.
+            let (lookup_ior, matrix) = dispersion.lookup(ior, j, uv[0]);
+            let channels = Vec3::new(matrix.x_axis.x, matrix.y_axis.y, matrix.z_axis.z);
             let paths = engine_path_x8(
                 self.camera,
                 &ScreenDepth(self.screen),
                 &uv,
                 p1,
                 n1,
-                ior,
+                &[lookup_ior; LANES],
                 model,
             );
-            let aovs = if pass == passes.len() / 2 {
+            let aovs = if j == dispersion.aov_lookup() {
                 aovs.as_deref_mut()
             } else {
                 None
             };
-            let rough = (lod > 0.0).then_some(Rough { model, lod, y });
             self.read_paths(group, &paths, p1, channels, rough, colors, lanes, aovs);
+        }
+    }
+
+    /// Filament's dispersion ([`EngineDispersion::Filament`]) for the pixels of `group`: each
+    /// of its lookups read in full (the pixel's own jittered index), flushed, multiplied by the
+    /// lookup's matrix and summed in the lookups' order; the sum clamped at 0 and added to
+    /// what the pixels held.
+    fn mixed_lookups(
+        &self,
+        group: &PixelGroup,
+        l: &Lookups<'_>,
+        colors: &mut [Vec3],
+        lanes: &mut EnvironmentLanes<'_>,
+        mut aovs: Option<&mut [EngineAov]>,
+    ) {
+        lanes.flush(colors);
+        let pixels = &group.x[..group.len];
+        let held: [Vec3; LANES] =
+            core::array::from_fn(|i| pixels.get(i).map_or(Vec3::ZERO, |&x| colors[x as usize]));
+        let mut mixed = [Vec3::ZERO; LANES];
+        for j in 0..l.dispersion.lookups() {
+            let mut iors = [l.ior; LANES];
+            let mut matrix = Mat3::IDENTITY;
+            for (i, uv) in l.uv.iter().enumerate() {
+                (iors[i], matrix) = l.dispersion.lookup(l.ior, j, *uv);
+            }
+            let screen = ScreenDepth(self.screen);
+            let paths = engine_path_x8(self.camera, &screen, l.uv, l.p1, l.n1, &iors, l.model);
+            for &x in pixels {
+                colors[x as usize] = Vec3::ZERO;
+            }
+            let aovs = if j == l.dispersion.aov_lookup() {
+                aovs.as_deref_mut()
+            } else {
+                None
+            };
+            self.read_paths(group, &paths, l.p1, Vec3::ONE, l.rough, colors, lanes, aovs);
+            lanes.flush(colors);
+            for (sum, &x) in mixed.iter_mut().zip(pixels) {
+                *sum += matrix * colors[x as usize];
+            }
+        }
+        for ((&x, held), sum) in pixels.iter().zip(held).zip(mixed) {
+            colors[x as usize] = held + sum.max(Vec3::ZERO);
         }
     }
 

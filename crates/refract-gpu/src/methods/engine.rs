@@ -190,10 +190,11 @@ impl GpuFamily for EnginePipelines {
     }
 }
 
-/// Refractor `k`'s `(IOR, amount, spread, LOD)` in entry `k` (`engine.wgsl`'s
+/// Refractor `k`'s `(IOR, amount, dispersion, LOD)` in entry `k` (`engine.wgsl`'s
 /// `engine_refractors`): the IOR, the model's `amount` ([`EngineUniforms::amount`]) of `params`
-/// on that refractor, its dispersion half spread
-/// ([`refract_core::engine::EngineModel::dispersion_half_spread`], 0 for one index) and how its
+/// on that refractor, its dispersion's one number
+/// ([`refract_core::engine_dispersion::EngineDispersion::amount`]: three.js's half spread,
+/// Filament's factor; 0 for one index; the model says which) and how its
 /// roughness blurs the screen ([`refract_core::engine::EngineModel::rough_lod`]: a LOD, Bevy's
 /// roughness; 0: the nearest texel).
 fn refractor_table(
@@ -206,7 +207,7 @@ fn refractor_table(
         let model = params.model(refractor);
         let amount = EngineUniforms::new(camera, &model, false).amount;
         let spread = if refractor.is_dispersive() {
-            model.dispersion_half_spread(refractor.ior(), refractor.abbe())
+            model.dispersion(refractor.ior(), refractor.abbe()).amount()
         } else {
             0.0
         };

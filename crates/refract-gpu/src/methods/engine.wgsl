@@ -199,13 +199,25 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
     let n1 = select(px.n1, n4.xyz, n4.w > 0.5);
     let k = min(u32(round(textureLoad(front_n1, texel, 0).w)) - 1u, MAX_REFRACTORS - 1u);
     let refractor = engine_refractors[k];
-    // three.js's dispersion (refract_core::engine::EngineModel::dispersion_half_spread): one
-    // path per channel at ior − s, ior, ior + s, channel c read from path c; the AOVs from the
-    // middle one. Without it one path for all three channels.
+    // The model's dispersion (refract_core::engine_dispersion::EngineDispersion): three.js's
+    // one path per channel at ior − s, ior, ior + s, channel c read from path c; Filament's
+    // (the sphere with its lookup) four paths at ior + f o_j + jitter, each read in full and
+    // mixed by K_j, the sum clamped at 0. The AOVs from the lookup at the base index. Without
+    // it one path for all three channels.
     let spread = refractor.z;
+    let filament = ENGINE_MODEL == ENGINE_PROXY_SPHERE && engine.filament_lookup != 0u;
     var passes = 1u;
+    var aov_lookup = 0u;
+    var jitter = 0.0;
     if spread > 0.0 {
-        passes = 3u;
+        if filament {
+            passes = 4u;
+            aov_lookup = 2u;
+            jitter = (interleaved_gradient_noise(px.uv) - 0.5) * FILAMENT_JITTER * spread;
+        } else {
+            passes = 3u;
+            aov_lookup = 1u;
+        }
     }
     var color = vec3<f32>(0.0);
     var middle: EnginePath;
@@ -216,26 +228,37 @@ fn shade_engine(@builtin(global_invocation_id) id: vec3<u32>) {
             ior = refractor.x + (f32(lookup) - 1.0) * spread;
             channels = vec3<f32>(0.0);
             channels[lookup] = 1.0;
+        } else if passes == 4u {
+            ior = refractor.x + spread * FILAMENT_OFFSETS[lookup] + jitter;
         }
         let path = engine_path(px.uv, px.p1, n1, ior, refractor.y);
         var weight = path.screen_weight;
         var environment_dir = path.environment_dir;
+        var read = vec3<f32>(0.0);
         if refractor.w > 0.0 {
-            let read = read_rough(path, px.uv, px.p1, refractor.w);
-            weight = read.screen_weight;
-            environment_dir = read.environment_dir;
+            let rough = read_rough(path, px.uv, px.p1, refractor.w);
+            weight = rough.screen_weight;
+            environment_dir = rough.environment_dir;
             if weight > 0.0 {
-                color += (weight * channels) * read.color;
+                read += (weight * channels) * rough.color;
             }
         } else if weight > 0.0 {
-            color += (weight * channels) * screen_color(path.texel);
+            read += (weight * channels) * screen_color(path.texel);
         }
         if weight < 1.0 {
-            color += ((1.0 - weight) * channels) * environment_radiance(environment_dir);
+            read += ((1.0 - weight) * channels) * environment_radiance(environment_dir);
         }
-        if lookup == passes / 2u {
+        if passes == 4u {
+            color += FILAMENT_MATRICES[lookup] * read;
+        } else {
+            color += read;
+        }
+        if lookup == aov_lookup {
             middle = path;
         }
+    }
+    if passes == 4u {
+        color = max(color, vec3<f32>(0.0));
     }
     let path = middle;
     out_color[i] = vec4<f32>(color, f32(COVERAGE_PATH));
