@@ -184,6 +184,14 @@ pub fn section(
                 many: None,
                 wavelengths: false,
             });
+        } else if id == MethodId::ProxySphere {
+            params.set("lookup", "filament", "claims")?;
+            rows.push(Row {
+                label: "`proxy-sphere`, `lookup=filament` (Filament's four wavelengths)".to_owned(),
+                three: offset(&params)?,
+                many: None,
+                wavelengths: false,
+            });
         }
     }
     let mut notes = Vec::new();
