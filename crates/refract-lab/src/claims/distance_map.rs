@@ -19,6 +19,18 @@ use crate::timing::spread;
 /// The chapter's setting (§17.4): 800 × 600, 3 layers of 6 × 512², depth 2.
 const CHAPTER_SIZE: (u32, u32) = (800, 600);
 
+/// U2: per round, whether its median frame of `ms` milliseconds runs at `fps` or more.
+fn at_frame_rate(ms: &[f64], fps: f64) -> Vec<bool> {
+    ms.iter().map(|&t| t <= 1e3 / fps).collect()
+}
+
+/// The frame rates of frames taking `ms` milliseconds, slowest to fastest (`lo–hi`).
+fn fps_range(ms: &[f64]) -> String {
+    let slowest = ms.iter().copied().fold(f64::NAN, f64::max);
+    let fastest = ms.iter().copied().fold(f64::NAN, f64::min);
+    format!("{:.1}–{:.1}", 1e3 / slowest, 1e3 / fastest)
+}
+
 fn dm(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     let mut params = MethodParams::defaults(MethodId::DistanceMap);
     for (name, v) in settings {
@@ -64,6 +76,8 @@ pub fn section(
         claims[3].threshold("repeats")?,
     );
     let repeats = args.rounds(stated);
+    let mut u2 = inventory.claim("U2")?;
+    let (fps, u2_stated) = (u2.threshold("fps")?, u2.threshold("repeats")?);
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
     for scene in rooms(args, &mut notes, progress)? {
@@ -137,6 +151,21 @@ pub fn section(
             dm(&[("minmax", "on"), ("res", "512"), ("layers", "3")])?,
         ];
         let race = Race::run(&mut bench.cpu, &camera, &configs, repeats, 2, 10)?;
+        let min_max_ms: Vec<f64> = race.medians.iter().map(|m| m.1).collect();
+        u2.push((
+            name.clone(),
+            args.timing_verdict(u2_stated, &at_frame_rate(&min_max_ms, fps)),
+            format!(
+                "CPU ({}), min-max: {} fps (the rounds' medians: {} ms; paper: 50 fps, GeForce 8800 GTX)",
+                crate::timing::cpu_description(),
+                fps_range(&min_max_ms),
+                min_max_ms
+                    .iter()
+                    .map(|ms| format!("{ms:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+        ));
         let speedups = race.ratios();
         let (lo, mid, hi) = spread(&speedups).unwrap_or_default();
         let (off_ms, on_ms) = race.mean_ms();
@@ -175,6 +204,7 @@ pub fn section(
         ),
     ));
     claims.push(u13);
+    claims.push(u2);
 
     // The two families on the same frames: glass in a pure environment.
     let mut versus = Vec::new();
@@ -266,4 +296,35 @@ pub fn section(
          distance-map` (`docs/performance.md`)."
     );
     Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::claims::inventory::Verdict;
+
+    /// U2 on rounds of known times: all under 40 ms confirm 25 fps, all over refute it, and
+    /// rounds on both sides (or too few) are inconclusive.
+    #[test]
+    fn u2_verdict_can_fail() {
+        let args = ClaimsArgs {
+            res: 64,
+            data: "data".into(),
+            out: "claims.md".into(),
+            timing_rounds: None,
+            reference_backend: Default::default(),
+        };
+        let verdict = |ms: &[f64]| args.timing_verdict(5.0, &at_frame_rate(ms, 25.0));
+        assert_eq!(verdict(&[30.0, 35.0, 39.9, 38.0, 20.0]), Verdict::Confirmed);
+        assert_eq!(
+            verdict(&[49.0, 48.8, 50.1, 47.0, 41.0]),
+            Verdict::NotConfirmed
+        );
+        assert_eq!(
+            verdict(&[39.0, 41.0, 39.0, 39.0, 39.0]),
+            Verdict::Inconclusive
+        );
+        assert_eq!(verdict(&[30.0, 30.0]), Verdict::Inconclusive);
+        assert_eq!(fps_range(&[40.0, 50.0, 20.0]), "20.0–50.0");
+    }
 }
