@@ -138,6 +138,82 @@ fn fallback_share(frame: &Frame) -> Option<f64> {
     (!pixels.is_empty()).then(|| n as f64 / pixels.len() as f64)
 }
 
+/// W6 and W8 on the horse of Wyman 2005a's Fig. 5 (`meshes/horse.obj`, the default camera):
+/// `wyman` with the furthest and the second back surface at IOR 1.5, and its silhouette
+/// fallback there and at W8's higher index.
+struct Horse {
+    furthest: MetricsRecord,
+    second: MetricsRecord,
+    fallback: Option<f64>,
+    high_ior: f32,
+    fallback_high: Option<f64>,
+}
+
+/// Measures [`Horse`] at `res`² against `reference` (`None` without the mesh).
+fn measure_horse(
+    data: &Path,
+    res: u32,
+    cpu: &mut CpuRenderer,
+    reference: &mut dyn Renderer,
+    high_ior: f32,
+) -> crate::Result<Option<Horse>> {
+    let path = data.join("meshes/horse.obj");
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let mesh = load_mesh(&path, &LoadOptions::default())?.mesh;
+    let mut at = |ior: f32| -> crate::Result<(MetricsRecord, MetricsRecord, Option<f64>)> {
+        let scene = Arc::new(Scene::new(
+            "horse",
+            Refractor::new(mesh.clone(), ior)?,
+            Environment::Procedural,
+        ));
+        let camera = scene.camera(res, res)?;
+        reference.prepare(&scene)?;
+        cpu.prepare(&scene)?;
+        let mut truth = Frame::default();
+        reference.render(
+            &camera,
+            &MethodParams::defaults(MethodId::Reference),
+            FrameOutputs::ColorAndAovs,
+            &mut truth,
+        )?;
+        let diameter = scene.refractor.diameter();
+        let mut measure = |params: &MethodParams| -> crate::Result<(Frame, MetricsRecord)> {
+            let mut frame = Frame::default();
+            cpu.render(&camera, params, FrameOutputs::ColorAndAovs, &mut frame)?;
+            let record = evaluate(&truth, &frame, &camera, diameter).0;
+            Ok((frame, record))
+        };
+        let (frame, furthest) = measure(&MethodParams::defaults(MethodId::Wyman))?;
+        let mut second = MethodParams::defaults(MethodId::Wyman);
+        second.set("back", "second", "claims")?;
+        let (_, second) = measure(&second)?;
+        Ok((furthest, second, fallback_share(&frame)))
+    };
+    let (furthest, second, fallback) = at(1.5)?;
+    let (_, _, fallback_high) = at(high_ior)?;
+    Ok(Some(Horse {
+        furthest,
+        second,
+        fallback,
+        high_ior,
+        fallback_high,
+    }))
+}
+
+/// W6: `|a − b| ≤ bar` (barely noticeable: `noticeable == false`) or `> bar` (the choice
+/// shows: `noticeable == true`); false where either is missing.
+fn back_surfaces_differ(a: Option<f64>, b: Option<f64>, bar: f64, noticeable: bool) -> bool {
+    a.zip(b)
+        .is_some_and(|(a, b)| ((a - b).abs() > bar) == noticeable)
+}
+
+/// W8's concave half: `high` is known and larger than every one of `others` (each known).
+fn more_often(high: Option<f64>, others: &[Option<f64>]) -> bool {
+    high.is_some_and(|h| others.iter().all(|o| o.is_some_and(|o| h > o)))
+}
+
 /// Where [`run`] puts the provenance block once the run has ended.
 const PROVENANCE_MARK: &str = "<!-- provenance -->\n";
 
@@ -217,6 +293,15 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
             fallback_share: fallback,
         });
     }
+    let high_ior = inventory.claim("W8")?.threshold("high_ior")? as f32;
+    let horse = measure_horse(&args.data, args.res, &mut cpu, reference.as_mut(), high_ior)?;
+    let mut notes = notes;
+    if horse.is_none() {
+        notes.push(format!(
+            "{} not found: the horse rows of W6 and W8 are missing.",
+            args.data.join("meshes/horse.obj").display()
+        ));
+    }
     let mut md = document(
         args,
         &inventory,
@@ -224,6 +309,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         &measured,
         &notes,
         cow_times.as_ref(),
+        horse.as_ref(),
     )?;
     md.push_str(&nearby::section(args, &inventory, &mut ledger, progress)?);
     md.push_str(&distance_map::section(
@@ -362,6 +448,7 @@ fn document(
     measured: &[Measured],
     notes: &[String],
     cow: Option<&Race>,
+    horse: Option<&Horse>,
 ) -> crate::Result<String> {
     let t2 = |r: &MetricsRecord| r.t2_angle_deg_mean_non_tir;
     let p2 = |r: &MetricsRecord| r.p2_error_rel_mean_non_tir;
@@ -395,30 +482,6 @@ fn document(
                 ),
             ));
         }
-        if m.scene == "sphere" {
-            let bar = w6.threshold("sphere_deg")?;
-            let difference = t2(&m.second).zip(t2(wyman)).map(|(a, b)| (a - b).abs());
-            // The cow's pair is reported beside it (no threshold was stated for it).
-            let cow = measured
-                .iter()
-                .find(|c| c.scene == "cow")
-                .map_or_else(String::new, |c| {
-                    format!(
-                        "; the cow: {}° vs {}°",
-                        value(t2(&c.second), 3),
-                        value(t2(c.get(MethodId::Wyman)), 3)
-                    )
-                });
-            w6.push((
-                m.scene.clone(),
-                difference.is_some_and(|d| d <= bar),
-                format!(
-                    "mean T2 error {}° (`back=second`) vs {}° (`furthest`){cow}",
-                    value(t2(&m.second), 3),
-                    value(t2(wyman), 3)
-                ),
-            ));
-        }
         let bar = w8.threshold("share")?;
         w8.push((
             m.scene.clone(),
@@ -427,6 +490,53 @@ fn document(
                 "silhouette fallback on {} of `wyman`'s refractor pixels (IOR {})",
                 pct(m.fallback_share),
                 m.ior
+            ),
+        ));
+    }
+    // W6: the cow (nearly convex) and the horse (Fig. 5).
+    let w6_bar = w6.threshold("convex_deg")?;
+    let pair = |second: &MetricsRecord, furthest: &MetricsRecord| {
+        format!(
+            "mean T2 error {}° (`back=second`) vs {}° (`furthest`)",
+            value(t2(second), 3),
+            value(t2(furthest), 3)
+        )
+    };
+    if let Some(cow) = measured.iter().find(|m| m.scene == "cow") {
+        let furthest = cow.get(MethodId::Wyman);
+        w6.push((
+            "cow".into(),
+            back_surfaces_differ(t2(&cow.second), t2(furthest), w6_bar, false),
+            pair(&cow.second, furthest),
+        ));
+    }
+    let w8_bar = w8.threshold("share")?;
+    if let Some(h) = horse {
+        w6.push((
+            "horse, IOR 1.5".into(),
+            back_surfaces_differ(t2(&h.second), t2(&h.furthest), w6_bar, true),
+            pair(&h.second, &h.furthest),
+        ));
+        w8.push((
+            "horse, IOR 1.5".into(),
+            h.fallback.is_some_and(|s| s < w8_bar),
+            format!(
+                "silhouette fallback on {} of `wyman`'s refractor pixels",
+                pct(h.fallback)
+            ),
+        ));
+        let others: Vec<Option<f64>> = measured
+            .iter()
+            .map(|m| m.fallback_share)
+            .chain([h.fallback])
+            .collect();
+        w8.push((
+            format!("horse, IOR {}", h.high_ior),
+            more_often(h.fallback_high, &others),
+            format!(
+                "silhouette fallback on {} of `wyman`'s refractor pixels, against {} (sphere, cow, horse at 1.5)",
+                pct(h.fallback_high),
+                others.iter().map(|o| pct(*o)).collect::<Vec<_>>().join(", ")
             ),
         ));
     }
@@ -577,4 +687,33 @@ impl Race {
 /// A share as a percentage.
 pub(crate) fn pct(v: Option<f64>) -> String {
     v.map_or_else(|| "–".to_owned(), |v| format!("{:.1} %", 100.0 * v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// W6 on numbers made for each case: the cow's 0.075° apart is barely noticeable against
+    /// 0.1° and would fail the horse's test; the sphere's identical pair fails the horse's test.
+    #[test]
+    fn w6_verdicts_can_fail() {
+        let (cow_second, cow_furthest) = (Some(1.126), Some(1.201));
+        assert!(back_surfaces_differ(cow_second, cow_furthest, 0.1, false));
+        assert!(!back_surfaces_differ(cow_second, cow_furthest, 0.1, true));
+        assert!(!back_surfaces_differ(Some(3.786), Some(3.786), 0.1, true));
+        assert!(back_surfaces_differ(Some(2.0), Some(2.4), 0.1, true));
+        assert!(!back_surfaces_differ(Some(2.0), Some(2.4), 0.1, false));
+        assert!(!back_surfaces_differ(None, Some(2.4), 0.1, false));
+    }
+
+    /// W8's concave half: larger than every other share, each known.
+    #[test]
+    fn w8_concave_verdict_can_fail() {
+        let others = [Some(0.0), Some(0.002), Some(0.01)];
+        assert!(more_often(Some(0.03), &others));
+        assert!(!more_often(Some(0.005), &others));
+        assert!(!more_often(Some(0.01), &others));
+        assert!(!more_often(None, &others));
+        assert!(!more_often(Some(0.03), &[Some(0.0), None]));
+    }
 }
