@@ -219,8 +219,7 @@ pub fn section(
     let mut bench = Bench::new(args)?;
     let mut notes = Vec::new();
     let methods = methods()?;
-    let mut claims = vec![inventory.claim("B2")?, inventory.claim("B3")?];
-    let b3_deg = claims[1].threshold("deg")?;
+    let mut claims = vec![inventory.claim("B2")?];
     let mut comparison = String::new();
     let mut sweep = String::new();
     let mut failure_rows = String::new();
@@ -290,7 +289,8 @@ pub fn section(
                 leaks.push((*label, f.leak));
             }
         }
-        if name == "engine-failures" || name == "chart" {
+        // B2 where something stands in front of the glass to leak.
+        if name == "engine-failures" {
             let leak = |label: &str| {
                 leaks
                     .iter()
@@ -306,25 +306,6 @@ pub fn section(
                     pct(three),
                     pct(bevy),
                     pct(hdrp)
-                ),
-            ));
-        }
-        if name == "sphere" {
-            let t2 = |label: &str| {
-                records
-                    .iter()
-                    .find(|r| r.0 == label)
-                    .and_then(|r| r.1.t2_angle_deg_mean_non_tir)
-            };
-            let (sphere, wyman) = (t2(HDRP_SPHERE), t2(WYMAN));
-            claims[1].push((
-                name.clone(),
-                matches!((sphere, wyman), (Some(s), Some(w)) if s < b3_deg && s <= w),
-                format!(
-                    "T2 {}° (`proxy-sphere`, thickness = mean d_N = {:.3}) vs {}° (`wyman`)",
-                    value(sphere, 3),
-                    truth.scene.refractor.mean_d_n(),
-                    value(wyman, 3)
                 ),
             ));
         }

@@ -363,18 +363,27 @@ pub fn section(
             res,
             TraceMode::Transmission,
         )?;
-        let (_, ours) = bench.measure(&truth, &pvrr(&[("depth", "4")])?)?;
-        let (_, fixed) = bench.measure(&truth, &pvrr(&[("depth", "4"), ("sizing", "fixed")])?)?;
         let rise = b4.threshold("rise")?;
-        b4.push((
-            name.into(),
-            footprint_within(flip(&ours), flip(&fixed), rise),
-            format!(
-                "FLIP {} (footprint) vs {} (fixed 1024)",
-                value(flip(&ours), 5),
-                value(flip(&fixed), 5)
-            ),
-        ));
+        let (_, ours) = bench.measure(&truth, &pvrr(&[("depth", "4")])?)?;
+        let twice = bench.truth_with(
+            Arc::new(load_scene(name)?.scene),
+            2 * res,
+            TraceMode::Transmission,
+        )?;
+        let (_, ours_twice) = bench.measure(&twice, &pvrr(&[("depth", "4")])?)?;
+        for (size, truth, ours) in [(res, &truth, &ours), (2 * res, &twice, &ours_twice)] {
+            let (_, fixed) =
+                bench.measure(truth, &pvrr(&[("depth", "4"), ("sizing", "fixed")])?)?;
+            b4.push((
+                format!("{name}, {size}²"),
+                footprint_within(flip(ours), flip(&fixed), rise),
+                format!(
+                    "FLIP {} (footprint) vs {} (fixed 1024)",
+                    value(flip(ours), 5),
+                    value(flip(&fixed), 5)
+                ),
+            ));
+        }
         let mut dm4 = MethodParams::defaults(MethodId::DistanceMap);
         dm4.set("depth", "4", "claims")?;
         let (_, dm) = bench.measure(&truth, &dm4)?;
