@@ -202,6 +202,51 @@ fn measure_horse(
     }))
 }
 
+/// What the Wyman 2005a section measures beside the scenes' rows: the cow's timing rounds (W10,
+/// W12), the horse (W6, W8) and `wyman-dv` on the sphere at IOR 1.2 (W2).
+struct Extra {
+    cow_times: Option<Race>,
+    horse: Option<Horse>,
+    sphere_low_ior: MetricsRecord,
+}
+
+/// W2's index-alone row: `wyman-dv` on the built-in sphere at IOR `ior` against the reference
+/// at `res`².
+fn measure_dv_sphere(
+    res: u32,
+    ior: f32,
+    cpu: &mut CpuRenderer,
+    reference: &mut dyn Renderer,
+) -> crate::Result<MetricsRecord> {
+    let mut scene = load_scene("sphere")?.scene;
+    scene.refractor.set_ior(ior)?;
+    let scene = Arc::new(scene);
+    let camera = scene.camera(res, res)?;
+    reference.prepare(&scene)?;
+    cpu.prepare(&scene)?;
+    let mut truth = Frame::default();
+    reference.render(
+        &camera,
+        &MethodParams::defaults(MethodId::Reference),
+        FrameOutputs::ColorAndAovs,
+        &mut truth,
+    )?;
+    let mut frame = Frame::default();
+    cpu.render(
+        &camera,
+        &MethodParams::defaults(MethodId::WymanDv),
+        FrameOutputs::ColorAndAovs,
+        &mut frame,
+    )?;
+    Ok(evaluate(&truth, &frame, &camera, scene.refractor.diameter()).0)
+}
+
+/// W2's index row: `a` (the lower index's error) at most `ratio` × `b`; false where either is
+/// missing.
+fn at_most(a: Option<f64>, ratio: f64, b: Option<f64>) -> bool {
+    matches!((a, b), (Some(a), Some(b)) if a <= ratio * b)
+}
+
 /// W6: `|a − b| ≤ bar` (barely noticeable: `noticeable == false`) or `> bar` (the choice
 /// shows: `noticeable == true`); false where either is missing.
 fn back_surfaces_differ(a: Option<f64>, b: Option<f64>, bar: f64, noticeable: bool) -> bool {
@@ -298,6 +343,7 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
             fallback_share: fallback,
         });
     }
+    let sphere_low_ior = measure_dv_sphere(args.res, 1.2, &mut cpu, reference.as_mut())?;
     let high_ior = inventory.claim("W8")?.threshold("high_ior")? as f32;
     let horse = measure_horse(&args.data, args.res, &mut cpu, reference.as_mut(), high_ior)?;
     let mut notes = notes;
@@ -307,15 +353,12 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
             args.data.join("meshes/horse.obj").display()
         ));
     }
-    let mut md = document(
-        args,
-        &inventory,
-        &mut ledger,
-        &measured,
-        &notes,
-        cow_times.as_ref(),
-        horse.as_ref(),
-    )?;
+    let extra = Extra {
+        cow_times,
+        horse,
+        sphere_low_ior,
+    };
+    let mut md = document(args, &inventory, &mut ledger, &measured, &notes, &extra)?;
     md.push_str(&nearby::section(args, &inventory, &mut ledger, progress)?);
     md.push_str(&distance_map::section(
         args,
@@ -452,9 +495,13 @@ fn document(
     ledger: &mut Ledger,
     measured: &[Measured],
     notes: &[String],
-    cow: Option<&Race>,
-    horse: Option<&Horse>,
+    extra: &Extra,
 ) -> crate::Result<String> {
+    let (cow, horse, sphere_low_ior) = (
+        extra.cow_times.as_ref(),
+        extra.horse.as_ref(),
+        &extra.sphere_low_ior,
+    );
     let t2 = |r: &MetricsRecord| r.t2_angle_deg_mean_non_tir;
     let p2 = |r: &MetricsRecord| r.p2_error_rel_mean_non_tir;
     let mut w1 = inventory.claim("W1")?;
@@ -546,28 +593,35 @@ fn document(
         ));
     }
     let mut claims = vec![w1];
-    // W2: d_V alone on the low-index cow against the sphere.
-    if let (Some(sphere), Some(cow_m)) = (
-        measured.iter().find(|m| m.scene == "sphere"),
-        measured.iter().find(|m| m.scene == "cow"),
-    ) {
-        let mut w2 = inventory.claim("W2")?;
-        let ratio = w2.threshold("ratio")?;
-        let (a, b) = (
-            t2(cow_m.get(MethodId::WymanDv)),
-            t2(sphere.get(MethodId::WymanDv)),
-        );
+    // W2: d_V alone, the index and the shape one at a time.
+    let mut w2 = inventory.claim("W2")?;
+    let ratio = w2.threshold("ratio")?;
+    let dv_low = t2(sphere_low_ior);
+    if let Some(sphere) = measured.iter().find(|m| m.scene == "sphere") {
+        let dv_high = t2(sphere.get(MethodId::WymanDv));
         w2.push((
-            "cow vs sphere".into(),
-            matches!((a, b), (Some(a), Some(b)) if a <= ratio * b),
+            "sphere, IOR 1.2 vs 1.5".into(),
+            at_most(dv_low, ratio, dv_high),
             format!(
-                "`wyman-dv` T2 {}° on the cow vs {}° on the sphere",
-                value(a, 2),
-                value(b, 2)
+                "`wyman-dv` T2 {}° at IOR 1.2 vs {}° at 1.5",
+                value(dv_low, 2),
+                value(dv_high, 2)
             ),
         ));
-        claims.push(w2);
     }
+    if let Some(cow_m) = measured.iter().find(|m| m.scene == "cow") {
+        let dv_cow = t2(cow_m.get(MethodId::WymanDv));
+        w2.push((
+            "IOR 1.2, sphere vs cow".into(),
+            less(dv_low, dv_cow),
+            format!(
+                "`wyman-dv` T2 {}° on the sphere vs {}° on the cow",
+                value(dv_low, 2),
+                value(dv_cow, 2)
+            ),
+        ));
+    }
+    claims.push(w2);
     claims.extend([w3, w4, w6, w8]);
     if let Some(cow) = cow {
         let mut w10 = inventory.claim("W10")?;
@@ -739,6 +793,17 @@ mod tests {
             verdict(&[130.0, 120.0, 130.0, 130.0, 130.0], 122.9),
             Verdict::Inconclusive
         );
+    }
+
+    /// W2's rows on numbers made for them: the index row's ratio, the shape row's order.
+    #[test]
+    fn w2_verdicts_can_fail() {
+        assert!(at_most(Some(1.0), 0.5, Some(2.0)));
+        assert!(!at_most(Some(1.1), 0.5, Some(2.0)));
+        assert!(!at_most(None, 0.5, Some(2.0)));
+        assert!(less(Some(1.0), Some(1.2)));
+        assert!(!less(Some(1.2), Some(1.2)));
+        assert!(!less(Some(1.0), None));
     }
 
     /// W8's concave half: larger than every other share, each known.
