@@ -24,6 +24,11 @@ fn at_frame_rate(ms: &[f64], fps: f64) -> Vec<bool> {
     ms.iter().map(|&t| t <= 1e3 / fps).collect()
 }
 
+/// U9: per round, whether the deeper frame's time over the shallower's is at most `bar`.
+fn at_most_ratio(ratios: &[f64], bar: f64) -> Vec<bool> {
+    ratios.iter().map(|&r| r <= bar).collect()
+}
+
 /// The frame rates of frames taking `ms` milliseconds, slowest to fastest (`lo–hi`).
 fn fps_range(ms: &[f64]) -> String {
     let slowest = ms.iter().copied().fold(f64::NAN, f64::max);
@@ -77,6 +82,10 @@ pub fn section(
     );
     let repeats = args.rounds(stated);
     let mut u2 = inventory.claim("U2")?;
+    let mut u7 = inventory.claim("U7")?;
+    let more_layers = u7.threshold("more")?.to_string();
+    let mut u9 = inventory.claim("U9")?;
+    let (u9_ratio, u9_stated) = (u9.threshold("ratio")?, u9.threshold("repeats")?);
     let (fps, u2_stated) = (u2.threshold("fps")?, u2.threshold("repeats")?);
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
@@ -144,6 +153,21 @@ pub fn section(
         ));
         step_tables.push((name.clone(), steps));
 
+        // U7: more layers than the chapter's three.
+        let three = bench.measure(&t, &dm(&[("depth", "4")])?)?.1;
+        let more = bench
+            .measure(&t, &dm(&[("depth", "4"), ("layers", &more_layers)])?)?
+            .1;
+        u7.push((
+            name.clone(),
+            less(more.flip_mean, three.flip_mean),
+            format!(
+                "FLIP {} (3 layers) → {} ({more_layers})",
+                value(three.flip_mean, 4),
+                value(more.flip_mean, 4)
+            ),
+        ));
+
         // Min-max at the chapter's setting (colour-only frames), alternating rounds.
         let camera = t.scene.camera(CHAPTER_SIZE.0, CHAPTER_SIZE.1)?;
         let configs = [
@@ -151,6 +175,46 @@ pub fn section(
             dm(&[("minmax", "on"), ("res", "512"), ("layers", "3")])?,
         ];
         let race = Race::run(&mut bench.cpu, &camera, &configs, repeats, 2, 10)?;
+        // U9 on Fig. 17-7's teapot: the frame at depth 3 against depth 1, min-max on.
+        if name == "teapot-box" {
+            let depths = [
+                dm(&[
+                    ("minmax", "on"),
+                    ("res", "512"),
+                    ("layers", "3"),
+                    ("depth", "3"),
+                ])?,
+                dm(&[
+                    ("minmax", "on"),
+                    ("res", "512"),
+                    ("layers", "3"),
+                    ("depth", "1"),
+                ])?,
+            ];
+            let race = Race::run(
+                &mut bench.cpu,
+                &camera,
+                &depths,
+                args.rounds(u9_stated),
+                2,
+                10,
+            )?;
+            let ratios = race.ratios();
+            let (lo, mid, hi) = spread(&ratios).unwrap_or_default();
+            let (deep_ms, one_ms) = race.mean_ms();
+            u9.push((
+                name.clone(),
+                args.timing_verdict(
+                    u9_stated,
+                    &at_most_ratio(&ratios, u9_ratio),
+                ),
+                format!(
+                    "CPU ({}): {one_ms:.1} ms at depth 1, {deep_ms:.1} ms at depth 3 (means of the rounds' medians); ratio median {mid:.2}×, range {lo:.2}–{hi:.2}× over {} alternating rounds",
+                    crate::timing::cpu_description(),
+                    ratios.len()
+                ),
+            ));
+        }
         let min_max_ms: Vec<f64> = race.medians.iter().map(|m| m.1).collect();
         u2.push((
             name.clone(),
@@ -204,7 +268,7 @@ pub fn section(
         ),
     ));
     claims.push(u13);
-    claims.push(u2);
+    claims.extend([u2, u7, u9]);
 
     // The two families on the same frames: glass in a pure environment.
     let mut versus = Vec::new();
@@ -326,5 +390,10 @@ mod tests {
         );
         assert_eq!(verdict(&[30.0, 30.0]), Verdict::Inconclusive);
         assert_eq!(fps_range(&[40.0, 50.0, 20.0]), "20.0–50.0");
+        // U9: "decreases very little" within 1.25 ×.
+        let u9 = |r: &[f64]| args.timing_verdict(5.0, &at_most_ratio(r, 1.25));
+        assert_eq!(u9(&[1.1, 1.2, 1.0, 1.24, 1.1]), Verdict::Confirmed);
+        assert_eq!(u9(&[1.6, 1.8, 1.7, 1.5, 1.9]), Verdict::NotConfirmed);
+        assert_eq!(u9(&[1.2, 1.3, 1.2, 1.2, 1.2]), Verdict::Inconclusive);
     }
 }
