@@ -931,6 +931,8 @@ fn claims_are_measured_and_written() {
             out,
             "--timing-rounds",
             "1",
+            "--second-res",
+            "0",
         ];
         args.extend(extra);
         let output = refract(&args, dir.path());
@@ -939,6 +941,29 @@ fn claims_are_measured_and_written() {
     };
     let md = claims("c/claims.md", &[]);
     assert!(md.contains("Written by `refract claims`"), "{md}");
+    assert!(md.contains("No robustness pass (`--second-res 0`)"), "{md}");
+    // A robustness pass at the measurement's own resolution, or outside the range, is refused
+    // before anything is measured.
+    for bad in ["48", "8", "4096"] {
+        let output = refract(
+            &[
+                "claims",
+                "--res",
+                "48",
+                "--second-res",
+                bad,
+                "--out",
+                "x/c.md",
+            ],
+            dir.path(),
+        );
+        assert!(!output.status.success(), "--second-res {bad}");
+        assert!(
+            stderr(&output).contains("--second-res"),
+            "{}",
+            stderr(&output)
+        );
+    }
     // The provenance block, measured (run outside a checkout here: the commit says so).
     let provenance = md
         .split("## Provenance")

@@ -55,9 +55,31 @@ pub struct ClaimsArgs {
     /// docs/reference.md). The timing claims run on the CPU backend either way.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "cpu"))]
     pub reference_backend: ReferenceBackend,
+    /// The robustness pass's square resolution: every error verdict is measured again there
+    /// (one timing round, no engines), and a row confirmed at one resolution and not at the
+    /// other is published as fragile. 0 skips the pass; otherwise 16 to 2048, and not `--res`.
+    /// Default: 1.5 × `--res`.
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub second_res: Option<u32>,
 }
 
 impl ClaimsArgs {
+    /// The robustness pass's resolution (`None`: no pass), checked: `--second-res` 0 skips it,
+    /// else 16 to 2048 and not `--res`; by default 1.5 × `--res`.
+    pub(crate) fn second_resolution(&self) -> crate::Result<Option<u32>> {
+        match self.second_res {
+            Some(0) => Ok(None),
+            Some(res) if !(16..=2048).contains(&res) || res == self.res => {
+                Err(crate::LabError::invalid(format!(
+                    "--second-res {res}: expected 0 (no robustness pass) or 16 to 2048 other than --res {}",
+                    self.res
+                )))
+            }
+            Some(res) => Ok(Some(res)),
+            None => Ok(Some((self.res + self.res / 2).min(2048)).filter(|&r| r != self.res)),
+        }
+    }
+
     /// The rounds of a timing claim whose test states `stated` (its `repeats` threshold).
     pub(crate) fn rounds(&self, stated: f64) -> u32 {
         self.timing_rounds.unwrap_or(stated as u32)
@@ -277,7 +299,6 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
     }
     refract_eval::atomic_write::check_writable(&args.out)?;
     let inventory = Inventory::builtin()?;
-    let mut ledger = Ledger::default();
     let mut provenance = crate::provenance::Provenance::start();
     if args.reference_backend == ReferenceBackend::Gpu {
         provenance.gpu = refract_gpu::GpuContext::new().ok().map(|c| {
@@ -287,6 +308,39 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
             )
         });
     }
+    // The robustness pass (issue 51): every section again at a second resolution, one timing
+    // round, without the engines; its verdicts mark the main pass's rows fragile where they
+    // differ.
+    let second = args.second_resolution()?;
+    let mut ledger = match second {
+        Some(res) => {
+            let pass = ClaimsArgs {
+                res,
+                timing_rounds: Some(1),
+                ..args.clone()
+            };
+            let mut second_ledger = Ledger::default();
+            measure(&pass, &inventory, &mut second_ledger, progress, false)?;
+            Ledger::with_second(res, second_ledger)
+        }
+        None => Ledger::default(),
+    };
+    let md = measure(args, &inventory, &mut ledger, progress, true)?;
+    provenance.finish();
+    let md = md.replacen(PROVENANCE_MARK, &provenance.markdown(), 1);
+    write_text_atomically(&args.out, &md)?;
+    Ok(md)
+}
+
+/// Every section measured at `args.res` into `ledger`, the engines themselves with
+/// `with_engines` (where they run); the document with the provenance mark.
+fn measure(
+    args: &ClaimsArgs,
+    inventory: &Inventory,
+    ledger: &mut Ledger,
+    progress: &dyn Progress,
+    with_engines: bool,
+) -> crate::Result<String> {
     let (scenes, notes) = scenes(&args.data)?;
     let mut measured = Vec::new();
     let mut cpu = CpuRenderer::new();
@@ -358,45 +412,36 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
         horse,
         sphere_low_ior,
     };
-    let mut md = document(args, &inventory, &mut ledger, &measured, &notes, &extra)?;
-    md.push_str(&nearby::section(args, &inventory, &mut ledger, progress)?);
-    md.push_str(&distance_map::section(
-        args,
-        &inventory,
-        &mut ledger,
-        progress,
-    )?);
-    md.push_str(&pvrr::section(args, &inventory, &mut ledger)?);
+    let mut md = document(args, inventory, ledger, &measured, &notes, &extra)?;
+    md.push_str(&nearby::section(args, inventory, ledger, progress)?);
+    md.push_str(&distance_map::section(args, inventory, ledger, progress)?);
+    md.push_str(&pvrr::section(args, inventory, ledger)?);
     // One browser per engine for both sections that render with the engines themselves.
-    let engines = crate::engines::EngineRenderers::open(
-        &refract_engines::Engine::ALL,
-        crate::backends::GpuPolicy::IfAvailable,
-        progress,
-    )?;
+    let engines = if with_engines {
+        crate::engines::EngineRenderers::open(
+            &refract_engines::Engine::ALL,
+            crate::backends::GpuPolicy::IfAvailable,
+            progress,
+        )?
+    } else {
+        None
+    };
     md.push_str(&engine::section(
         args,
-        &inventory,
-        &mut ledger,
+        inventory,
+        ledger,
         progress,
         engines.as_ref(),
     )?);
-    md.push_str(&layers::section(args, &inventory, &mut ledger)?);
-    md.push_str(&rough::section(
-        args,
-        &inventory,
-        &mut ledger,
-        engines.as_ref(),
-    )?);
+    md.push_str(&layers::section(args, inventory, ledger)?);
+    md.push_str(&rough::section(args, inventory, ledger, engines.as_ref())?);
     md.push_str(&dispersion::section(
         args,
-        &inventory,
-        &mut ledger,
+        inventory,
+        ledger,
         engines.as_ref(),
     )?);
-    md.push_str(&ledger.coverage(&inventory));
-    provenance.finish();
-    let md = md.replacen(PROVENANCE_MARK, &provenance.markdown(), 1);
-    write_text_atomically(&args.out, &md)?;
+    md.push_str(&ledger.coverage(inventory));
     Ok(md)
 }
 
@@ -679,7 +724,8 @@ fn document(
          (`crates/refract-lab/claims.toml`, ids of `../shared/paper-claims.md`); the coverage table \
          at the end has a row for every claim of the four papers, and the revisions of a test \
          after it was measured. Timing verdicts come from alternating rounds and are \
-         **inconclusive** when the rounds fall on both sides of the bar. Errors against the exact \
+         **inconclusive** when the rounds fall on both sides of the bar. {robustness} Errors \
+         against the exact \
          reference (`transmission`, 1 spp, Mitsuba's interface rule{tracer}) \
          at {res}², CPU backend, over refractor pixels without TIR at the first exit; T2 is the \
          direction leaving the first exit, P2 the first exit point (`docs/metrics.md`). Scenes: the \
@@ -689,7 +735,16 @@ fn document(
         tracer = match args.reference_backend {
             ReferenceBackend::Cpu => "",
             ReferenceBackend::Gpu => "; traced on the GPU, `--reference-backend gpu`",
-        }
+        },
+        robustness = match args.second_resolution()? {
+            Some(second) => format!(
+                "Every section was also measured at {second}² (one timing round, without the \
+                 engines themselves): a row confirmed at one resolution and not confirmed at the \
+                 other is **fragile**, with both measurements; rows whose scene names its \
+                 resolution, the engines' own rows and timing rows are not compared."
+            ),
+            None => "No robustness pass (`--second-res 0`): no row is marked fragile.".to_owned(),
+        },
     );
     let _ = writeln!(
         md,
@@ -785,6 +840,7 @@ mod tests {
             out: "claims.md".into(),
             timing_rounds: None,
             reference_backend: ReferenceBackend::Cpu,
+            second_res: None,
         };
         let verdict = |fps: &[f64], bar| args.timing_verdict(5.0, &at_least(fps, bar));
         assert_eq!(verdict(&[151.0; 5], 122.9), Verdict::Confirmed);

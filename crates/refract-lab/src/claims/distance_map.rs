@@ -377,6 +377,7 @@ mod tests {
             out: "claims.md".into(),
             timing_rounds: None,
             reference_backend: Default::default(),
+            second_res: None,
         };
         let verdict = |ms: &[f64]| args.timing_verdict(5.0, &at_frame_rate(ms, 25.0));
         assert_eq!(verdict(&[30.0, 35.0, 39.9, 38.0, 20.0]), Verdict::Confirmed);

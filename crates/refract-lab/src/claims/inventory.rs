@@ -162,6 +162,9 @@ pub(crate) enum Verdict {
     NotConfirmed,
     /// Repeated measurements fall on both sides of the threshold (timing).
     Inconclusive,
+    /// Confirmed at one resolution and not at the robustness pass's, or the other way round
+    /// ([`Ledger::with_second`]): neither is published.
+    Fragile,
 }
 
 impl From<bool> for Verdict {
@@ -194,11 +197,22 @@ impl Verdict {
         }
     }
 
+    /// The verdict as a plain word.
+    fn word(self) -> &'static str {
+        match self {
+            Self::Confirmed => "confirmed",
+            Self::NotConfirmed => "not confirmed",
+            Self::Inconclusive => "inconclusive",
+            Self::Fragile => "fragile",
+        }
+    }
+
     fn markdown(self) -> &'static str {
         match self {
             Self::Confirmed => "**confirmed**",
             Self::NotConfirmed => "**not confirmed**",
             Self::Inconclusive => "**inconclusive**",
+            Self::Fragile => "**fragile**",
         }
     }
 }
@@ -235,7 +249,14 @@ pub(crate) struct Ledger {
     verdicts: BTreeMap<String, Vec<(String, Verdict)>>,
     /// The section each claim's rows are in.
     sections: BTreeMap<String, String>,
+    /// The robustness pass: its resolution and its rows.
+    second: Option<(u32, MeasuredRows)>,
+    /// The rows as measured, for a later pass to compare with.
+    measured: MeasuredRows,
 }
+
+/// Per claim id, its rows as measured: scene, verdict, numbers.
+type MeasuredRows = BTreeMap<String, Vec<(String, Verdict, String)>>;
 
 impl Ledger {
     /// Writes the markdown rows of `claims` into `md` and records their verdicts under
@@ -243,6 +264,12 @@ impl Ledger {
     pub fn rows(&mut self, md: &mut String, section: &str, claims: &[Claim]) {
         for claim in claims {
             for (scene, verdict, numbers) in &claim.rows {
+                self.measured.entry(claim.id.to_owned()).or_default().push((
+                    scene.clone(),
+                    *verdict,
+                    numbers.clone(),
+                ));
+                let (verdict, numbers) = self.robust(claim.id, scene, *verdict, numbers);
                 let _ = writeln!(
                     md,
                     "| {} | {scene} | {numbers} | {} |",
@@ -252,11 +279,52 @@ impl Ledger {
                 self.verdicts
                     .entry(claim.id.to_owned())
                     .or_default()
-                    .push((scene.clone(), *verdict));
+                    .push((scene.clone(), verdict));
             }
             self.sections
                 .entry(claim.id.to_owned())
                 .or_insert_with(|| section.to_owned());
+        }
+    }
+
+    /// A ledger whose rows are compared with `second`'s, measured at `resolution`: a row of
+    /// the same claim and scene that is confirmed in one and not confirmed in the other
+    /// becomes [`Verdict::Fragile`], with both measurements.
+    pub fn with_second(resolution: u32, second: Ledger) -> Self {
+        Self {
+            second: Some((resolution, second.measured)),
+            ..Self::default()
+        }
+    }
+
+    /// The verdict and numbers a row is published with: as measured, or fragile where the
+    /// robustness pass's row of the same claim and scene came out the other way (an
+    /// inconclusive or missing row there changes nothing).
+    fn robust(&self, id: &str, scene: &str, verdict: Verdict, numbers: &str) -> (Verdict, String) {
+        let other = self.second.as_ref().and_then(|(res, rows)| {
+            rows.get(id)?
+                .iter()
+                .find(|(s, _, _)| s == scene)
+                .map(|(_, v, n)| (*res, *v, n))
+        });
+        match other {
+            Some((res, other, other_numbers))
+                if matches!(
+                    (verdict, other),
+                    (Verdict::Confirmed, Verdict::NotConfirmed)
+                        | (Verdict::NotConfirmed, Verdict::Confirmed)
+                ) =>
+            {
+                (
+                    Verdict::Fragile,
+                    format!(
+                        "{numbers} ({}); at {res}²: {other_numbers} ({})",
+                        verdict.word(),
+                        other.word()
+                    ),
+                )
+            }
+            _ => (verdict, numbers.to_owned()),
         }
     }
 
@@ -333,6 +401,7 @@ fn summarise(rows: &[(String, Verdict)]) -> String {
     let mut parts = Vec::new();
     for v in [
         Verdict::NotConfirmed,
+        Verdict::Fragile,
         Verdict::Inconclusive,
         Verdict::Confirmed,
     ] {
@@ -351,6 +420,65 @@ fn summarise(rows: &[(String, Verdict)]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The robustness pass: a row confirmed at one resolution and not at the other is fragile,
+    /// with both measurements, and counts as not confirmed everywhere; rows that agree, rows the
+    /// second pass has not (or has inconclusive) and timing rows stay as measured.
+    #[test]
+    fn rows_that_flip_between_resolutions_are_fragile() {
+        let inventory = Inventory::builtin().expect("inventory");
+        let rows = |verdicts: &[(&str, Verdict)]| {
+            let mut claim = inventory.claim("W1").expect("W1");
+            for (scene, v) in verdicts {
+                claim.push(((*scene).to_owned(), *v, format!("numbers on {scene}")));
+            }
+            claim
+        };
+        let mut second = Ledger::default();
+        second.rows(
+            &mut String::new(),
+            "s",
+            &[rows(&[
+                ("sphere", Verdict::NotConfirmed),
+                ("cow", Verdict::Confirmed),
+                ("torus", Verdict::Inconclusive),
+            ])],
+        );
+        let mut ledger = Ledger::with_second(384, second);
+        let mut md = String::new();
+        ledger.rows(
+            &mut md,
+            "s",
+            &[rows(&[
+                ("sphere", Verdict::Confirmed),
+                ("cow", Verdict::Confirmed),
+                ("torus", Verdict::NotConfirmed),
+                ("horse", Verdict::Confirmed),
+            ])],
+        );
+        let line = |scene: &str| {
+            md.lines()
+                .find(|l| l.contains(&format!("| {scene} |")))
+                .expect("a row")
+                .to_owned()
+        };
+        assert!(line("sphere").ends_with("| **fragile** |"), "{md}");
+        assert!(
+            line("sphere").contains(
+                "numbers on sphere (confirmed); at 384²: numbers on sphere (not confirmed)"
+            ),
+            "{md}"
+        );
+        assert!(line("cow").ends_with("| **confirmed** |"), "{md}");
+        assert!(line("torus").ends_with("| **not confirmed** |"), "{md}");
+        assert!(line("horse").ends_with("| **confirmed** |"), "{md}");
+        let coverage = ledger.coverage(&inventory);
+        let w1 = coverage
+            .lines()
+            .find(|l| l.starts_with("| W1 |"))
+            .expect("W1's coverage row");
+        assert!(w1.contains("**fragile** on sphere"), "{w1}");
+    }
 
     /// The compiled-in file holds every inventory claim once and passes its own checks.
     #[test]
