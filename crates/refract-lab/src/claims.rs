@@ -171,46 +171,28 @@ struct Horse {
     fallback_high: Option<f64>,
 }
 
-/// Measures [`Horse`] at `res`² against `reference` (`None` without the mesh).
+/// Measures [`Horse`] at `args.res`² on `bench` (`None` without the mesh).
 fn measure_horse(
-    data: &Path,
-    res: u32,
-    cpu: &mut CpuRenderer,
-    reference: &mut dyn Renderer,
+    args: &ClaimsArgs,
+    bench: &mut Bench,
     high_ior: f32,
 ) -> crate::Result<Option<Horse>> {
-    let path = data.join("meshes/horse.obj");
+    let path = args.data.join("meshes/horse.obj");
     if !path.is_file() {
         return Ok(None);
     }
     let mesh = load_mesh(&path, &LoadOptions::default())?.mesh;
     let mut at = |ior: f32| -> crate::Result<(MetricsRecord, MetricsRecord, Option<f64>)> {
-        let scene = Arc::new(Scene::new(
+        let scene = Scene::new(
             "horse",
             Refractor::new(mesh.clone(), ior)?,
             Environment::Procedural,
-        ));
-        let camera = scene.camera(res, res)?;
-        reference.prepare(&scene)?;
-        cpu.prepare(&scene)?;
-        let mut truth = Frame::default();
-        reference.render(
-            &camera,
-            &MethodParams::defaults(MethodId::Reference),
-            FrameOutputs::ColorAndAovs,
-            &mut truth,
-        )?;
-        let diameter = scene.refractor.diameter();
-        let mut measure = |params: &MethodParams| -> crate::Result<(Frame, MetricsRecord)> {
-            let mut frame = Frame::default();
-            cpu.render(&camera, params, FrameOutputs::ColorAndAovs, &mut frame)?;
-            let record = evaluate(&truth, &frame, &camera, diameter).0;
-            Ok((frame, record))
-        };
-        let (frame, furthest) = measure(&MethodParams::defaults(MethodId::Wyman))?;
+        );
+        let truth = bench.truth(scene, args.res)?;
+        let (frame, furthest) = bench.measure(&truth, &MethodParams::defaults(MethodId::Wyman))?;
         let mut second = MethodParams::defaults(MethodId::Wyman);
         second.set("back", "second", "claims")?;
-        let (_, second) = measure(&second)?;
+        let (_, second) = bench.measure(&truth, &second)?;
         Ok((furthest, second, fallback_share(&frame)))
     };
     let (furthest, second, fallback) = at(1.5)?;
@@ -232,35 +214,14 @@ struct Extra {
     sphere_low_ior: MetricsRecord,
 }
 
-/// W2's index-alone row: `wyman-dv` on the built-in sphere at IOR `ior` against the reference
-/// at `res`².
-fn measure_dv_sphere(
-    res: u32,
-    ior: f32,
-    cpu: &mut CpuRenderer,
-    reference: &mut dyn Renderer,
-) -> crate::Result<MetricsRecord> {
+/// W2's index-alone row: `wyman-dv` on the built-in sphere at IOR `ior`, at `res`² on `bench`.
+fn measure_dv_sphere(bench: &mut Bench, res: u32, ior: f32) -> crate::Result<MetricsRecord> {
     let mut scene = load_scene("sphere")?.scene;
     scene.refractor.set_ior(ior)?;
-    let scene = Arc::new(scene);
-    let camera = scene.camera(res, res)?;
-    reference.prepare(&scene)?;
-    cpu.prepare(&scene)?;
-    let mut truth = Frame::default();
-    reference.render(
-        &camera,
-        &MethodParams::defaults(MethodId::Reference),
-        FrameOutputs::ColorAndAovs,
-        &mut truth,
-    )?;
-    let mut frame = Frame::default();
-    cpu.render(
-        &camera,
-        &MethodParams::defaults(MethodId::WymanDv),
-        FrameOutputs::ColorAndAovs,
-        &mut frame,
-    )?;
-    Ok(evaluate(&truth, &frame, &camera, scene.refractor.diameter()).0)
+    let truth = bench.truth(scene, res)?;
+    Ok(bench
+        .measure(&truth, &MethodParams::defaults(MethodId::WymanDv))?
+        .1)
 }
 
 /// W2's index row: `a` (the lower index's error) at most `ratio` × `b`; false where either is
@@ -397,9 +358,10 @@ fn measure(
             fallback_share: fallback,
         });
     }
-    let sphere_low_ior = measure_dv_sphere(args.res, 1.2, &mut cpu, reference.as_mut())?;
+    let mut bench = Bench::new(args)?;
+    let sphere_low_ior = measure_dv_sphere(&mut bench, args.res, 1.2)?;
     let high_ior = inventory.claim("W8")?.threshold("high_ior")? as f32;
-    let horse = measure_horse(&args.data, args.res, &mut cpu, reference.as_mut(), high_ior)?;
+    let horse = measure_horse(args, &mut bench, high_ior)?;
     let mut notes = notes;
     if horse.is_none() {
         notes.push(format!(
