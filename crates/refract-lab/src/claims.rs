@@ -55,15 +55,42 @@ pub struct ClaimsArgs {
     /// docs/reference.md). The timing claims run on the CPU backend either way.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "cpu"))]
     pub reference_backend: ReferenceBackend,
-    /// The robustness pass's square resolution: every error verdict is measured again there
-    /// (one timing round, no engines), and a row confirmed at one resolution and not at the
-    /// other is published as fragile. 0 skips the pass; otherwise 16 to 2048, and not `--res`.
-    /// Default: 1.5 × `--res`.
+    /// The robustness pass's square resolution: every error verdict is measured again there,
+    /// from a second camera (every eye turned 5° about its target; one timing round, no
+    /// engines), and a row confirmed in one measurement and not in the other is published as
+    /// fragile. 0 skips the pass; otherwise 16 to 2048, and not `--res`. Default: 1.5 × `--res`.
     #[cfg_attr(feature = "clap", arg(long))]
     pub second_res: Option<u32>,
+    /// Degrees this pass turns every scene's camera about its target, around its up vector: 0
+    /// for the measurement, [`SECOND_ORBIT_DEG`] for the robustness pass (its second camera).
+    #[cfg_attr(feature = "clap", arg(skip))]
+    pub orbit_deg: f32,
 }
 
+/// `scene` with its camera's eye turned `degrees` about the target, around the camera's up
+/// vector (unchanged at 0): the distance to the target, the field of view and the planes kept.
+pub(crate) fn orbited(mut scene: Scene, degrees: f32) -> Scene {
+    if degrees != 0.0 {
+        let camera = &mut scene.camera;
+        let turn = glam::Quat::from_axis_angle(
+            camera.up.normalize_or(glam::Vec3::Y),
+            degrees.to_radians(),
+        );
+        camera.eye = camera.target + turn * (camera.eye - camera.target);
+    }
+    scene
+}
+
+/// The robustness pass's second camera: every scene's eye turned this many degrees about its
+/// target, around its up vector.
+pub const SECOND_ORBIT_DEG: f32 = 5.0;
+
 impl ClaimsArgs {
+    /// `scene` as this pass sees it ([`orbited`] by [`Self::orbit_deg`]).
+    pub(crate) fn view(&self, scene: Scene) -> Scene {
+        orbited(scene, self.orbit_deg)
+    }
+
     /// The robustness pass's resolution (`None`: no pass), checked: `--second-res` 0 skips it,
     /// else 16 to 2048 and not `--res`; by default 1.5 × `--res`.
     pub(crate) fn second_resolution(&self) -> crate::Result<Option<u32>> {
@@ -269,20 +296,24 @@ pub fn run(args: &ClaimsArgs, progress: &dyn Progress) -> crate::Result<String> 
             )
         });
     }
-    // The robustness pass (issue 51): every section again at a second resolution, one timing
-    // round, without the engines; its verdicts mark the main pass's rows fragile where they
-    // differ.
+    // The robustness pass (issue 51): every section again at a second resolution from a second
+    // camera, one timing round, without the engines; its verdicts mark the main pass's rows
+    // fragile where they differ.
     let second = args.second_resolution()?;
     let mut ledger = match second {
         Some(res) => {
             let pass = ClaimsArgs {
                 res,
                 timing_rounds: Some(1),
+                orbit_deg: SECOND_ORBIT_DEG,
                 ..args.clone()
             };
             let mut second_ledger = Ledger::default();
             measure(&pass, &inventory, &mut second_ledger, progress, false)?;
-            Ledger::with_second(res, second_ledger)
+            Ledger::with_second(
+                format!("{res}², camera turned {SECOND_ORBIT_DEG}°"),
+                second_ledger,
+            )
         }
         None => Ledger::default(),
     };
@@ -303,6 +334,10 @@ fn measure(
     with_engines: bool,
 ) -> crate::Result<String> {
     let (scenes, notes) = scenes(&args.data)?;
+    let scenes: Vec<Arc<Scene>> = scenes
+        .into_iter()
+        .map(|s| Arc::new(args.view((*s).clone())))
+        .collect();
     let mut measured = Vec::new();
     let mut cpu = CpuRenderer::new();
     let mut reference = args.reference_backend.renderer()?;
@@ -411,6 +446,8 @@ fn measure(
 pub(crate) struct Bench {
     pub cpu: CpuRenderer,
     reference: Box<dyn Renderer>,
+    /// The pass's [`ClaimsArgs::orbit_deg`], applied to every scene it traces.
+    orbit_deg: f32,
 }
 
 /// A scene with its reference frame at one resolution.
@@ -426,6 +463,7 @@ impl Bench {
         Ok(Self {
             cpu: CpuRenderer::new(),
             reference: args.reference_backend.renderer()?,
+            orbit_deg: args.orbit_deg,
         })
     }
 
@@ -434,13 +472,19 @@ impl Bench {
         self.truth_with(Arc::new(scene), res, TraceMode::Transmission)
     }
 
-    /// [`Self::truth`] with the reference in `mode`.
+    /// [`Self::truth`] with the reference in `mode`; the scene as the pass sees it
+    /// ([`ClaimsArgs::view`]).
     pub fn truth_with(
         &mut self,
         scene: Arc<Scene>,
         res: u32,
         mode: TraceMode,
     ) -> crate::Result<Truth> {
+        let scene = if self.orbit_deg == 0.0 {
+            scene
+        } else {
+            Arc::new(orbited((*scene).clone(), self.orbit_deg))
+        };
         let camera = scene.camera(res, res)?;
         self.reference.prepare(&scene)?;
         let mut frame = Frame::default();
@@ -700,10 +744,12 @@ fn document(
         },
         robustness = match args.second_resolution()? {
             Some(second) => format!(
-                "Every section was also measured at {second}² (one timing round, without the \
-                 engines themselves): a row confirmed at one resolution and not confirmed at the \
-                 other is **fragile**, with both measurements; rows whose scene names its \
-                 resolution, the engines' own rows and timing rows are not compared."
+                "Every section was also measured at {second}² from a second camera, every \
+                 scene's eye turned {SECOND_ORBIT_DEG}° about its target around its up vector \
+                 (one timing round, without the engines themselves): a row confirmed in one \
+                 measurement and not confirmed in the other is **fragile**, with both; rows whose \
+                 scene names its resolution, the engines' own rows and timing rows are not \
+                 compared."
             ),
             None => "No robustness pass (`--second-res 0`): no row is marked fragile.".to_owned(),
         },
@@ -779,6 +825,24 @@ pub(crate) fn pct(v: Option<f64>) -> String {
 mod tests {
     use super::*;
 
+    /// The second camera turns the eye about the target around the up vector: the distance
+    /// and the height along up kept, the horizontal direction turned by the angle.
+    #[test]
+    fn the_second_camera_orbits_the_target() {
+        let scene = load_scene("chart").expect("chart").scene;
+        let turned = orbited(scene.clone(), SECOND_ORBIT_DEG);
+        let (a, b) = (scene.camera, turned.camera);
+        assert_eq!((a.target, a.up, a.fov_y), (b.target, b.up, b.fov_y));
+        let up = a.up.normalize();
+        let (ra, rb) = (a.eye - a.target, b.eye - b.target);
+        assert!((ra.length() - rb.length()).abs() < 1e-5);
+        assert!((ra.dot(up) - rb.dot(up)).abs() < 1e-5);
+        let flat = |v: glam::Vec3| v - v.dot(up) * up;
+        let angle = flat(ra).angle_between(flat(rb)).to_degrees();
+        assert!((angle - SECOND_ORBIT_DEG).abs() < 1e-2, "{angle}");
+        assert_eq!(orbited(scene.clone(), 0.0).camera, a);
+    }
+
     /// W6 on numbers made for each case: the cow's 0.075° apart is barely noticeable against
     /// 0.1° and would fail the horse's test; the sphere's identical pair fails the horse's test.
     #[test]
@@ -803,6 +867,7 @@ mod tests {
             timing_rounds: None,
             reference_backend: ReferenceBackend::Cpu,
             second_res: None,
+            orbit_deg: 0.0,
         };
         let verdict = |fps: &[f64], bar| args.timing_verdict(5.0, &at_least(fps, bar));
         assert_eq!(verdict(&[151.0; 5], 122.9), Verdict::Confirmed);

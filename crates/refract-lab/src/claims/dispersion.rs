@@ -135,7 +135,7 @@ pub fn section(
     let mut b12 = inventory.claim("B12")?;
     let tolerance = b12.threshold("tolerance")?;
     let (width, height) = SIZE;
-    let scene = Arc::new(load_scene(SCENE)?.scene);
+    let scene = Arc::new(args.view(load_scene(SCENE)?.scene));
     let camera = scene.camera(width, height)?;
     let mut tracer = args.reference_backend.renderer()?;
     tracer.prepare(&scene)?;

@@ -378,6 +378,7 @@ mod tests {
             timing_rounds: None,
             reference_backend: Default::default(),
             second_res: None,
+            orbit_deg: 0.0,
         };
         let verdict = |ms: &[f64]| args.timing_verdict(5.0, &at_frame_rate(ms, 25.0));
         assert_eq!(verdict(&[30.0, 35.0, 39.9, 38.0, 20.0]), Verdict::Confirmed);

@@ -249,8 +249,8 @@ pub(crate) struct Ledger {
     verdicts: BTreeMap<String, Vec<(String, Verdict)>>,
     /// The section each claim's rows are in.
     sections: BTreeMap<String, String>,
-    /// The robustness pass: its resolution and its rows.
-    second: Option<(u32, MeasuredRows)>,
+    /// The robustness pass: how it measured (resolution, camera) and its rows.
+    second: Option<(String, MeasuredRows)>,
     /// The rows as measured, for a later pass to compare with.
     measured: MeasuredRows,
 }
@@ -287,12 +287,12 @@ impl Ledger {
         }
     }
 
-    /// A ledger whose rows are compared with `second`'s, measured at `resolution`: a row of
-    /// the same claim and scene that is confirmed in one and not confirmed in the other
-    /// becomes [`Verdict::Fragile`], with both measurements.
-    pub fn with_second(resolution: u32, second: Ledger) -> Self {
+    /// A ledger whose rows are compared with `second`'s, measured as `how` says (for example
+    /// "384², camera turned 5°"): a row of the same claim and scene that is confirmed in one
+    /// and not confirmed in the other becomes [`Verdict::Fragile`], with both measurements.
+    pub fn with_second(how: String, second: Ledger) -> Self {
         Self {
-            second: Some((resolution, second.measured)),
+            second: Some((how, second.measured)),
             ..Self::default()
         }
     }
@@ -301,14 +301,14 @@ impl Ledger {
     /// robustness pass's row of the same claim and scene came out the other way (an
     /// inconclusive or missing row there changes nothing).
     fn robust(&self, id: &str, scene: &str, verdict: Verdict, numbers: &str) -> (Verdict, String) {
-        let other = self.second.as_ref().and_then(|(res, rows)| {
+        let other = self.second.as_ref().and_then(|(how, rows)| {
             rows.get(id)?
                 .iter()
                 .find(|(s, _, _)| s == scene)
-                .map(|(_, v, n)| (*res, *v, n))
+                .map(|(_, v, n)| (how, *v, n))
         });
         match other {
-            Some((res, other, other_numbers))
+            Some((how, other, other_numbers))
                 if matches!(
                     (verdict, other),
                     (Verdict::Confirmed, Verdict::NotConfirmed)
@@ -318,7 +318,7 @@ impl Ledger {
                 (
                     Verdict::Fragile,
                     format!(
-                        "{numbers} ({}); at {res}²: {other_numbers} ({})",
+                        "{numbers} ({}); at {how}: {other_numbers} ({})",
                         verdict.word(),
                         other.word()
                     ),
@@ -444,7 +444,7 @@ mod tests {
                 ("torus", Verdict::Inconclusive),
             ])],
         );
-        let mut ledger = Ledger::with_second(384, second);
+        let mut ledger = Ledger::with_second("384²".to_owned(), second);
         let mut md = String::new();
         ledger.rows(
             &mut md,

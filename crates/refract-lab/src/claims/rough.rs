@@ -280,7 +280,7 @@ pub fn section(
     let res = args.res;
     let high = res * FACTOR;
     let high_spp = (SPP / (FACTOR * FACTOR)).max(1);
-    let rough = Arc::new(load_scene(SCENE)?.scene);
+    let rough = Arc::new(args.view(load_scene(SCENE)?.scene));
     let smooth = Arc::new(smooth_twin(&rough)?);
     let rough_far = Arc::new(moved_back(&rough, DISTANCE as f32));
     let smooth_far = Arc::new(moved_back(&smooth, DISTANCE as f32));
