@@ -148,6 +148,24 @@ impl EngineModel {
         }
     }
 
+    /// How many levels of a `size` screen pyramid (from level 0) this model reads at a rough
+    /// `lod` ([`Self::rough_lod`]; 0: none, the one-texel read of smooth glass): Bevy's taps
+    /// read level 0 only; a LOD's reads touch levels `⌊lod⌋` and `⌈lod⌉`
+    /// ([`screen_mips::sample_trilinear`], [`screen_mips::sample_threejs`]), so
+    /// `min(⌈lod⌉ + 1, levels)`. A frame builds the most any of its refractors reads.
+    pub fn rough_levels(&self, lod: f32, size: UVec2) -> u32 {
+        if lod <= 0.0 {
+            return 0;
+        }
+        match self {
+            Self::VolumeThickness {
+                reject_nearer: true,
+                ..
+            } => 1,
+            _ => (-math::floor(-lod) as u32 + 1).min(screen_mips::level_count(size)),
+        }
+    }
+
     /// The blurred screen this model reads for `path` (the pixel at `uv_px`, its front surface
     /// at `p1_ws`) at a rough `lod` (> 0, [`Self::rough_lod`]), and the
     /// share of the pixel it takes (the rest is the environment along the model's fallback):
@@ -710,6 +728,29 @@ impl EngineUniforms {
 
 #[cfg(test)]
 mod tests {
+
+    /// The levels a rough read touches: Bevy's level 0, a LOD's up to `⌈lod⌉`, none when smooth.
+    #[test]
+    fn rough_reads_touch_the_levels_they_build() {
+        let size = UVec2::new(256, 192);
+        let bevy = EngineModel::VolumeThickness {
+            thickness: 1.0,
+            reject_nearer: true,
+        };
+        let three = EngineModel::VolumeThickness {
+            thickness: 1.0,
+            reject_nearer: false,
+        };
+        assert_eq!(bevy.rough_levels(0.6, size), 1);
+        assert_eq!(bevy.rough_levels(0.0, size), 0);
+        assert_eq!(three.rough_levels(2.0, size), 3);
+        assert_eq!(three.rough_levels(2.3, size), 4);
+        assert_eq!(three.rough_levels(0.2, size), 2);
+        assert_eq!(
+            three.rough_levels(40.0, size),
+            screen_mips::level_count(size)
+        );
+    }
 
     /// three.js's model disperses by its three indices, Filament's sphere by its four; the
     /// others not at all.

@@ -6,7 +6,8 @@ use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use refract_core::screen_mips::{ScreenMips, level_block, level_count, level_size};
 
-/// Every level of one frame's screen texture, level after level in one buffer.
+/// The levels of one frame's screen texture a frame reads (from level 0), level after level in
+/// one buffer.
 #[derive(Default)]
 pub struct ScreenPyramid {
     size: UVec2,
@@ -16,12 +17,15 @@ pub struct ScreenPyramid {
 }
 
 impl ScreenPyramid {
-    /// Rebuilds the pyramid of a `size` screen whose texel `t` shows `color(t)`.
-    pub fn build(&mut self, size: UVec2, color: impl Fn(UVec2) -> Vec3 + Sync) {
+    /// Rebuilds the first `levels` levels (at least 1, at most the pyramid's) of a `size`
+    /// screen whose texel `t` shows `color(t)`; a read of a level above them is out of range
+    /// ([`refract_core::engine::EngineModel::rough_levels`] says how many a frame reads).
+    pub fn build(&mut self, size: UVec2, levels: u32, color: impl Fn(UVec2) -> Vec3 + Sync) {
         self.size = size;
         self.offsets.clear();
+        let levels = levels.clamp(1, level_count(size));
         let mut total = 0;
-        for level in 0..level_count(size) {
+        for level in 0..levels {
             self.offsets.push(total);
             let s = level_size(size, level);
             total += (s.x * s.y) as usize;
@@ -37,7 +41,7 @@ impl ScreenPyramid {
             });
         let base = &*base;
         let mut rest = above;
-        for level in 1..level_count(size) {
+        for level in 1..levels {
             let s = level_size(size, level);
             let (this, next) = rest.split_at_mut((s.x * s.y) as usize);
             this.par_chunks_mut(s.x as usize)
@@ -82,7 +86,7 @@ mod tests {
         let size = UVec2::new(13, 6);
         let color = |t: UVec2| Vec3::new(t.x as f32, t.y as f32, (t.x * t.y) as f32);
         let mut pyramid = ScreenPyramid::default();
-        pyramid.build(size, color);
+        pyramid.build(size, level_count(size), color);
         for level in 0..level_count(size) {
             let s = level_size(size, level);
             for y in 0..s.y {

@@ -163,16 +163,23 @@ impl CpuFamily for EnginePasses {
         });
         // The blurred screen exists where a refractor is rough: the objects, or the environment
         // along each texel's eye ray (the engines draw the sky into the texture).
-        let rough = self.refractors.iter().any(|r| r.lod > 0.0);
+        let size = glam::UVec2::new(camera.width(), camera.height());
+        let levels = self
+            .refractors
+            .iter()
+            .map(|r| r.model.rough_levels(r.lod, size))
+            .max()
+            .unwrap_or(0);
+        let rough = levels > 0;
         if rough {
-            let size = glam::UVec2::new(camera.width(), camera.height());
-            self.mips
-                .build(size, |texel| match screen.and_then(|s| s.texel(texel)) {
+            self.mips.build(size, levels, |texel| {
+                match screen.and_then(|s| s.texel(texel)) {
                     Some(t) => t.color,
                     None => scene
                         .environment
                         .radiance(camera.pixel_ray(Camera::pixel_center(texel.x, texel.y)).dir),
-                });
+                }
+            });
         }
         self.fronts
             .resize_with(scene.refractor_count(), SurfaceBuffer::default);

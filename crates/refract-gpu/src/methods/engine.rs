@@ -121,15 +121,26 @@ impl EnginePipelines {
 /// Whether a frame of `params` on `scene` reads the blurred screen: a refractor whose model
 /// blurs at its roughness ([`refract_core::engine::EngineModel::rough_lod`]).
 fn needs_mips(cx: &GpuFrameCx<'_>, params: &EngineParams) -> bool {
-    refractor_table(cx.scene, params, cx.camera)
-        .iter()
-        .any(|entry| entry[3] > 0.0)
+    mip_levels(cx, params) > 0
 }
 
-/// The screen pyramid's texels above level 0 at `size`.
-fn texels_above_base((width, height): (u32, u32)) -> u64 {
+/// How many levels of the screen pyramid a frame of `params` reads: the most any refractor's
+/// model reads at its LOD ([`refract_core::engine::EngineModel::rough_levels`]; 0: none).
+fn mip_levels(cx: &GpuFrameCx<'_>, params: &EngineParams) -> u32 {
+    let size = glam::UVec2::new(cx.camera.width(), cx.camera.height());
+    refractor_table(cx.scene, params, cx.camera)
+        .iter()
+        .zip(cx.scene.refractors())
+        .map(|(entry, refractor)| params.model(refractor).rough_levels(entry[3], size))
+        .max()
+        .unwrap_or(0)
+}
+
+/// The screen pyramid's texels in levels 1 to `levels − 1` at `size` (all levels above 0 when
+/// `levels` is the pyramid's count).
+fn texels_above_base((width, height): (u32, u32), levels: u32) -> u64 {
     let size = glam::UVec2::new(width, height);
-    (1..level_count(size))
+    (1..levels.min(level_count(size)))
         .map(|level| {
             let s = level_size(size, level);
             u64::from(s.x) * u64::from(s.y)
@@ -172,7 +183,7 @@ impl GpuFamily for EnginePipelines {
         cx.context
             .queue
             .write_buffer(&targets.refractor_table, 0, bytemuck::cast_slice(&table));
-        targets.encode(cx, self, &uniforms, encoder);
+        targets.encode(cx, self, &uniforms, mip_levels(cx, params), encoder);
         Ok(())
     }
 
@@ -240,7 +251,7 @@ impl EngineTargets {
         let context = cx.context;
         check_limits(context, width, height)?;
         let mip_texels = if mips {
-            u64::from(width) * u64::from(height) + texels_above_base((width, height))
+            u64::from(width) * u64::from(height) + texels_above_base((width, height), u32::MAX)
         } else {
             1
         };
@@ -306,11 +317,15 @@ impl EngineTargets {
     }
 
     /// Encodes the passes of one frame and the copies of its outputs.
+    /// Encodes a frame: the refractor's and the screen's passes, the `mip_levels` levels of
+    /// the screen pyramid a rough frame reads (level 0 and the ones above it; the buffer holds
+    /// them all), then the kernel.
     fn encode(
         &self,
         cx: &GpuFrameCx<'_>,
         pipelines: &EnginePipelines,
         engine: &EngineUniforms,
+        mip_levels: u32,
         encoder: &mut wgpu::CommandEncoder,
     ) {
         let GpuFrameCx {
@@ -363,7 +378,8 @@ impl EngineTargets {
             pass.set_pipeline(&pipelines.mip_base);
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
             // `screen_mip_levels` numbers its invocations x + 65535 · 64 · y.
-            let groups = texels_above_base(self.size).div_ceil(64);
+            // The levels are laid out in order: the first invocations make the lower ones.
+            let groups = texels_above_base(self.size, mip_levels).div_ceil(64);
             if groups > 0 {
                 pass.set_pipeline(&pipelines.mip_levels);
                 let x = groups.min(65_535) as u32;
