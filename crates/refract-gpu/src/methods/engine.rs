@@ -121,14 +121,20 @@ impl EnginePipelines {
 /// Whether a frame of `params` on `scene` reads the blurred screen: a refractor whose model
 /// blurs at its roughness ([`refract_core::engine::EngineModel::rough_lod`]).
 fn needs_mips(cx: &GpuFrameCx<'_>, params: &EngineParams) -> bool {
-    mip_levels(cx, params) > 0
+    let table = refractor_table(cx.scene, params, cx.camera);
+    mip_levels(cx, params, &table) > 0
 }
 
 /// How many levels of the screen pyramid a frame of `params` reads: the most any refractor's
-/// model reads at its LOD ([`refract_core::engine::EngineModel::rough_levels`]; 0: none).
-fn mip_levels(cx: &GpuFrameCx<'_>, params: &EngineParams) -> u32 {
+/// model reads at its LOD (`table`'s, [`refractor_table`];
+/// [`refract_core::engine::EngineModel::rough_levels`]; 0: none).
+fn mip_levels(
+    cx: &GpuFrameCx<'_>,
+    params: &EngineParams,
+    table: &[[f32; 4]; MAX_REFRACTORS],
+) -> u32 {
     let size = glam::UVec2::new(cx.camera.width(), cx.camera.height());
-    refractor_table(cx.scene, params, cx.camera)
+    table
         .iter()
         .zip(cx.scene.refractors())
         .map(|(entry, refractor)| params.model(refractor).rough_levels(entry[3], size))
@@ -183,7 +189,7 @@ impl GpuFamily for EnginePipelines {
         cx.context
             .queue
             .write_buffer(&targets.refractor_table, 0, bytemuck::cast_slice(&table));
-        targets.encode(cx, self, &uniforms, mip_levels(cx, params), encoder);
+        targets.encode(cx, self, &uniforms, mip_levels(cx, params, &table), encoder);
         Ok(())
     }
 

@@ -117,7 +117,8 @@ enum Kind {
     Reference,
     /// A re-implementation on the CPU backend.
     Method,
-    /// An engine rendering the exported scene (the rows B8 and B9 judge).
+    /// An engine rendering the exported scene (B8 and B9 judge these rows; B13 these and the
+    /// re-implementations').
     Engine,
 }
 
