@@ -445,15 +445,12 @@ pub fn evaluate_nearby(
     if let Some(converged) = frame.flag(Aov::Converged) {
         record.converged_share = mean(covered.iter().map(|&i| f64::from(u8::from(converged[i]))));
     }
-    if let Some((k, spacing)) = seeds {
-        let sizes: Vec<Option<f32>> = (0..n)
-            .filter(|&i| Layers::flag(truth.covered, i))
-            .map(|i| {
-                let (p2, t2) = (Layers::vector(ours.p2, i), Layers::vector(ours.t2, i));
-                (!p2.is_nan() && !t2.is_nan() && t2 != Vec3::ZERO)
-                    .then(|| guaranteed_feature_px(ng_camera, p2, t2, k, spacing))
-                    .flatten()
-            })
+    if let Some(seeds) = seeds {
+        let sizes: Vec<Option<f32>> = pixel_feature_sizes(reference, frame, ng_camera, seeds)
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| Layers::flag(truth.covered, i))
+            .map(|(_, size)| size)
             .collect();
         let share = |limit: f32| {
             mean(
@@ -465,6 +462,56 @@ pub fn evaluate_nearby(
         record.feature_guarantee_3px_share = share(3.0);
         record.feature_guarantee_10px_share = share(10.0);
     }
+}
+
+/// Per pixel, the largest feature size in NG-texture pixels (`ng_camera`) that the seeds
+/// `(K, spacing)` of `frame`'s lookup guarantee to find (Wyman 2005b §4.3, Fig. 9:
+/// [`guaranteed_feature_px`] along the method's exit ray `P2 + t T2`); `None` where `reference`
+/// does not see the refractor or the method has no exit ray there.
+fn pixel_feature_sizes(
+    reference: &Frame,
+    frame: &Frame,
+    ng_camera: &Camera,
+    (k, spacing): (u32, SeedSpacing),
+) -> Vec<Option<f32>> {
+    let (truth, ours) = (Layers::of(reference), Layers::of(frame));
+    (0..reference.pixel_count())
+        .map(|i| {
+            let (p2, t2) = (Layers::vector(ours.p2, i), Layers::vector(ours.t2, i));
+            (Layers::flag(truth.covered, i) && !p2.is_nan() && !t2.is_nan() && t2 != Vec3::ZERO)
+                .then(|| guaranteed_feature_px(ng_camera, p2, t2, k, spacing))
+                .flatten()
+        })
+        .collect()
+}
+
+/// [`pixel_feature_sizes`] of a seeded lookup method (`iterative-seeded`), with the NG camera
+/// its `guard` implies and its `seeds` and `spacing`; `None` for a method without seeds.
+pub fn feature_sizes_px(
+    reference: &Frame,
+    frame: &Frame,
+    camera: &Camera,
+    method: &MethodParams,
+) -> Option<Vec<Option<f32>>> {
+    let (ng_camera, seeds) = lookup_setup(camera, method)?;
+    Some(pixel_feature_sizes(reference, frame, &ng_camera, seeds?))
+}
+
+/// A nearby-geometry lookup's NG camera (the eye's camera widened by its `guard` band) and its
+/// seeds `(K, spacing)` (`None` without a `seeds` parameter), from its parameters.
+fn lookup_setup(
+    camera: &Camera,
+    method: &MethodParams,
+) -> Option<(Camera, Option<(u32, SeedSpacing)>)> {
+    let integer = |name| method.get(name).and_then(|v| v.parse::<u32>().ok());
+    let (desc, _) = guard_band_camera(camera.desc(), integer("guard").unwrap_or(0));
+    // The NG camera differs from a valid camera only by its field of view and size.
+    let ng_camera = Camera::new(desc).ok()?;
+    let spacing = method
+        .get("spacing")
+        .and_then(|name| refract_scene::registry::seed_spacing(&name))
+        .unwrap_or(SeedSpacing::Screen);
+    Some((ng_camera, integer("seeds").map(|k| (k, spacing))))
 }
 
 /// Where the ray `origin + t dir` (unit `dir`, `t > 0`) first meets an opaque object of `scene`.
@@ -493,18 +540,10 @@ pub fn evaluate_method(
 ) -> (MetricsRecord, ErrorMaps) {
     let (mut record, maps) = evaluate(reference, frame, camera, scene.refractor.diameter());
     let writes = |aov| method.id().info().aovs.contains(&aov);
-    let integer = |name| method.get(name).and_then(|v| v.parse::<u32>().ok());
-    if writes(Aov::NgTexel) {
-        let (desc, _) = guard_band_camera(camera.desc(), integer("guard").unwrap_or(0));
-        // The NG camera differs from a valid camera only by its field of view and size.
-        if let Ok(ng_camera) = Camera::new(desc) {
-            let spacing = method
-                .get("spacing")
-                .and_then(|name| refract_scene::registry::seed_spacing(&name))
-                .unwrap_or(SeedSpacing::Screen);
-            let seeds = integer("seeds").map(|k| (k, spacing));
-            evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
-        }
+    if writes(Aov::NgTexel)
+        && let Some((ng_camera, seeds)) = lookup_setup(camera, method)
+    {
+        evaluate_nearby(reference, frame, scene, &ng_camera, seeds, &mut record);
     }
     if let (true, Some(covered)) = (writes(Aov::LinearSteps), frame.flag(Aov::Covered)) {
         let paths: Vec<usize> = (0..frame.pixel_count()).filter(|&i| covered[i]).collect();

@@ -480,6 +480,20 @@ impl Bench {
         res: u32,
         mode: TraceMode,
     ) -> crate::Result<Truth> {
+        let settings = refract_scene::TraceSettings {
+            mode,
+            ..refract_scene::TraceSettings::default()
+        };
+        self.truth_traced(scene, res, settings)
+    }
+
+    /// [`Self::truth`] with the reference's `settings`; the scene as the pass sees it.
+    pub fn truth_traced(
+        &mut self,
+        scene: Arc<Scene>,
+        res: u32,
+        settings: refract_scene::TraceSettings,
+    ) -> crate::Result<Truth> {
         let scene = if self.orbit_deg == 0.0 {
             scene
         } else {
@@ -488,10 +502,6 @@ impl Bench {
         let camera = scene.camera(res, res)?;
         self.reference.prepare(&scene)?;
         let mut frame = Frame::default();
-        let settings = refract_scene::TraceSettings {
-            mode,
-            ..refract_scene::TraceSettings::default()
-        };
         self.reference.render(
             &camera,
             &MethodParams::Reference(settings),
@@ -529,14 +539,23 @@ impl Bench {
             FrameOutputs::ColorAndAovs,
             &mut frame,
         )?;
-        let (record, maps) = refract_eval::metrics::evaluate_method(
+        let (record, maps) = Self::evaluate(truth, &frame, params);
+        Ok((frame, record, maps))
+    }
+
+    /// The metrics of `frame`, rendered with `params`, against `truth`.
+    pub fn evaluate(
+        truth: &Truth,
+        frame: &Frame,
+        params: &MethodParams,
+    ) -> (MetricsRecord, refract_eval::metrics::ErrorMaps) {
+        refract_eval::metrics::evaluate_method(
             &truth.frame,
-            &frame,
+            frame,
             &truth.camera,
             &truth.scene,
             params,
-        );
-        Ok((frame, record, maps))
+        )
     }
 }
 

@@ -27,7 +27,7 @@ mod distance_map;
 mod engine;
 mod image_space;
 mod layers;
-mod nearby;
+pub(crate) mod nearby;
 mod pvrr;
 mod reference;
 

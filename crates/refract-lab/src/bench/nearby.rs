@@ -13,7 +13,7 @@ use crate::progress::{Note, Progress};
 
 /// Wyman 2005b Table 1 (GeForce 6800, "using our iterative approach"): row, our scene, the
 /// paper's fps at 1024² and at 512².
-const NEARBY_PAPER: [(&str, &str, f64, f64); 4] = [
+pub(crate) const NEARBY_PAPER: [(&str, &str, f64, f64); 4] = [
     ("Sphere w/1 plane", "sphere-plane", 61.0, 212.8),
     ("Sphere & Dragon", "sphere-igea", 16.9, 21.3),
     ("Dragon w/2 planes", "igea-planes", 8.5, 17.8),
@@ -24,6 +24,19 @@ const NEARBY_PAPER: [(&str, &str, f64, f64); 4] = [
 const SPHERE_PLANE: &str = "[camera]\neye = [0.0, 0.9, 4.2]\ntarget = [0.0, -0.15, 0.0]\nnear = 0.05\nfar = 12.0\n\n\
      [refractor]\nmesh = \"builtin:sphere\"\nior = 1.5\nscale = 0.8\n\n\
      [[objects]]\nmesh = \"builtin:plane\"\ntexture = \"wood\"\nscale = 6.0\ntranslate = [0.0, -0.8, 0.6]\n";
+
+/// The scene of a row of [`NEARBY_PAPER`] (`None`, noted, where its meshes are missing).
+pub(crate) fn load_row(
+    name: &str,
+    data: &std::path::Path,
+    progress: &dyn Progress,
+) -> crate::Result<Option<refract_scene::Scene>> {
+    if name == "sphere-plane" {
+        data_scenes::load_text(name, SPHERE_PLANE, data, progress)
+    } else {
+        data_scenes::load(name, data, progress)
+    }
+}
 
 /// Runs Wyman 2005b Table 1.
 pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<TableOutput> {
@@ -39,12 +52,9 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
     let mut records = Vec::new();
     let mut frame = Frame::default();
     for &(_, name, _, _) in rows {
-        let loaded = if name == "sphere-plane" {
-            data_scenes::load_text(name, SPHERE_PLANE, &args.data, progress)?
-        } else {
-            data_scenes::load(name, &args.data, progress)?
+        let Some(scene) = load_row(name, &args.data, progress)? else {
+            continue;
         };
-        let Some(scene) = loaded else { continue };
         let scene = Arc::new(scene);
         let triangles = triangles(&scene);
         for renderer in &mut renderers {

@@ -44,6 +44,19 @@ fn dm(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
     Ok(params)
 }
 
+/// U8: the FLIP against the reference at `own` (an index into `flips`, one per traced depth) is
+/// below the FLIP against every other depth's reference (all measured).
+fn closest_at_own_depth(flips: &[Option<f64>], own: usize) -> bool {
+    let Some(Some(at_own)) = flips.get(own) else {
+        return false;
+    };
+    flips
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| *k != own)
+        .all(|(_, f)| f.is_some_and(|f| *at_own < f))
+}
+
 /// The room scenes: `mirror-room` (built in) and `teapot-box` with the shared data.
 fn rooms(
     args: &ClaimsArgs,
@@ -89,8 +102,39 @@ pub fn section(
     let (fps, u2_stated) = (u2.threshold("fps")?, u2.threshold("repeats")?);
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
+    let mut u8 = inventory.claim("U8")?;
     for scene in rooms(args, &mut notes, progress)? {
-        let t = bench.truth_with(Arc::new(scene), args.res, TraceMode::Transmission)?;
+        let scene = Arc::new(scene);
+        // U8: each depth's frame against the reference traced to each depth of 1 to 4.
+        let mut traced = Vec::new();
+        for depth in 1..=4u32 {
+            let settings = refract_scene::TraceSettings {
+                max_depth: depth,
+                ..refract_scene::TraceSettings::default()
+            };
+            traced.push(bench.truth_traced(Arc::clone(&scene), args.res, settings)?);
+        }
+        for depth in 1..=3usize {
+            let params = dm(&[("depth", &depth.to_string())])?;
+            let frame = bench.measure(&traced[depth - 1], &params)?.0;
+            let flips: Vec<Option<f64>> = traced
+                .iter()
+                .map(|t| Bench::evaluate(t, &frame, &params).0.flip_mean)
+                .collect();
+            u8.push((
+                format!("{}, depth {depth}", scene.name),
+                closest_at_own_depth(&flips, depth - 1),
+                format!(
+                    "FLIP against the reference traced to depth 1 / 2 / 3 / 4: {}",
+                    flips
+                        .iter()
+                        .map(|f| value(*f, 4))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                ),
+            ));
+        }
+        let t = bench.truth_with(scene, args.res, TraceMode::Transmission)?;
         let name = t.scene.name.clone();
         let mut flips = Vec::new();
         for depth in 1..=8u32 {
@@ -268,6 +312,7 @@ pub fn section(
         ),
     ));
     claims.push(u13);
+    claims.push(u8);
     claims.extend([u2, u7, u9]);
 
     // The two families on the same frames: glass in a pure environment.
@@ -366,6 +411,18 @@ pub fn section(
 mod tests {
     use super::*;
     use crate::claims::inventory::Verdict;
+
+    /// U8 fails where the frame is as close to another depth's reference (or closer), or a
+    /// FLIP is missing, and holds where its own depth is strictly closest.
+    #[test]
+    fn u8_verdict_can_fail() {
+        let f = |v: &[f64]| v.iter().map(|&x| Some(x)).collect::<Vec<_>>();
+        assert!(closest_at_own_depth(&f(&[0.05, 0.2, 0.25, 0.3]), 0));
+        assert!(!closest_at_own_depth(&f(&[0.05, 0.04, 0.25, 0.3]), 0));
+        assert!(!closest_at_own_depth(&f(&[0.2, 0.1, 0.1, 0.3]), 1));
+        assert!(!closest_at_own_depth(&[Some(0.05), None, Some(0.3)], 0));
+        assert!(!closest_at_own_depth(&[None, Some(0.2)], 0));
+    }
 
     /// U2 on rounds of known times: all under 40 ms confirm 25 fps, all over refute it, and
     /// rounds on both sides (or too few) are inconclusive.
