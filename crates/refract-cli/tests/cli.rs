@@ -1003,6 +1003,13 @@ fn claims_are_measured_and_written() {
         (rows("W"), rows("N"), rows("U"), rows("K"), rows("B")),
         (13, 16, 14, 21, 13)
     );
+    // Outside a git checkout the order of statement and measurement is not known, and the
+    // table says so rather than claiming either (issue 51).
+    assert!(
+        coverage.lines().any(|l| l.starts_with("| W1 |")
+            && l.ends_with("| not known: no git history of the checkout |")),
+        "{coverage}"
+    );
     // One timing round of the five U12 states: inconclusive, whatever the speed-up.
     assert!(
         md.lines()

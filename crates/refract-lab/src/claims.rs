@@ -25,6 +25,7 @@ use refract_scene::{
 mod dispersion;
 mod distance_map;
 mod engine;
+mod history;
 mod inventory;
 mod layers;
 mod nearby;
@@ -438,7 +439,9 @@ fn measure(
         ledger,
         engines.as_ref(),
     )?);
-    md.push_str(&ledger.coverage(inventory));
+    let history = history::repository(Path::new("."))
+        .and_then(|root| history::History::read(&root, inventory));
+    md.push_str(&ledger.coverage(inventory, history.as_ref()));
     Ok(md)
 }
 
@@ -745,10 +748,10 @@ fn document(
         md,
         "# Paper claims and our measured verdicts\n\n\
          Written by `refract claims` (regenerate with `cargo run --release -- claims`; do not edit by \
-         hand). Each claim's test and thresholds were stated before measuring, as data \
-         (`crates/refract-lab/claims.toml`, ids of `../shared/paper-claims.md`); the coverage table \
-         at the end has a row for every claim of the four papers, and the revisions of a test \
-         after it was measured. Timing verdicts come from alternating rounds and are \
+         hand). Each claim's test and thresholds are data, the paper's words and section beside \
+         them (`crates/refract-lab/claims.toml`); the coverage table at the end has a row for \
+         every claim of the four papers, says from git whether its test was stated before its \
+         first measurement or with it, and lists the revisions of a test after it was measured. Timing verdicts come from alternating rounds and are \
          **inconclusive** when the rounds fall on both sides of the bar. {robustness} Errors \
          against the exact \
          reference (`transmission`, 1 spp, Mitsuba's interface rule{tracer}) \

@@ -10,6 +10,8 @@ use std::fmt::Write as _;
 
 use serde::Deserialize;
 
+use super::history::{History, Order};
+
 /// The claims file, compiled in.
 const CLAIMS_TOML: &str = include_str!("../../claims.toml");
 
@@ -121,21 +123,29 @@ impl Inventory {
             self.claims.iter().find(|c| c.id == id).ok_or_else(|| {
                 crate::LabError::invalid(format_args!("claims.toml: no claim {id}"))
             })?;
-        let test = spec.test.as_deref().ok_or_else(|| {
+        let text = row_text(spec).ok_or_else(|| {
             crate::LabError::invalid(format_args!("claims.toml: claim {id} is not measured"))
         })?;
         Ok(Claim {
             id,
-            text: format!(
-                "**{id}** {} ({}): {}",
-                spec.words,
-                spec.section,
-                fill(test, &spec.thresholds)
-            ),
+            text,
             thresholds: spec.thresholds.clone(),
             rows: Vec::new(),
         })
     }
+}
+
+/// The text a tested claim's rows open with: its id, the paper's words, the section and the
+/// test with its thresholds filled in; `None` for a claim without a test.
+pub(crate) fn row_text(spec: &ClaimSpec) -> Option<String> {
+    let test = spec.test.as_deref()?;
+    Some(format!(
+        "**{}** {} ({}): {}",
+        spec.id,
+        spec.words,
+        spec.section,
+        fill(test, &spec.thresholds)
+    ))
 }
 
 /// The `{name}`s of a test.
@@ -330,14 +340,18 @@ impl Ledger {
 
     /// The coverage table: one row per claim of `inventory`, its verdicts over the scenes, or
     /// why it is not measured here; then the revisions.
-    pub fn coverage(&self, inventory: &Inventory) -> String {
+    pub fn coverage(&self, inventory: &Inventory, history: Option<&History>) -> String {
         let mut md = String::from(
             "\n## Coverage: every claim of the inventory\n\n\
-             One row per claim of `../shared/paper-claims.md` (W = Wyman 2005a, N = Wyman 2005b, \
+             One row per claim of the four papers' inventory (W = Wyman 2005a, N = Wyman 2005b, \
              U = Umenhoffer et al. 2007, K = Kakimoto et al. 2007) and per claim beyond the papers \
              (B). The tests and thresholds are data, stated before measuring \
              (`crates/refract-lab/claims.toml`); a test changed after it was measured is listed \
-             under Revisions.\n\n| id | claim (section) | verdict | where |\n|---|---|---|---|\n",
+             under Revisions. *Stated* is read from git: the commit that gave the test its \
+             present wording (`git blame` of its lines in `claims.toml`) against the first \
+             commit of `docs/claims.md` with a row of that wording; a test counts as stated \
+             before measuring only where the first is a strict ancestor of the second.\n\n\
+             | id | claim (section) | verdict | where | stated |\n|---|---|---|---|---|\n",
         );
         // Counted apart: the papers' inventory (index 0) and the project's own claims (1).
         let (mut measured, mut confirmed, mut total) = ([0; 2], [0; 2], [0; 2]);
@@ -359,9 +373,17 @@ impl Ledger {
                     summary
                 }
             };
+            let stated = match (&c.test, history) {
+                (None, _) => "–".to_owned(),
+                (Some(_), None) => "not known: no git history of the checkout".to_owned(),
+                (Some(_), Some(h)) => h
+                    .orders
+                    .get(&c.id)
+                    .map_or_else(|| "not known".to_owned(), Order::markdown),
+            };
             let _ = writeln!(
                 md,
-                "| {} | {} ({}) | {verdict} | {} |",
+                "| {} | {} ({}) | {verdict} | {} | {stated} |",
                 c.id,
                 c.words,
                 c.section,
@@ -374,15 +396,37 @@ impl Ledger {
              project's own claims (B): {} of {} measured, {} confirmed on every scene.",
             measured[0], total[0], confirmed[0], measured[1], total[1], confirmed[1]
         );
+        if let Some(h) = history {
+            let before = h
+                .orders
+                .values()
+                .filter(|o| matches!(o, Order::Before { .. }))
+                .count();
+            let _ = writeln!(
+                md,
+                "\nStated before measuring, by git: {before} of the {} tested claims; the others \
+                 were stated with their measurement.",
+                h.orders.len()
+            );
+            for mismatch in &h.date_mismatches {
+                let _ = writeln!(
+                    md,
+                    "\n- a date of claims.toml that git contradicts: {mismatch}"
+                );
+            }
+        }
         if !inventory.revisions.is_empty() {
             md.push_str(
                 "\n## Revisions\n\nTests changed after they were measured, with the reason.\n\n\
-                 | date | id | before | after | reason |\n|---|---|---|---|---|\n",
+                 | date | id | before | after | reason | commit |\n|---|---|---|---|---|---|\n",
             );
-            for r in &inventory.revisions {
+            for (k, r) in inventory.revisions.iter().enumerate() {
+                let commit = history
+                    .and_then(|h| h.revisions.get(k).cloned().flatten())
+                    .map_or_else(|| "–".to_owned(), |c| format!("`{}`", c.hash));
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} | {} | {} |",
+                    "| {} | {} | {} | {} | {} | {commit} |",
                     r.date, r.id, r.before, r.after, r.reason
                 );
             }
@@ -472,7 +516,7 @@ mod tests {
         assert!(line("cow").ends_with("| **confirmed** |"), "{md}");
         assert!(line("torus").ends_with("| **not confirmed** |"), "{md}");
         assert!(line("horse").ends_with("| **confirmed** |"), "{md}");
-        let coverage = ledger.coverage(&inventory);
+        let coverage = ledger.coverage(&inventory, None);
         let w1 = coverage
             .lines()
             .find(|l| l.starts_with("| W1 |"))
@@ -531,7 +575,7 @@ mod tests {
         w1.push(("cow".into(), false, "T2 3° vs 2°".into()));
         let mut md = String::new();
         ledger.rows(&mut md, "Wyman 2005a", &[w1]);
-        let coverage = ledger.coverage(&inventory);
+        let coverage = ledger.coverage(&inventory, None);
         assert!(coverage.contains("| W1 |") && coverage.contains("**not confirmed** on cow"));
         assert!(coverage.contains("| W3 |") && coverage.contains("**no row**"));
         assert!(coverage.contains("not measured here: the Buddha mesh"));
