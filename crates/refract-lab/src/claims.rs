@@ -151,6 +151,21 @@ pub(crate) fn value(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
 }
 
+/// A measured value at or above `bar` (a value not measured fails).
+pub(crate) fn at_or_above(v: Option<f64>, bar: f64) -> bool {
+    v.is_some_and(|v| v >= bar)
+}
+
+/// A measured value at or below `bar`.
+pub(crate) fn at_or_below(v: Option<f64>, bar: f64) -> bool {
+    v.is_some_and(|v| v <= bar)
+}
+
+/// A measured value below `bar`.
+pub(crate) fn below(v: Option<f64>, bar: f64) -> bool {
+    v.is_some_and(|v| v < bar)
+}
+
 /// `a < b` where both exist.
 fn less(a: Option<f64>, b: Option<f64>) -> bool {
     matches!((a, b), (Some(a), Some(b)) if a < b)
@@ -610,7 +625,7 @@ fn document(
         let bar = w8.threshold("share")?;
         w8.push((
             m.scene.clone(),
-            m.fallback_share.is_some_and(|s| s < bar),
+            below(m.fallback_share, bar),
             format!(
                 "silhouette fallback on {} of `wyman`'s refractor pixels (IOR {})",
                 pct(m.fallback_share),
@@ -644,7 +659,7 @@ fn document(
         ));
         w8.push((
             "horse, IOR 1.5".into(),
-            h.fallback.is_some_and(|s| s < w8_bar),
+            below(h.fallback, w8_bar),
             format!(
                 "silhouette fallback on {} of `wyman`'s refractor pixels",
                 pct(h.fallback)
@@ -906,6 +921,11 @@ mod tests {
         assert!(at_most(Some(1.0), 0.5, Some(2.0)));
         assert!(!at_most(Some(1.1), 0.5, Some(2.0)));
         assert!(!at_most(None, 0.5, Some(2.0)));
+        assert!(at_or_above(Some(0.99), 0.99) && !at_or_above(Some(0.98), 0.99));
+        assert!(!at_or_above(None, 0.0));
+        assert!(at_or_below(Some(2.0), 2.0) && !at_or_below(Some(2.1), 2.0));
+        assert!(!at_or_below(None, 2.0));
+        assert!(below(Some(0.04), 0.05) && !below(Some(0.05), 0.05) && !below(None, 1.0));
         assert!(less(Some(1.0), Some(1.2)));
         assert!(!less(Some(1.2), Some(1.2)));
         assert!(!less(Some(1.0), None));

@@ -263,29 +263,31 @@ struct MapScene<'a> {
     lambda_nm: Option<f32>,
 }
 
-impl DistanceLayers for MapScene<'_> {
+/// The layers' distances, read at the nearest texel (the search of [`refract_core::distance_map::hit`]
+/// runs on the map alone).
+impl DistanceLayers for DistanceMap {
     fn layer_count(&self) -> usize {
-        self.map.layers.len()
+        self.layers.len()
     }
 
     fn face_size(&self) -> u32 {
-        self.map.size
+        self.size
     }
 
     #[inline]
     fn distance(&self, layer: usize, dir: Vec3) -> f32 {
-        let Some((face, texel)) = cube_texel(dir, self.map.size) else {
+        let Some((face, texel)) = cube_texel(dir, self.size) else {
             return -1.0;
         };
-        self.map.layers[layer].distance[cube_texel_index(face, texel, self.map.size) as usize]
+        self.layers[layer].distance[cube_texel_index(face, texel, self.size) as usize]
     }
 
     /// Prefetches the eight texels' cache lines: a ray's samples are texels apart in layers of
     /// megabytes.
     #[inline]
     fn prefetch_x8(&self, layer: usize, dirs: &Vec3x8) {
-        let distance = &self.map.layers[layer].distance;
-        for index in cube_texel_indices_x8(*dirs, self.map.size)
+        let distance = &self.layers[layer].distance;
+        for index in cube_texel_indices_x8(*dirs, self.size)
             .into_iter()
             .flatten()
         {
@@ -298,12 +300,9 @@ impl DistanceLayers for MapScene<'_> {
     /// The eight texels located on lanes ([`cube_texel_indices_x8`]), then read.
     #[inline]
     fn distance_x8(&self, layer: usize, dirs: &Vec3x8) -> [f32; LANES] {
-        let distance = &self.map.layers[layer].distance;
+        let distance = &self.layers[layer].distance;
         let mut out = [-1.0; LANES];
-        for (o, index) in out
-            .iter_mut()
-            .zip(cube_texel_indices_x8(*dirs, self.map.size))
-        {
+        for (o, index) in out.iter_mut().zip(cube_texel_indices_x8(*dirs, self.size)) {
             if let Some(index) = index {
                 *o = distance[index as usize];
             }
@@ -312,11 +311,48 @@ impl DistanceLayers for MapScene<'_> {
     }
 
     fn range(&self, layer: usize) -> Option<(f32, f32)> {
-        self.map.layers[layer].range
+        self.layers[layer].range
     }
 
     fn two_sided(&self, layer: usize) -> bool {
         layer < 2
+    }
+}
+
+impl DistanceLayers for MapScene<'_> {
+    #[inline]
+    fn layer_count(&self) -> usize {
+        self.map.layer_count()
+    }
+
+    #[inline]
+    fn face_size(&self) -> u32 {
+        self.map.face_size()
+    }
+
+    #[inline]
+    fn distance(&self, layer: usize, dir: Vec3) -> f32 {
+        self.map.distance(layer, dir)
+    }
+
+    #[inline]
+    fn prefetch_x8(&self, layer: usize, dirs: &Vec3x8) {
+        self.map.prefetch_x8(layer, dirs);
+    }
+
+    #[inline]
+    fn distance_x8(&self, layer: usize, dirs: &Vec3x8) -> [f32; LANES] {
+        self.map.distance_x8(layer, dirs)
+    }
+
+    #[inline]
+    fn range(&self, layer: usize) -> Option<(f32, f32)> {
+        self.map.range(layer)
+    }
+
+    #[inline]
+    fn two_sided(&self, layer: usize) -> bool {
+        self.map.two_sided(layer)
     }
 }
 

@@ -7,11 +7,13 @@
 use std::fmt::Write as _;
 use std::sync::Arc;
 
+use glam::Vec3;
+
 use refract_eval::load_scene;
 use refract_scene::{MethodId, MethodParams, Scene, TraceMode};
 
-use super::inventory::{Inventory, Ledger};
-use super::{Bench, ClaimsArgs, Race, less, value};
+use super::inventory::{Inventory, Ledger, Verdict};
+use super::{Bench, ClaimsArgs, Race, less, pct, value};
 use crate::data_scenes;
 use crate::progress::Progress;
 use crate::timing::spread;
@@ -42,6 +44,140 @@ fn dm(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
         params.set(name, v, "claims")?;
     }
     Ok(params)
+}
+
+/// U1 and U4 on one scene: from each pixel where the eye sees the specular object, its
+/// reflected ray searched in the distance map against the exact ray's first hit.
+#[derive(Debug, Default, PartialEq)]
+struct SearchCheck {
+    /// Rays whose exact ray meets a surface, and those whose search (defaults) finds it.
+    rays: usize,
+    found: usize,
+    /// Rays whose exact ray meets a plane first and whose 64-step search finds it; those whose
+    /// one-step and linear-only hits are within a texel of the 64-step hit.
+    planar: usize,
+    one_step: usize,
+    linear_only: usize,
+    /// Rays whose exact ray meets the specular object itself first, and those whose search
+    /// finds that hit (U3).
+    self_rays: usize,
+    self_found: usize,
+    /// Secant iterations of the 64-step search, summed, and the rays, where the exact ray meets
+    /// a plane and where it meets the specular object (U14).
+    planar_secant: (u64, usize),
+    curved_secant: (u64, usize),
+}
+
+/// Whether the search's hit `q` is the exact hit `e` of a ray from `p`: within `near` × the
+/// exact distance.
+fn finds(q: Option<Vec3>, p: Vec3, e: Vec3, near: f64) -> bool {
+    q.is_some_and(|q| f64::from(q.distance(e)) <= near * f64::from(e.distance(p)))
+}
+
+/// [`SearchCheck`] of `scene` from its camera at `res`², in the distance map at
+/// `distance-map`'s defaults.
+fn search_check(scene: &Scene, res: u32, near: f64) -> crate::Result<SearchCheck> {
+    use refract_core::distance_map::{SearchParams, hit};
+    use refract_core::optics::{face_forward_shading_normal, reflect};
+    use refract_core::{Camera, Ray};
+    use refract_cpu::families::distance_map::{DistanceMap, start_layer};
+    use refract_scene::SceneMesh;
+    let MethodParams::DistanceMap(defaults) = dm(&[])? else {
+        crate::bail!("distance-map parameters expected");
+    };
+    let mut map = DistanceMap::default();
+    map.prepare(scene);
+    map.render(scene, defaults.layers as usize, defaults.resolution)?;
+    let center = map.center();
+    let texel_angle = 2.0 / defaults.resolution as f32;
+    let camera = scene.camera(res, res)?;
+    let search = |secant_steps: u32| SearchParams {
+        secant_steps,
+        ..defaults.path.search
+    };
+    let mut check = SearchCheck::default();
+    for y in 0..res {
+        for x in 0..res {
+            let eye_ray = camera.pixel_ray(Camera::pixel_center(x, y));
+            let Some((SceneMesh::Refractor, h)) = scene.closest_hit(&eye_ray, 1e-3, None) else {
+                continue;
+            };
+            let p = eye_ray.at(h.t);
+            let n = face_forward_shading_normal(h.shading_normal, eye_ray.dir);
+            let r = reflect(eye_ray.dir, n);
+            let ray = Ray { origin: p, dir: r };
+            let Some((mesh, exact)) = scene.closest_hit(&ray, 1e-3, None) else {
+                continue;
+            };
+            let e = ray.at(exact.t);
+            let start = Some(start_layer(SceneMesh::Refractor, p, n, center));
+            let at = |steps: u32| {
+                hit(&map, p - center, r, start, &search(steps))
+                    .0
+                    .map(|found| p + r * found.d)
+            };
+            let found = finds(at(defaults.path.search.secant_steps), p, e, near);
+            check.rays += 1;
+            check.found += usize::from(found);
+            let on_plane = match mesh {
+                SceneMesh::Object(k) => scene.objects[k].own_plane().is_some(),
+                SceneMesh::Refractor => false,
+            };
+            if mesh == SceneMesh::Refractor {
+                check.self_rays += 1;
+                check.self_found += usize::from(found);
+            }
+            let (converged, work) = hit(&map, p - center, r, start, &search(64));
+            let iterations = (u64::from(work.secant_steps), 1);
+            let add = |(a, b): (u64, usize), (c, d): (u64, usize)| (a + c, b + d);
+            if on_plane {
+                check.planar_secant = add(check.planar_secant, iterations);
+            } else if mesh == SceneMesh::Refractor {
+                check.curved_secant = add(check.curved_secant, iterations);
+            }
+            let converged = converged.map(|found| p + r * found.d);
+            if !on_plane || !finds(converged, p, e, near) {
+                continue;
+            }
+            let Some(converged) = converged else { continue };
+            let texel = texel_angle * (converged - center).length();
+            let within = |q: Option<Vec3>| q.is_some_and(|q| q.distance(converged) <= texel);
+            check.planar += 1;
+            check.one_step += usize::from(within(at(1)));
+            check.linear_only += usize::from(within(at(0)));
+        }
+    }
+    Ok(check)
+}
+
+/// U14: few secant iterations where the exact ray meets a plane (a mean of at most `few`), and
+/// fewer than where it meets the curved specular object (both measured).
+fn few_on_smooth(check: &SearchCheck, few: f64) -> bool {
+    let mean = |(sum, n): (u64, usize)| (n > 0).then(|| sum as f64 / n as f64);
+    matches!(
+        (mean(check.planar_secant), mean(check.curved_secant)),
+        (Some(smooth), Some(curved)) if smooth <= few && smooth < curved
+    )
+}
+
+/// U10: FLIP at every depth 1 to 8 measured, the deepest below the first, and never growing by
+/// more than `slack` from one depth to the next.
+fn approaches(flips: &[Option<f64>], slack: f64) -> bool {
+    let f: Vec<f64> = flips.iter().filter_map(|f| *f).collect();
+    f.len() == 8 && f[7] < f[0] && f.windows(2).all(|w| w[1] <= w[0] + slack)
+}
+
+/// U1: the search finds the exact ray's first surface on at least `share` of the rays.
+fn misses_few(check: &SearchCheck, share: f64) -> bool {
+    check.rays > 0 && check.found as f64 >= share * check.rays as f64
+}
+
+/// U4: one secant step is within a texel of the converged hit on at least `share` of the planar
+/// rays, and more often than the linear search alone.
+fn one_step_on_planes(check: &SearchCheck, share: f64) -> bool {
+    check.planar > 0
+        && check.one_step as f64 >= share * check.planar as f64
+        && check.linear_only < check.one_step
 }
 
 /// U8: the FLIP against the reference at `own` (an index into `flips`, one per traced depth) is
@@ -103,8 +239,67 @@ pub fn section(
     let mut depth_tables = Vec::new();
     let mut step_tables = Vec::new();
     let mut u8 = inventory.claim("U8")?;
+    let (mut u1, mut u3, mut u4) = (
+        inventory.claim("U1")?,
+        inventory.claim("U3")?,
+        inventory.claim("U4")?,
+    );
+    let mut u14 = inventory.claim("U14")?;
     for scene in rooms(args, &mut notes, progress)? {
         let scene = Arc::new(scene);
+        // U1 and U4: the reflected rays searched in the map against the exact rays.
+        let viewed = args.view((*scene).clone());
+        let check = search_check(&viewed, args.res, u1.threshold("near")?)?;
+        let share = u1.threshold("share")?;
+        u1.push((
+            scene.name.clone(),
+            misses_few(&check, share),
+            format!(
+                "the search finds the exact ray's first surface on {} of {} reflected rays",
+                pct(Some(check.found as f64 / check.rays.max(1) as f64)),
+                check.rays
+            ),
+        ));
+        if scene.name == "teapot-box" {
+            let min_rays = u3.threshold("min_rays")? as usize;
+            let share = u3.threshold("share")?;
+            let self_share = check.self_found as f64 / check.self_rays.max(1) as f64;
+            u3.push((
+                scene.name.clone(),
+                if check.self_rays < min_rays {
+                    Verdict::Inconclusive
+                } else {
+                    Verdict::from(self_share >= share)
+                },
+                format!(
+                    "the search finds the teapot's own surface on {} of {} rays whose exact ray meets it first",
+                    pct(Some(self_share)),
+                    check.self_rays
+                ),
+            ));
+            let mean = |(sum, n): (u64, usize)| sum as f64 / n.max(1) as f64;
+            u14.push((
+                scene.name.clone(),
+                few_on_smooth(&check, u14.threshold("few")?),
+                format!(
+                    "mean secant iterations {:.2} on {} rays meeting a plane, {:.2} on {} rays meeting the teapot",
+                    mean(check.planar_secant),
+                    check.planar_secant.1,
+                    mean(check.curved_secant),
+                    check.curved_secant.1
+                ),
+            ));
+        }
+        u4.push((
+            scene.name.clone(),
+            one_step_on_planes(&check, u4.threshold("share")?),
+            format!(
+                "within a texel of the 64-step hit after one secant step on {} of {} rays whose exact ray meets a plane, after the linear search alone on {}",
+                pct(Some(check.one_step as f64 / check.planar.max(1) as f64)),
+                check.planar,
+                pct(Some(check.linear_only as f64 / check.planar.max(1) as f64))
+            ),
+        ));
         // U8: each depth's frame against the reference traced to each depth of 1 to 4.
         let mut traced = Vec::new();
         for depth in 1..=4u32 {
@@ -141,9 +336,7 @@ pub fn section(
             let r = bench.measure(&t, &dm(&[("depth", &depth.to_string())])?)?.1;
             flips.push((depth, r.flip_mean, r.psnr_ldr_db));
         }
-        let f: Vec<f64> = flips.iter().filter_map(|(_, f, _)| *f).collect();
-        let monotone = f.windows(2).all(|w| w[1] <= w[0] + slack);
-        let holds = f.len() == 8 && f[7] < f[0] && monotone;
+        let holds = approaches(&flips.iter().map(|(_, f, _)| *f).collect::<Vec<_>>(), slack);
         claims[0].push((
             name.clone(),
             holds,
@@ -312,7 +505,7 @@ pub fn section(
         ),
     ));
     claims.push(u13);
-    claims.push(u8);
+    claims.extend([u1, u3, u4, u8, u14]);
     claims.extend([u2, u7, u9]);
 
     // The two families on the same frames: glass in a pure environment.
@@ -410,7 +603,56 @@ pub fn section(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::claims::inventory::Verdict;
+
+    /// U10 fails on a FLIP that grows by more than the slack, on a deepest depth no better than
+    /// the first, and on a depth not measured.
+    #[test]
+    fn u10_verdict_can_fail() {
+        let f = |v: &[f64]| v.iter().map(|&x| Some(x)).collect::<Vec<_>>();
+        let falling = [0.2, 0.1, 0.08, 0.07, 0.065, 0.06, 0.06, 0.059];
+        assert!(approaches(&f(&falling), 0.002));
+        let mut bump = falling;
+        bump[4] = 0.075;
+        assert!(!approaches(&f(&bump), 0.002));
+        assert!(!approaches(&f(&[0.1; 8]), 0.002));
+        let mut missing = f(&falling);
+        missing[3] = None;
+        assert!(!approaches(&missing, 0.002));
+    }
+
+    /// U1, U4 and U14 fail on a search that misses, on a one-step hit off the converged one, and
+    /// where the linear search alone does as well (the secant step would show nothing).
+    #[test]
+    fn search_verdicts_can_fail() {
+        let c = |rays, found, planar, one_step, linear_only| SearchCheck {
+            rays,
+            found,
+            planar,
+            one_step,
+            linear_only,
+            ..SearchCheck::default()
+        };
+        let smooth = |planar_secant, curved_secant| SearchCheck {
+            planar_secant,
+            curved_secant,
+            ..SearchCheck::default()
+        };
+        assert!(few_on_smooth(&smooth((120, 100), (400, 100)), 3.0));
+        assert!(!few_on_smooth(&smooth((350, 100), (400, 100)), 3.0));
+        assert!(!few_on_smooth(&smooth((120, 100), (100, 100)), 3.0));
+        assert!(!few_on_smooth(&smooth((120, 100), (0, 0)), 3.0));
+        assert!(misses_few(&c(1000, 995, 0, 0, 0), 0.99));
+        assert!(!misses_few(&c(1000, 980, 0, 0, 0), 0.99));
+        assert!(!misses_few(&c(0, 0, 0, 0, 0), 0.99));
+        assert!(one_step_on_planes(&c(100, 100, 100, 96, 40), 0.95));
+        assert!(!one_step_on_planes(&c(100, 100, 100, 90, 40), 0.95));
+        assert!(!one_step_on_planes(&c(100, 100, 100, 97, 97), 0.95));
+        assert!(!one_step_on_planes(&c(100, 100, 0, 0, 0), 0.95));
+        let (p, e) = (Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0));
+        assert!(finds(Some(Vec3::new(10.4, 0.0, 0.0)), p, e, 0.05));
+        assert!(!finds(Some(Vec3::new(10.6, 0.0, 0.0)), p, e, 0.05));
+        assert!(!finds(None, p, e, 0.05));
+    }
 
     /// U8 fails where the frame is as close to another depth's reference (or closer), or a
     /// FLIP is missing, and holds where its own depth is strictly closest.

@@ -209,6 +209,12 @@ fn scenes(
 
 /// Measures the engine methods and returns the markdown section; `engines`: the engines'
 /// own renderers when they run (shared with the rough-glass section: one browser each).
+/// B2: three.js's lookup leaks the foreground (a share above 0), Bevy's and HDRP's never do
+/// (exactly 0); a share not measured (NaN) fails.
+fn leaks_as_stated(three: f64, bevy: f64, hdrp: f64) -> bool {
+    three > 0.0 && bevy == 0.0 && hdrp == 0.0
+}
+
 pub fn section(
     args: &ClaimsArgs,
     inventory: &Inventory,
@@ -300,7 +306,7 @@ pub fn section(
             let (three, bevy, hdrp) = (leak(THREE_JS), leak(BEVY), leak(HDRP_SPHERE));
             claims[0].push((
                 name.clone(),
-                three > 0.0 && bevy == 0.0 && hdrp == 0.0,
+                leaks_as_stated(three, bevy, hdrp),
                 format!(
                     "leak: three.js {}, Bevy {}, HDRP {}",
                     pct(three),
@@ -420,4 +426,19 @@ pub fn section(
     );
     ledger.rows(&mut md, "Engine glass against the exact reference", &claims);
     Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// B2 fails where three.js does not leak, where Bevy or HDRP leaks at all, or where a share
+    /// is missing.
+    #[test]
+    fn b2_verdict_can_fail() {
+        assert!(leaks_as_stated(0.03, 0.0, 0.0));
+        assert!(!leaks_as_stated(0.0, 0.0, 0.0));
+        assert!(!leaks_as_stated(0.03, 0.001, 0.0));
+        assert!(!leaks_as_stated(0.03, 0.0, f64::NAN));
+    }
 }

@@ -21,7 +21,7 @@ use refract_scene::{
 };
 
 use super::inventory::{Inventory, Ledger, Verdict};
-use super::{Bench, ClaimsArgs, Race, Truth, less, pct, value};
+use super::{Bench, ClaimsArgs, Race, Truth, at_or_above, at_or_below, less, pct, value};
 use crate::timing::spread;
 
 fn pvrr(settings: &[(&str, &str)]) -> crate::Result<MethodParams> {
@@ -351,7 +351,7 @@ pub fn section(
             let bar = k1.threshold("share")?;
             k1.push((
                 "convex-mirror (49 vertices)".into(),
-                share.is_some_and(|s| s >= bar),
+                at_or_above(share, bar),
                 format!(
                     "the image agrees at {} of the {} visible mapped vertices; the map position is within one texel of the exact hit's projection at {:.1} % of the {} vertices whose ray hits the scene (by construction)",
                     share.map_or_else(|| "–".to_owned(), |s| format!("{:.1} %", 100.0 * s)),
@@ -368,7 +368,7 @@ pub fn section(
         if let (49, Some(e)) = (*vertices, e) {
             k7.push((
                 "convex-mirror (49 vertices)".into(),
-                e.inconsistent_share <= 1.0 - k7_bar,
+                at_or_below(Some(e.inconsistent_share), 1.0 - k7_bar),
                 format!(
                     "{:.2} % of the mirror's pixels inconsistent",
                     100.0 * e.inconsistent_share
@@ -700,7 +700,7 @@ pub fn section(
     let bar = k14.threshold("share")?;
     k14.push((
         "spectacles (biconvex lens)".into(),
-        share.is_some_and(|s| s >= bar),
+        at_or_above(share, bar),
         format!(
             "the image agrees at {} of the {} visible ray-issuing vertices",
             pct(share),
