@@ -357,8 +357,13 @@ pub fn section(
     let _ = writeln!(
         md,
         "\n## Engine glass against the exact reference\n\n\
-         The refraction of Godot, three.js, Bevy, Unity HDRP and Filament (`docs/methods.md`, \
-         \"Engine methods\"), CPU backend, {res}², against the same reference, beside Wyman 2005a \
+         This project's re-implementations of the refraction of Godot, three.js, Bevy, Unity \
+         HDRP and Filament, written from their formulas, not the engines' code: each method's \
+         row in `docs/methods.md` (\"Engine methods\") names the engine source file it follows \
+         and every place it departs. The engines themselves, rendered by the engines in \
+         headless Chromium where they run (`docs/engines.md`), have their own rows below, \
+         labelled with the engine and its version. CPU backend, {res}², against the same \
+         reference, beside Wyman 2005a \
          (`wyman`), Wyman 2005b (`iterative-seeded`) and the distance maps. The engines' defaults \
          but the thickness, which is `auto` (the refractor's mean `d_N`) for every \
          thickness-driven method (three.js and Bevy default to 0, no refraction; the engines' \

@@ -348,14 +348,19 @@ pub fn section(
             let pixels = vertex_pixels(bench.cpu.pvrr_passes(), &truth.scene, &truth.camera);
             let epsilon = k1.threshold("epsilon")? as f32;
             let share = vertex_agreement(&frame, &truth.frame, &pixels, epsilon);
+            // The rule's negative control: the distance map, which is not exact at the vertices.
+            let (control, _) =
+                bench.measure(&truth, &MethodParams::defaults(MethodId::DistanceMap))?;
+            let control = vertex_agreement(&control, &truth.frame, &pixels, epsilon);
             let bar = k1.threshold("share")?;
             k1.push((
                 "convex-mirror (49 vertices)".into(),
                 at_or_above(share, bar),
                 format!(
-                    "the image agrees at {} of the {} visible mapped vertices; the map position is within one texel of the exact hit's projection at {:.1} % of the {} vertices whose ray hits the scene (by construction)",
+                    "the image agrees at {} of the {} visible mapped vertices (`distance-map` by the same rule, the negative control: {}); the map position is within one texel of the exact hit's projection at {:.1} % of the {} vertices whose ray hits the scene (by construction)",
                     share.map_or_else(|| "–".to_owned(), |s| format!("{:.1} %", 100.0 * s)),
                     pixels.len(),
+                    pct(control),
                     e.as_ref().map_or(0.0, |e| 100.0 * e.vertices_within_texel),
                     e.as_ref().map_or(0, |e| e.vertices_hit)
                 ),
