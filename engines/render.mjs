@@ -30,7 +30,7 @@ import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 import puppeteer from 'puppeteer-core';
 
-const ENGINES = ['threejs', 'babylon'];
+const ENGINES = ['threejs', 'babylon', 'gltf-viewer'];
 const VARIANTS = ['color', 'position'];
 const MAX_SIDE = 4096;
 const ORIGIN = 'http://refract.invalid';
@@ -148,6 +148,9 @@ async function render(request) {
         scene: `/scene/${k}/${coded ? 'position-coded.gltf' : 'scene.gltf'}`,
         environment: coded ? null : `/scene/${k}/environment.hdr`,
         environmentKey: coded ? null : environmentKey,
+        // The scene's environment for every variant: a page that must bind one even to a frame
+        // without its light (the glTF Sample Viewer) loads it from here.
+        sceneEnvironment: { file: `/scene/${k}/environment.hdr`, key: environmentKey },
         variant,
         width: request.width,
         height: request.height,

@@ -137,7 +137,7 @@ struct CompareArgs {
     #[arg(long = "param", value_name = "NAME=VALUE")]
     params: Vec<String>,
     /// Comma-separated engines whose own renderers run beside the methods, in headless
-    /// Chromium (docs/engines.md): threejs, babylon, or none. A listed engine that cannot run (no
+    /// Chromium (docs/engines.md): threejs, babylon, gltf-viewer, or none. A listed engine that cannot run (no
     /// Node, Chromium or `npm ci --prefix engines`) fails the command.
     #[arg(long, value_delimiter = ',', default_value = "none")]
     engines: Vec<String>,

@@ -114,12 +114,18 @@ fn babylon_camera_matches_refracts() {
     camera_matches_refracts(Engine::Babylon);
 }
 
+#[test]
+fn gltf_viewer_camera_matches_refracts() {
+    camera_matches_refracts(Engine::GltfViewer);
+}
+
 /// `engine`'s background is refract's environment in refract's orientation: under a
 /// direction-coded lat-long map (`0.5 + 0.4 d`, asymmetric in every axis), each pixel's
 /// background decodes to the direction of refract's pixel ray: median within 0.01 and 99 %
 /// within 0.03 (the engines resample the map into a cube map; a quarter turn off is 0.5 or
-/// more, a mirrored map as much).
-fn background_is_refracts_environment(engine: Engine) {
+/// more, a mirrored map as much), or within `bars = (median, p99)` where an engine draws its
+/// background with a known distortion.
+fn background_is_refracts_environment(engine: Engine, (median_bar, p99_bar): (f32, f32)) {
     let Some(driver) = driver() else { return };
     let (map_width, map_height) = (1024, 512);
     let texels = (0..map_height)
@@ -182,7 +188,7 @@ fn background_is_refracts_environment(engine: Engine) {
         frame.label
     );
     assert!(
-        median < 0.01 && p99 < 0.03,
+        median < median_bar && p99 < p99_bar,
         "{}: background direction off by {median} (median), {p99} (99 %)",
         frame.label
     );
@@ -190,12 +196,22 @@ fn background_is_refracts_environment(engine: Engine) {
 
 #[test]
 fn threejs_background_is_refracts_environment() {
-    background_is_refracts_environment(Engine::Threejs);
+    background_is_refracts_environment(Engine::Threejs, (0.01, 0.03));
 }
 
 #[test]
 fn babylon_background_is_refracts_environment() {
-    background_is_refracts_environment(Engine::Babylon);
+    background_is_refracts_environment(Engine::Babylon, (0.01, 0.03));
+}
+
+/// The Sample Viewer draws its background cube with `w + 0.1` (its `cubemap.vert` sets the
+/// view-projection's translation column to `(0, 0, 0, 0.1)`): on a unit cube at the eye, every
+/// direction off a face's centre shows about 10 % wider than the pixel's ray (0.028 median,
+/// 0.042 at 99 % on this frame). In the right orientation that stays under 0.05 / 0.08; a
+/// quarter turn or a mirror is 0.5 or more.
+#[test]
+fn gltf_viewer_background_is_refracts_environment() {
+    background_is_refracts_environment(Engine::GltfViewer, (0.05, 0.08));
 }
 
 /// What `engine` looks up and shows through the glass of the chart, against the
@@ -332,6 +348,82 @@ fn babylon_looks_up_where_volume_thickness_does() {
     };
     let median = percentile(errors, 0.5);
     assert!(median < 0.05, "{label}: median lookup distance {median} px");
+}
+
+/// The glTF Sample Viewer reads its transmission target where `volume-thickness` looks up
+/// (its `getVolumeTransmissionRay`: `proj(P + T d)`, as three.js), and weights what it reads by
+/// its `1 − F` whatever `KHR_materials_specular` says: on the position-coded chart, each glass
+/// pixel's code is the code of the re-implementation's lookup point times one factor for all
+/// three channels (their ratios agree within 0.03, median), the factor 0.9 to 1 (0.96 at
+/// normal incidence for IOR 1.5). A lookup elsewhere gives channel ratios that disagree; an
+/// unweighted read a factor of 1. This is why its `P_geom` is not measured
+/// (`Engine::positions_through_glass`).
+#[test]
+fn gltf_viewer_looks_up_where_volume_thickness_does_weighted_by_its_fresnel() {
+    use refract_eval::gltf_export::position_code;
+    use refract_scene::{Aov, Frame, FrameOutputs, MethodParams, Renderer};
+    assert!(!Engine::GltfViewer.positions_through_glass());
+    let Some(driver) = driver() else { return };
+    let scene = Arc::new(builtin("chart"));
+    let dir = tempfile::tempdir().expect("tempdir");
+    export(&scene, dir.path());
+    let (width, height) = (128, 128);
+    let theirs = driver
+        .render(
+            Engine::GltfViewer,
+            dir.path(),
+            &EngineRequest {
+                variants: vec![Variant::Position],
+                width,
+                height,
+                hide_refractor: false,
+            },
+        )
+        .expect("engine frame")
+        .remove(0);
+    let camera = scene.camera(width, height).expect("camera");
+    let mut cpu = refract_cpu::CpuRenderer::new();
+    cpu.prepare(&scene).expect("prepare");
+    let mut ours = Frame::new(width, height);
+    cpu.render(
+        &camera,
+        &MethodParams::defaults("volume-thickness".parse().expect("method")),
+        FrameOutputs::ColorAndAovs,
+        &mut ours,
+    )
+    .expect("volume-thickness");
+    let bounds = position_code_bounds(&scene);
+    let (covered, p_geom) = (
+        ours.flag(Aov::Covered).expect("Covered"),
+        ours.vec3(Aov::PGeom).expect("Pgeom"),
+    );
+    let (mut spreads, mut factors) = (Vec::new(), Vec::new());
+    for i in 0..covered.len() {
+        if !(covered[i] && p_geom[i].is_finite()) {
+            continue;
+        }
+        // The code of the object point the re-implementation's lookup `proj(P2)` shows.
+        let ratio = theirs.frame.color[i] / position_code(p_geom[i], bounds);
+        spreads.push(ratio.max_element() - ratio.min_element());
+        factors.push(ratio.element_sum() / 3.0);
+    }
+    assert!(spreads.len() > 1000, "{} glass pixels", spreads.len());
+    let (spread, factor) = (percentile(spreads, 0.5), percentile(factors, 0.5));
+    println!(
+        "{}: channel ratios to the re-implementation's lookup code agree within {spread} \
+         (median); the common factor {factor} (median)",
+        theirs.label
+    );
+    assert!(
+        spread < 0.03,
+        "{}: channel ratios spread {spread}",
+        theirs.label
+    );
+    assert!(
+        (0.9..0.995).contains(&factor),
+        "{}: transmission weight {factor}",
+        theirs.label
+    );
 }
 
 /// Each engine's glass shows what lies behind it when only the environment does (`sphere`), and

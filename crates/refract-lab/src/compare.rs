@@ -59,8 +59,9 @@ pub fn method_params(
 }
 
 /// The default job (`cargo run --release`, `refract` without a command): every method but the
-/// reference on both backends (the CPU only without an adapter) and every engine's own
-/// renderer (skipped with a note where Node, Chromium or the npm packages are missing) on
+/// reference on both backends (the CPU only without an adapter) and the engines' own renderers
+/// of [`refract_engines::Engine::DEFAULT_JOB`] (skipped with a note where Node, Chromium or the
+/// npm packages are missing) on
 /// every built-in scene at 512², 1 reference sample per pixel (64 on scenes with rough surfaces,
 /// [`refract_scene::ROUGH_MIN_SPP`]), 3 timed frames after the AOV frame and no other warm-up
 /// (a median for the report's time column, which drops a slow first frame; `refract bench` is
@@ -77,7 +78,7 @@ pub fn default_options() -> crate::Result<CompareOptions> {
         reference_backend: BackendId::Trace,
         warm_up: 0,
         frames: 3,
-        engines: refract_engines::Engine::ALL.to_vec(),
+        engines: refract_engines::Engine::DEFAULT_JOB.to_vec(),
         engine_policy: GpuPolicy::IfAvailable,
         out: PathBuf::from("out"),
     })

@@ -21,7 +21,7 @@ use crate::progress::{Note, Progress};
 /// The backend column of an engine's rows: where it ran (Chromium's WebGL2 on SwiftShader).
 pub const ENGINE_BACKEND: &str = "webgl";
 
-/// Parses an `--engines` list (`threejs`, `babylon`; `none` for no engine).
+/// Parses an `--engines` list (`threejs`, `babylon`, `gltf-viewer`; `none` for no engine).
 pub fn parse_engines(names: &[String]) -> crate::Result<Vec<Engine>> {
     let mut engines = Vec::new();
     for name in names {
@@ -122,8 +122,12 @@ impl EngineRenderers {
         let export = tempfile::tempdir().map_err(crate::LabError::Os)?;
         export_gltf(scene)?.write(export.path())?;
         let bounds = position_code_bounds(scene);
-        let request = EngineRequest {
-            variants: vec![Variant::Color, Variant::Position],
+        let request = |engine: Engine| EngineRequest {
+            variants: if engine.positions_through_glass() {
+                vec![Variant::Color, Variant::Position]
+            } else {
+                vec![Variant::Color]
+            },
             width,
             height,
             hide_refractor: false,
@@ -149,23 +153,29 @@ impl EngineRenderers {
                     sessions.len() - 1
                 }
             };
-            let rendered = sessions[index].render(export.path(), &request);
+            let rendered = sessions[index].render(export.path(), &request(engine));
             if rendered.is_err() {
                 // A failed request may have left the page in any state: the next scene starts
                 // a fresh browser.
                 sessions.swap_remove(index);
             }
             let mut rendered = rendered.map_err(|err| crate::LabError::invalid(err.to_string()))?;
-            let position = rendered.pop().expect("two variants requested");
-            let color = rendered.pop().expect("two variants requested");
+            let position = engine
+                .positions_through_glass()
+                .then(|| rendered.pop().expect("two variants requested"));
+            let color = rendered.pop().expect("the colour variant requested");
             let mut frame = color.frame;
-            let p_geom: Vec<Vec3> = decode_positions(&position.frame, bounds)
-                .into_iter()
-                .zip(&covered)
-                .map(|(p, &glass)| p.filter(|_| glass).unwrap_or(Vec3::NAN))
-                .collect();
             frame.insert_layer(Aov::Covered, Layer::Flag(covered.clone()));
-            frame.insert_layer(Aov::PGeom, Layer::Vec3(p_geom));
+            // Without decodable positions (`Engine::positions_through_glass`) the frame has no
+            // `P_geom` layer, and its `P_geom` metrics are "–", not misses.
+            if let Some(position) = position {
+                let p_geom: Vec<Vec3> = decode_positions(&position.frame, bounds)
+                    .into_iter()
+                    .zip(&covered)
+                    .map(|(p, &glass)| p.filter(|_| glass).unwrap_or(Vec3::NAN))
+                    .collect();
+                frame.insert_layer(Aov::PGeom, Layer::Vec3(p_geom));
+            }
             frames.push(EngineFrame {
                 engine,
                 label: color.label,
@@ -206,7 +216,7 @@ mod tests {
         let err = parse_engines(&names(&["unity"])).expect_err("unknown");
         assert!(
             err.to_string()
-                .contains("`unity`; expected threejs, babylon or none"),
+                .contains("`unity`; expected threejs, babylon, gltf-viewer or none"),
             "{err}"
         );
     }
