@@ -188,7 +188,9 @@ impl EngineRenderers {
 
 /// The metrics of an engine's frame (colour, `Covered`, `P_geom`, as [`EngineRenderers::render`]
 /// makes it) against the reference `truth`: the methods' colour metrics and the nearby-geometry
-/// metrics from its `P_geom`; with the error maps.
+/// metrics from its `P_geom` where it has one (not for an engine whose glass does not pass
+/// position codes, `Engine::positions_through_glass`: those metrics stay absent, not misses);
+/// with the error maps.
 pub fn engine_record(
     truth: &Frame,
     frame: &Frame,
@@ -197,13 +199,34 @@ pub fn engine_record(
 ) -> (MetricsRecord, refract_eval::metrics::ErrorMaps) {
     let (mut record, maps) =
         refract_eval::metrics::evaluate(truth, frame, camera, scene.refractor.diameter());
-    refract_eval::metrics::evaluate_nearby(truth, frame, scene, camera, None, &mut record);
+    if frame.vec3(Aov::PGeom).is_some() {
+        refract_eval::metrics::evaluate_nearby(truth, frame, scene, camera, None, &mut record);
+    }
     (record, maps)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An engine frame without `P_geom` (the glTF Sample Viewer's) has no nearby-geometry
+    /// metrics: not 100 % misses, as it had when its missing layer read as "no hit".
+    #[test]
+    fn a_frame_without_positions_has_no_miss_rate() {
+        let scene = refract_eval::load_scene("chart").expect("chart").scene;
+        let camera = scene.camera(4, 4).expect("camera");
+        let mut truth = Frame::new(4, 4);
+        truth.insert_layer(Aov::Covered, Layer::Flag(vec![true; 16]));
+        truth.insert_layer(Aov::PGeom, Layer::Vec3(vec![Vec3::ZERO; 16]));
+        let mut frame = Frame::new(4, 4);
+        frame.insert_layer(Aov::Covered, Layer::Flag(vec![true; 16]));
+        let (record, _) = engine_record(&truth, &frame, &scene, &camera);
+        assert_eq!(record.nearby_miss_rate, None);
+        assert!(record.flip_mean.is_some());
+        frame.insert_layer(Aov::PGeom, Layer::Vec3(vec![Vec3::NAN; 16]));
+        let (record, _) = engine_record(&truth, &frame, &scene, &camera);
+        assert_eq!(record.nearby_miss_rate, Some(1.0));
+    }
 
     #[test]
     fn engines_are_parsed_by_id_and_a_wrong_one_names_the_choices() {
