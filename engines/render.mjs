@@ -96,9 +96,15 @@ function fileOf(url) {
   return file.startsWith(root + path.sep) ? file : null;
 }
 
+// A page call may take minutes: the glTF Sample Viewer prefilters an environment in about 80 s
+// on SwiftShader alone, several times that with other browsers on the same cores (puppeteer's
+// default of 180 s failed so in CI).
+const PROTOCOL_TIMEOUT_MS = 20 * 60 * 1000;
+
 const browser = await puppeteer.launch({
   executablePath: args.browser,
   headless: true,
+  protocolTimeout: PROTOCOL_TIMEOUT_MS,
   args: [
     '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
     '--ignore-gpu-blocklist', '--enable-webgl', '--disable-extensions',

@@ -323,32 +323,11 @@ fn a_concave_mirror_marks_its_zooming_region() {
     );
 }
 
-const MAGNIFIER: &str = r#"
-[camera]
-eye = [0.0, 0.0, 4.5]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.05
-far = 60.0
-
-[refractor]
-mesh = "builtin:lens"
-ior = 1.61
-scale = 0.9
-
-[[objects]]
-mesh = "builtin:plane"
-texture = "color-chart"
-scale = 16.0
-rotate_deg = [90.0, 0.0, 0.0]
-translate = [0.0, 0.0, -14.0]
-"#;
-
 /// Fig. 13: a convex lens far from the eye reverses the image, and pvrr draws it so: the
 /// lens's left shows what lies right of the axis, as in the reference.
 #[test]
 fn a_far_convex_lens_reverses_the_image() {
-    let scene = scene(MAGNIFIER);
+    let scene = scene(refract_eval::scene_file::MAGNIFIER_SCENE);
     let camera = scene.camera(96, 96).expect("camera");
     let (_, frame) = pvrr(&scene, &camera, &params(&[("res", "512")]));
     let truth = reference(&scene, &camera, "transmission");

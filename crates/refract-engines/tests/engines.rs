@@ -43,6 +43,23 @@ fn export(scene: &Scene, dir: &Path) {
         .expect("write");
 }
 
+/// refract's `volume-thickness` (CPU, defaults) of `scene` at `width × height`, every layer.
+fn volume_thickness(scene: &Arc<Scene>, width: u32, height: u32) -> refract_scene::Frame {
+    use refract_scene::{Frame, FrameOutputs, MethodParams, Renderer};
+    let camera = scene.camera(width, height).expect("camera");
+    let mut cpu = refract_cpu::CpuRenderer::new();
+    cpu.prepare(scene).expect("prepare");
+    let mut ours = Frame::new(width, height);
+    cpu.render(
+        &camera,
+        &MethodParams::defaults("volume-thickness".parse().expect("method")),
+        FrameOutputs::ColorAndAovs,
+        &mut ours,
+    )
+    .expect("volume-thickness");
+    ours
+}
+
 fn percentile(mut values: Vec<f32>, q: f32) -> f32 {
     assert!(!values.is_empty());
     values.sort_by(f32::total_cmp);
@@ -361,7 +378,7 @@ fn babylon_looks_up_where_volume_thickness_does() {
 #[test]
 fn gltf_viewer_looks_up_where_volume_thickness_does_weighted_by_its_fresnel() {
     use refract_eval::gltf_export::position_code;
-    use refract_scene::{Aov, Frame, FrameOutputs, MethodParams, Renderer};
+    use refract_scene::Aov;
     assert!(!Engine::GltfViewer.positions_through_glass());
     let Some(driver) = driver() else { return };
     let scene = Arc::new(builtin("chart"));
@@ -381,17 +398,7 @@ fn gltf_viewer_looks_up_where_volume_thickness_does_weighted_by_its_fresnel() {
         )
         .expect("engine frame")
         .remove(0);
-    let camera = scene.camera(width, height).expect("camera");
-    let mut cpu = refract_cpu::CpuRenderer::new();
-    cpu.prepare(&scene).expect("prepare");
-    let mut ours = Frame::new(width, height);
-    cpu.render(
-        &camera,
-        &MethodParams::defaults("volume-thickness".parse().expect("method")),
-        FrameOutputs::ColorAndAovs,
-        &mut ours,
-    )
-    .expect("volume-thickness");
+    let ours = volume_thickness(&scene, width, height);
     let bounds = position_code_bounds(&scene);
     let (covered, p_geom) = (
         ours.flag(Aov::Covered).expect("Covered"),
@@ -434,7 +441,7 @@ fn gltf_viewer_looks_up_where_volume_thickness_does_weighted_by_its_fresnel() {
 /// glass after a colour frame was black on every pixel (`P_geom` misses 100 % on `chart`).
 #[test]
 fn glass_shows_the_environment_and_positions_after_colour() {
-    use refract_scene::{Aov, Frame, FrameOutputs, MethodParams, Renderer};
+    use refract_scene::Aov;
     let Some(driver) = driver() else {
         return;
     };
@@ -460,17 +467,7 @@ fn glass_shows_the_environment_and_positions_after_colour() {
                 .expect("engine frames");
             let position = frames.pop().expect("position");
             let color = frames.pop().expect("colour");
-            let camera = scene.camera(width, height).expect("camera");
-            let mut cpu = refract_cpu::CpuRenderer::new();
-            cpu.prepare(&scene).expect("prepare");
-            let mut ours = Frame::new(width, height);
-            cpu.render(
-                &camera,
-                &MethodParams::defaults("volume-thickness".parse().expect("method")),
-                FrameOutputs::ColorAndAovs,
-                &mut ours,
-            )
-            .expect("volume-thickness");
+            let ours = volume_thickness(&scene, width, height);
             let covered = ours.flag(Aov::Covered).expect("Covered");
             let glass: Vec<usize> = (0..covered.len()).filter(|&i| covered[i]).collect();
             assert!(glass.len() > 500, "{name}: {} glass pixels", glass.len());

@@ -514,6 +514,31 @@ scale = 6.0
 translate = [0.0, -1.0, 0.6]
 "#;
 
+/// Kakimoto et al. 2007 Fig. 13's far convex lens: the built-in biconvex lens (IOR 1.61) 4.5
+/// units before the eye, the colour chart 14 units behind it, beyond its focal length, so the
+/// lens shows the chart reversed. Not a built-in scene (the default job does not render it):
+/// claim K13 and `a_far_convex_lens_reverses_the_image` load it with [`load_scene_str`].
+pub const MAGNIFIER_SCENE: &str = r#"
+[camera]
+eye = [0.0, 0.0, 4.5]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 30.0
+near = 0.05
+far = 60.0
+
+[refractor]
+mesh = "builtin:lens"
+ior = 1.61
+scale = 0.9
+
+[[objects]]
+mesh = "builtin:plane"
+texture = "color-chart"
+scale = 16.0
+rotate_deg = [90.0, 0.0, 0.0]
+translate = [0.0, 0.0, -14.0]
+"#;
+
 /// The `chart` scene (Wyman 2005b Fig. 5): a glass sphere of radius 0.8 resting on a wood floor
 /// (`y = −0.8`), a colour chart (5.7 wide) 3.2 behind its centre facing the camera; the far
 /// plane at 12 so the NG texture's depth range fits the scene.

@@ -174,29 +174,6 @@ fn vertex_pixels(passes: &PvrrPasses, scene: &Scene, camera: &Camera) -> Vec<usi
     pixels
 }
 
-/// K13's scene: a biconvex lens far before the eye, the colour chart behind its focal length
-/// (Fig. 13; the scene of `a_far_convex_lens_reverses_the_image`, tests/tests/pvrr.rs).
-const MAGNIFIER: &str = r#"
-[camera]
-eye = [0.0, 0.0, 4.5]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.05
-far = 60.0
-
-[refractor]
-mesh = "builtin:lens"
-ior = 1.61
-scale = 0.9
-
-[[objects]]
-mesh = "builtin:plane"
-texture = "color-chart"
-scale = 16.0
-rotate_deg = [90.0, 0.0, 0.0]
-translate = [0.0, 0.0, -14.0]
-"#;
-
 /// `spectacles` with the built-in biconcave lens (`builtin:lens-concave`) in place of the
 /// biconvex one, placed as it is (into the unit sphere, then scaled by 0.9).
 fn with_concave_lens() -> crate::Result<Scene> {
@@ -737,7 +714,7 @@ pub fn section(
     let mut k13 = inventory.claim("K13")?;
     let magnifier = refract_eval::scene_file::load_scene_str(
         "magnifier",
-        MAGNIFIER,
+        refract_eval::scene_file::MAGNIFIER_SCENE,
         std::path::Path::new("."),
         "the K13 scene (claims/pvrr.rs)",
     )?
@@ -891,7 +868,7 @@ mod tests {
     fn orientation_measure_can_fail() {
         let scene = refract_eval::scene_file::load_scene_str(
             "magnifier",
-            MAGNIFIER,
+            refract_eval::scene_file::MAGNIFIER_SCENE,
             std::path::Path::new("."),
             "test",
         )
