@@ -128,18 +128,24 @@ fn search_check(scene: &Scene, res: u32, near: f64) -> crate::Result<SearchCheck
                 check.self_found += usize::from(found);
             }
             let (converged, work) = hit(&map, p - center, r, start, &search(64));
-            let iterations = (u64::from(work.secant_steps), 1);
-            let add = |(a, b): (u64, usize), (c, d): (u64, usize)| (a + c, b + d);
-            if on_plane {
-                check.planar_secant = add(check.planar_secant, iterations);
+            let secant = if on_plane {
+                Some(&mut check.planar_secant)
             } else if mesh == SceneMesh::Refractor {
-                check.curved_secant = add(check.curved_secant, iterations);
+                Some(&mut check.curved_secant)
+            } else {
+                None
+            };
+            if let Some((sum, rays)) = secant {
+                *sum += u64::from(work.secant_steps);
+                *rays += 1;
             }
-            let converged = converged.map(|found| p + r * found.d);
-            if !on_plane || !finds(converged, p, e, near) {
+            // U4 on the rays meeting a plane whose converged search finds that plane.
+            let Some(converged) = converged
+                .map(|found| p + r * found.d)
+                .filter(|&q| on_plane && finds(Some(q), p, e, near))
+            else {
                 continue;
-            }
-            let Some(converged) = converged else { continue };
+            };
             let texel = texel_angle * (converged - center).length();
             let within = |q: Option<Vec3>| q.is_some_and(|q| q.distance(converged) <= texel);
             check.planar += 1;

@@ -671,7 +671,7 @@ pub fn section(
         res,
         TraceMode::Transmission,
     )?;
-    let (frame, _) = bench.measure(&truth, &pvrr(&[])?)?;
+    let (frame, convex) = bench.measure(&truth, &pvrr(&[])?)?;
     let pixels = vertex_pixels(bench.cpu.pvrr_passes(), &truth.scene, &truth.camera);
     let share = vertex_agreement(
         &frame,
@@ -690,15 +690,16 @@ pub fn section(
         ),
     ));
 
-    // K12: the biconvex and the biconcave lens against distance-map.
+    // K12: the biconvex lens (K14's frame) and the biconcave lens against distance-map.
     let mut k12 = inventory.claim("K12")?;
-    for (label, scene) in [
-        ("biconvex", load_scene("spectacles")?.scene),
-        ("biconcave", with_concave_lens()?),
+    let concave = bench.truth_with(Arc::new(with_concave_lens()?), res, TraceMode::Transmission)?;
+    let (_, concave_pvrr) = bench.measure(&concave, &pvrr(&[])?)?;
+    for (label, truth, ours) in [
+        ("biconvex", &truth, convex),
+        ("biconcave", &concave, concave_pvrr),
     ] {
-        let truth = bench.truth_with(Arc::new(scene), res, TraceMode::Transmission)?;
-        let (_, ours) = bench.measure(&truth, &pvrr(&[])?)?;
-        let (_, dm) = bench.measure(&truth, &MethodParams::defaults(MethodId::DistanceMap))?;
+        bench.cpu.prepare(&truth.scene)?;
+        let (_, dm) = bench.measure(truth, &MethodParams::defaults(MethodId::DistanceMap))?;
         k12.push((
             format!("spectacles, {label} lens"),
             less(flip(&ours), flip(&dm)),
