@@ -247,7 +247,9 @@ pub fn run(options: &CompareOptions, progress: &dyn Progress) -> crate::Result<V
                     let written = MethodImages {
                         stem: format!("{}-{ENGINE_BACKEND}", engine.label),
                         has_p2: false,
-                        has_miss: true,
+                        // No miss map where the engine's `P_geom` is not measured
+                        // (`Engine::positions_through_glass`): it would show no misses.
+                        has_miss: engine.frame.vec3(Aov::PGeom).is_some(),
                     };
                     let description = crate::provenance::file_description(
                         &scene.name,
