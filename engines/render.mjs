@@ -4,14 +4,14 @@
 //
 // One scene:
 //   node engines/render.mjs --engine threejs --scene DIR --variants color,position \
-//        --width W --height H --out DIR [--hide-refractor] [--browser PATH]
+//        --width W --height H --out DIR [--hide-refractor] [--without LIST] [--browser PATH]
 // writes OUT/<variant>.f32 for each variant and prints one JSON line: an array of
 // { engine, version, width, height, settings, ms }, one per variant.
 //
 // Many scenes, one browser (what `refract_engines::EngineSession` runs):
 //   node engines/render.mjs --engine threejs --serve [--browser PATH]
 // reads one request per line from standard input, { scene, variants, width, height, out,
-// hideRefractor } with the meanings of the options above, and answers each with one line,
+// hideRefractor, without } with the meanings of the options above, and answers each with one line,
 // { frames: [...] } (the array above) or { error: "..." }; it closes the browser and exits at
 // the end of the input. The page stays open between requests, so an engine prefilters an
 // environment it has seen before only once (engines/README.md).
@@ -32,6 +32,10 @@ import puppeteer from 'puppeteer-core';
 
 const ENGINES = ['threejs', 'babylon', 'gltf-viewer'];
 const VARIANTS = ['color', 'position'];
+// Behaviours of an engine's glass a request may leave out (`without`), to measure each one's share
+// of the engine's difference from its re-implementation (docs/engines.md); a page that cannot
+// leave one out throws.
+const DEPARTURES = ['reflection', 'fresnel-weight', 'filtered-read'];
 const MAX_SIDE = 4096;
 const ORIGIN = 'http://refract.invalid';
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -51,6 +55,7 @@ const { values: args } = parseArgs({
     height: { type: 'string' },
     out: { type: 'string' },
     'hide-refractor': { type: 'boolean', default: false },
+    without: { type: 'string', default: '' },
     browser: { type: 'string', default: process.env.REFRACT_CHROMIUM ?? 'chromium' },
   },
 });
@@ -58,7 +63,7 @@ if (!ENGINES.includes(args.engine)) fail(`--engine: expected one of ${ENGINES.jo
 
 /// A request with its fields checked: the error names the field and what it takes.
 function checkedRequest(request) {
-  const { scene, variants, width, height, out, hideRefractor } = request;
+  const { scene, variants, width, height, out, hideRefractor, without = [] } = request;
   if (typeof scene !== 'string' || scene === '') throw new Error('scene: the directory refract export --format gltf wrote');
   if (typeof out !== 'string' || out === '') throw new Error('out: the directory to write the frames into');
   if (!Array.isArray(variants) || variants.length === 0) throw new Error('variants: expected color and/or position');
@@ -68,7 +73,11 @@ function checkedRequest(request) {
   for (const [side, n] of [['width', width], ['height', height]]) {
     if (!Number.isInteger(n) || n < 1 || n > MAX_SIDE) throw new Error(`${side}: expected an integer in 1..=${MAX_SIDE}, got ${n}`);
   }
-  return { scene: path.resolve(scene), variants, width, height, out, hideRefractor: Boolean(hideRefractor) };
+  if (!Array.isArray(without)) throw new Error(`without: expected a list of ${DEPARTURES.join(', ')}`);
+  for (const departure of without) {
+    if (!DEPARTURES.includes(departure)) throw new Error(`without: expected ${DEPARTURES.join(', ')}, got ${departure}`);
+  }
+  return { scene: path.resolve(scene), variants, width, height, out, hideRefractor: Boolean(hideRefractor), without };
 }
 
 const CONTENT_TYPES = {
@@ -161,6 +170,7 @@ async function render(request) {
         width: request.width,
         height: request.height,
         hideRefractor: request.hideRefractor,
+        without: request.without,
       });
     } catch (err) {
       throw new Error(`${args.engine} failed: ${err.message}\n${consoleLines.join('\n')}`);
@@ -197,6 +207,7 @@ try {
         height: Number(args.height),
         out: args.out,
         hideRefractor: args['hide-refractor'],
+        without: args.without === '' ? [] : args.without.split(','),
       });
     } catch (err) {
       fail(`--${err.message}`);

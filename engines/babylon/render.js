@@ -54,11 +54,74 @@ async function stage(environment, environmentKey) {
   return scene;
 }
 
+// What `without` (engines/render.mjs's DEPARTURES) leaves out of the glass, as edits of the PBR
+// fragment shader's final GLSL (after Babylon has resolved its includes): [text, replacement]
+// pairs.
+// Each text must be found, so a Babylon.js whose shader has moved fails loudly instead of
+// measuring nothing. Only the glass's program is edited.
+const FRAGMENT_EDITS = {
+  // The environment's specular reflection (its prefiltered cube along the reflected ray,
+  // weighted by the BRDF lookup table), `pbrBlockFinalLitComponents`.
+  reflection: [[
+    'vec3 finalRadianceScaled=finalRadiance*vLightingIntensity.z;',
+    'vec3 finalRadianceScaled=vec3(0.0);',
+  ]],
+  // Babylon weights the refracted light twice: by `1 - specularEnvironmentReflectance`
+  // (`pbrBlockSubSurface`), and by the surface albedo it tints the refraction with (the loader
+  // sets `useAlbedoToTintRefraction`), which its legacy energy conservation scales by
+  // `1 - F0` (`pbrBlockReflectivity`; the glass's only use of that albedo).
+  'fresnel-weight': [[
+    'outParams.finalRefraction*=vec3(1.0)-vSpecularEnvironmentReflectance;',
+    '',
+  ], [
+    'outParams.surfaceAlbedo=baseColor.rgb*(vec3(1.0)-vec3(dielectricF0)*surfaceReflectivityColor)*(1.0-outParams.metallic);',
+    'outParams.surfaceAlbedo=baseColor.rgb*(1.0-outParams.metallic);',
+  ]],
+  // The bilinear read of the transmission helper's target at the roughness LOD: the nearest
+  // texel of level 0 instead, clamped to the target, `pbrBlockSubSurface`.
+  'filtered-read': [[
+    'environmentRefraction=sampleRefractionLod(refractionSampler,refractionCoords,requestedRefractionLOD);',
+    'environmentRefraction=texelFetch(refractionSampler,clamp(ivec2(floor(refractionCoords*vec2(textureSize(refractionSampler,0)))),ivec2(0),textureSize(refractionSampler,0)-ivec2(1)),0);',
+  ]],
+};
+
+/// Leaves `without`'s behaviours out of every refracting PBR material of `materials`: under a
+/// shader name of its own (a copy of `pbr`, so that Babylon's effect cache, keyed by name and
+/// defines, does not hand back the unedited program) whose final fragment code is edited.
+/// Returns the edits that found no text, after the frame that compiled them.
+function leaveOut(materials, without) {
+  const missing = new Set();
+  if (without.length === 0) return missing;
+  const key = [...without].sort().join('-');
+  const name = `pbrRefractWithout-${key}`;
+  const store = BABYLON.ShaderStore.ShadersStore;
+  store[`${name}VertexShader`] = store.pbrVertexShader;
+  store[`${name}PixelShader`] = store.pbrPixelShader;
+  for (const material of materials) {
+    if (!material.subSurface?.isRefractionEnabled) continue;
+    material.customShaderNameResolve = (shaderName, uniforms, uniformBuffers, samplers, defines, attributes, options) => {
+      options.processFinalCode = (type, code) => {
+        if (type !== 'fragment') return code;
+        let edited = code;
+        for (const departure of without) {
+          for (const [text, replacement] of FRAGMENT_EDITS[departure]) {
+            if (!edited.includes(text)) missing.add(departure);
+            edited = edited.replace(text, replacement);
+          }
+        }
+        return edited;
+      };
+      return name;
+    };
+  }
+  return missing;
+}
+
 // What a scene holds, by kind: what a request loaded is what it holds after minus before.
 const HOLDINGS = ['meshes', 'materials', 'textures', 'cameras', 'transformNodes', 'geometries', 'lights'];
 const holdings = (scene) => Object.fromEntries(HOLDINGS.map((kind) => [kind, new Set(scene[kind])]));
 
-window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor }) => {
+window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor, without = [] }) => {
   if (engine === null) {
     const canvas = document.createElement('canvas');
     canvas.width = width;
@@ -71,6 +134,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, va
   const before = holdings(scene);
 
   await BABYLON.AppendSceneAsync(sceneUrl, scene);
+  const missing = leaveOut(scene.materials.filter((m) => !before.materials.has(m)), without);
   const camera = scene.cameras.find((c) => !before.cameras.has(c));
   if (!camera) throw new Error(`${sceneUrl} has no camera`);
   scene.activeCamera = camera;
@@ -143,6 +207,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, va
   for (const material of loaded('materials')) material.dispose(false, false);
   for (const texture of loaded('textures')) if (!kept.has(texture)) texture.dispose();
   for (const geometry of loaded('geometries')) geometry.dispose();
+  if (missing.size > 0) throw new Error(`without ${[...missing].join(', ')}: Babylon.js ${BABYLON.Engine.Version}'s PBR fragment shader has no text to edit`);
   return {
     engine: 'babylon',
     version: BABYLON.Engine.Version,
@@ -160,6 +225,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, va
       clearColor: [0, 0, 0, 1],
       environment: environment ? `HDRCubeTexture ${CUBE_SIZE}, default skybox (edge ${SKYBOX_EDGE}) made before the glTF, camera far ${camera.maxZ}, rotationY ${ENVIRONMENT_ROTATION_Y}` : null,
       hideRefractor: Boolean(hideRefractor),
+      without,
       webgl,
     },
     pixels: topDownBase64(rows, width, height),

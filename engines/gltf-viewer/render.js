@@ -63,7 +63,9 @@ function setUp() {
   view = new GltfView(gl);
 }
 
-window.refractRender = async ({ scene: sceneUrl, environment, sceneEnvironment, variant, width, height, hideRefractor }) => {
+window.refractRender = async ({ scene: sceneUrl, environment, sceneEnvironment, variant, width, height, hideRefractor, without = [] }) => {
+  // This page leaves none of the engine's behaviours out (engines/render.mjs's DEPARTURES).
+  if (without.length > 0) throw new Error(`without: The glTF Sample Viewer leaves nothing out here, got ${without.join(', ')}`);
   if (view === null) setUp();
   canvas.width = width;
   canvas.height = height;

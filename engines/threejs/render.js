@@ -19,7 +19,60 @@ let renderer = null;
 // The environment textures by the content of their file (render.mjs's `environmentKey`).
 const environments = new Map();
 
-window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor }) => {
+// What `without` (engines/render.mjs's DEPARTURES) leaves out of the glass, as edits of three.js's
+// shader chunks: [chunk, text, replacement]. Each text must be found, so a three.js whose shader
+// has moved fails loudly instead of measuring nothing. Only the glass's program is edited.
+const CHUNK_EDITS = {
+  // The environment's specular reflection (its PMREM along the reflected ray, weighted by the
+  // split-sum BRDF). The material's `envMapIntensity` would not do: under `scene.environment`
+  // three.js sets the uniform from `scene.environmentIntensity`.
+  reflection: [
+    'lights_fragment_maps',
+    'radiance += iblRadiance;',
+    '/* refract: the environment reflection left out */',
+  ],
+  // The `(1 - F)` weight of the environment BRDF on the transmitted light.
+  'fresnel-weight': [
+    'transmission_pars_fragment',
+    'return vec4( ( 1.0 - F ) * attenuatedColor,',
+    'return vec4( attenuatedColor,',
+  ],
+  // The mip-level bicubic read at the roughness LOD (roughness 0 is raised to 0.045 plus the
+  // normal's screen-space change): the nearest texel of level 0 instead, clamped to the target.
+  'filtered-read': [
+    'transmission_pars_fragment',
+    'return textureBicubic( transmissionSamplerMap, fragCoord.xy, lod );',
+    'return texelFetch( transmissionSamplerMap, clamp( ivec2( floor( fragCoord.xy * transmissionSamplerSize ) ), ivec2( 0 ), ivec2( transmissionSamplerSize ) - 1 ), 0 );',
+  ],
+};
+
+/// Leaves `without`'s behaviours out of every transmissive material of `root`.
+function leaveOut(root, without) {
+  if (without.length === 0) return;
+  const chunks = new Map();
+  for (const departure of without) {
+    const [name, text, replacement] = CHUNK_EDITS[departure];
+    const chunk = chunks.get(name) ?? THREE.ShaderChunk[name];
+    if (!chunk.includes(text)) throw new Error(`without ${departure}: three.js ${THREE.REVISION}'s ${name} has no "${text}"`);
+    chunks.set(name, chunk.replace(text, replacement));
+  }
+  const key = [...without].sort().join(',');
+  root.traverse((object) => {
+    for (const material of [object.material ?? []].flat()) {
+      if (!(material.transmission > 0)) continue;
+      material.onBeforeCompile = (shader) => {
+        for (const [name, chunk] of chunks) {
+          const include = `#include <${name}>`;
+          if (!shader.fragmentShader.includes(include)) throw new Error(`three.js ${THREE.REVISION}: the glass's fragment shader has no ${include}`);
+          shader.fragmentShader = shader.fragmentShader.replace(include, chunk);
+        }
+      };
+      material.customProgramCacheKey = () => key;
+    }
+  });
+}
+
+window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, variant, width, height, hideRefractor, without = [] }) => {
   if (renderer === null) {
     const canvas = document.createElement('canvas');
     renderer = new THREE.WebGLRenderer({ canvas, antialias: false, alpha: false });
@@ -32,6 +85,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, va
   renderer.transmissionResolutionScale = 1;
 
   const gltf = await new GLTFLoader().loadAsync(sceneUrl);
+  leaveOut(gltf.scene, without);
   // GLTFLoader's `gltf.scene` is a Group; the background and the environment are a Scene's.
   const scene = new THREE.Scene();
   scene.add(gltf.scene);
@@ -110,6 +164,7 @@ window.refractRender = async ({ scene: sceneUrl, environment, environmentKey, va
       clearColor: [0, 0, 0, 1],
       environmentRotationY: environment ? ENVIRONMENT_ROTATION_Y : null,
       hideRefractor: Boolean(hideRefractor),
+      without,
       webgl: info,
     },
     pixels: topDownBase64(rows, width, height),

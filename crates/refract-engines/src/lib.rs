@@ -64,6 +64,18 @@ impl Engine {
         !matches!(self, Engine::GltfViewer)
     }
 
+    /// Whether a request may leave `departure` out of this engine's glass
+    /// ([`EngineRequest::without`]): three.js's and Babylon.js's, whose glass shaders their
+    /// pages edit (`docs/engines.md`); not the glTF Sample Viewer's.
+    pub const fn leaves_out(self, departure: Departure) -> bool {
+        match self {
+            Engine::Threejs | Engine::Babylon => match departure {
+                Departure::Reflection | Departure::FresnelWeight | Departure::FilteredRead => true,
+            },
+            Engine::GltfViewer => false,
+        }
+    }
+
     /// The npm package whose version names the engine.
     pub const fn npm_package(self) -> &'static str {
         match self {
@@ -93,6 +105,44 @@ impl Variant {
     }
 }
 
+/// A behaviour of an engine's glass that its re-implementation (`volume-thickness`) does not
+/// model, which a request can leave out of the engine's frame to measure that behaviour's
+/// share of the difference (`docs/engines.md`, "The engines against `volume-thickness`").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Departure {
+    /// The environment's specular reflection off the glass (three.js: `radiance +=
+    /// iblRadiance` of `lights_fragment_maps`; Babylon.js: `finalRadianceScaled` of
+    /// `pbrBlockFinalLitComponents`).
+    Reflection,
+    /// The Fresnel weight of the environment BRDF on the transmitted light (three.js: the
+    /// `(1 − F)` of `getIBLVolumeRefraction`; Babylon.js: `1 −
+    /// specularEnvironmentReflectance` in `pbrBlockSubSurface`).
+    FresnelWeight,
+    /// The filtered read of the transmission target at a roughness LOD (three.js: bicubic, at
+    /// the level of `max(roughness, 0.045)` plus the normal's screen-space change; Babylon.js:
+    /// bilinear at the level of `alphaG`): the nearest texel of level 0 instead, clamped to
+    /// the target, as `volume-thickness` reads.
+    FilteredRead,
+}
+
+impl Departure {
+    /// Every departure.
+    pub const ALL: [Departure; 3] = [
+        Departure::Reflection,
+        Departure::FresnelWeight,
+        Departure::FilteredRead,
+    ];
+
+    /// The id in a request (`engines/render.mjs`'s `DEPARTURES`).
+    pub const fn id(self) -> &'static str {
+        match self {
+            Departure::Reflection => "reflection",
+            Departure::FresnelWeight => "fresnel-weight",
+            Departure::FilteredRead => "filtered-read",
+        }
+    }
+}
+
 /// The frames to render of one export, in one browser session.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EngineRequest {
@@ -104,6 +154,31 @@ pub struct EngineRequest {
     pub height: u32,
     /// Leave the refractor out (camera and background checks).
     pub hide_refractor: bool,
+    /// Behaviours left out of the engine's glass (each one [`Engine::leaves_out`]); empty for
+    /// the engine as it ships.
+    pub without: Vec<Departure>,
+}
+
+impl EngineRequest {
+    /// A [`EngineRequest::Request`](EngineError::Request) error naming the field where a side
+    /// is outside `1..=MAX_SIDE` or `engine` cannot leave a departure out.
+    fn check(&self, engine: Engine) -> Result<(), EngineError> {
+        for (side, value) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_SIDE).contains(&value) {
+                return Err(EngineError::Request(format!(
+                    "{side} {value}: expected 1..={MAX_SIDE} pixels for an engine frame"
+                )));
+            }
+        }
+        match self.without.iter().find(|d| !engine.leaves_out(**d)) {
+            Some(departure) => Err(EngineError::Request(format!(
+                "without {}: {} cannot leave it out of its glass",
+                departure.id(),
+                engine.id()
+            ))),
+            None => Ok(()),
+        }
+    }
 }
 
 /// The largest side [`EngineRequest`] takes (what `engines/render.mjs` accepts).
@@ -233,6 +308,7 @@ impl EngineDriver {
         export_dir: &Path,
         request: &EngineRequest,
     ) -> Result<Vec<EngineFrame>, EngineError> {
+        request.check(engine)?;
         self.session(engine)?.render(export_dir, request)
     }
 
@@ -302,14 +378,8 @@ impl EngineSession {
         export_dir: &Path,
         request: &EngineRequest,
     ) -> Result<Vec<EngineFrame>, EngineError> {
-        for (side, value) in [("width", request.width), ("height", request.height)] {
-            if !(1..=MAX_SIDE).contains(&value) {
-                return Err(EngineError::Request(format!(
-                    "{side} {value}: expected 1..={MAX_SIDE} pixels for an engine frame"
-                )));
-            }
-        }
         let engine = self.engine;
+        request.check(engine)?;
         let driver_error = |message: String| EngineError::Driver {
             engine: engine.id(),
             message,
@@ -333,6 +403,7 @@ impl EngineSession {
             "height": request.height,
             "out": utf8(scratch.path())?,
             "hideRefractor": request.hide_refractor,
+            "without": request.without.iter().map(|d| d.id()).collect::<Vec<_>>(),
         });
         let answer = self.exchange(&line.to_string()).map_err(|why| {
             driver_error(format!("engines/render.mjs {why}: {}", self.log_text()))

@@ -131,6 +131,7 @@ impl EngineRenderers {
             width,
             height,
             hide_refractor: false,
+            without: Vec::new(),
         };
         let covered = truth
             .flag(Aov::Covered)
