@@ -24,7 +24,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
-from ._refract import Frame, RenderError, Scene, __version__
+from ._refract import Frame, RenderError, Scene, Tracer, __version__
 from ._refract import builtin_scenes as _builtin_scenes
 from ._refract import compare as _compare
 from ._refract import error_maps as _error_maps
@@ -38,6 +38,7 @@ __all__ = [
     "Param",
     "RenderError",
     "Scene",
+    "Tracer",
     "builtin_scenes",
     "compare",
     "error_maps",

@@ -94,6 +94,23 @@ class Scene:
     ) -> Frame:
         """One frame of ``method`` (or ``"reference"``); the GIL is released meanwhile."""
 
+class Tracer:
+    """The exact reference's closest-hit query on one mesh (its BVH), for measuring the tracer
+    against another on the same triangles and rays (python/benchmarks/embree.py)."""
+
+    @staticmethod
+    def load(path: Union[str, "os.PathLike[str]"]) -> "Tracer": ...
+    @property
+    def vertices(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def triangles(self) -> npt.NDArray[np.uint32]: ...
+    def closest_hits(
+        self,
+        origins: npt.NDArray[np.float32],
+        directions: npt.NDArray[np.float32],
+        t_min: float = 0.0,
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]: ...
+
 def methods() -> List[Dict[str, Any]]: ...
 def builtin_scenes() -> List[Tuple[str, str]]: ...
 def metrics(frame: Frame, reference: Frame) -> Dict[str, Any]: ...

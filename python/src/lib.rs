@@ -16,6 +16,7 @@ mod experiments;
 mod frame;
 mod registry;
 mod scene;
+mod tracer;
 mod workers;
 
 use pyo3::prelude::*;
@@ -38,6 +39,7 @@ fn _refract(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RenderError", m.py().get_type::<RenderError>())?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<frame::Frame>()?;
+    m.add_class::<tracer::Tracer>()?;
     m.add_function(wrap_pyfunction!(registry::methods, m)?)?;
     m.add_function(wrap_pyfunction!(registry::builtin_scenes, m)?)?;
     m.add_function(wrap_pyfunction!(frame::metrics, m)?)?;
