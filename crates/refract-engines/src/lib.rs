@@ -160,6 +160,18 @@ pub struct EngineRequest {
 }
 
 impl EngineRequest {
+    /// `variants` at `width × height`, of the engine as it ships: the refractor shown, nothing
+    /// left out ([`EngineRequest::without`]).
+    pub fn new(variants: Vec<Variant>, width: u32, height: u32) -> Self {
+        Self {
+            variants,
+            width,
+            height,
+            hide_refractor: false,
+            without: Vec::new(),
+        }
+    }
+
     /// A [`EngineRequest::Request`](EngineError::Request) error naming the field where a side
     /// is outside `1..=MAX_SIDE` or `engine` cannot leave a departure out.
     fn check(&self, engine: Engine) -> Result<(), EngineError> {

@@ -112,11 +112,8 @@ fn camera_matches_refracts(engine: Engine) {
         engine,
         dir.path(),
         &EngineRequest {
-            variants: vec![Variant::Position],
-            width,
-            height,
             hide_refractor: true,
-            without: Vec::new(),
+            ..EngineRequest::new(vec![Variant::Position], width, height)
         },
     )
     .expect("engine frame")
@@ -210,11 +207,8 @@ fn background_is_refracts_environment(engine: Engine, (median_bar, p99_bar): (f3
         engine,
         dir.path(),
         &EngineRequest {
-            variants: vec![Variant::Color],
-            width,
-            height,
             hide_refractor: true,
-            without: Vec::new(),
+            ..EngineRequest::new(vec![Variant::Color], width, height)
         },
     )
     .expect("engine frame")
@@ -284,13 +278,7 @@ fn lookups(engine: Engine, method: &str) -> Option<Lookups> {
         &driver,
         engine,
         dir.path(),
-        &EngineRequest {
-            variants: vec![Variant::Position, Variant::Color],
-            width,
-            height,
-            hide_refractor: false,
-            without: Vec::new(),
-        },
+        &EngineRequest::new(vec![Variant::Position, Variant::Color], width, height),
     )
     .expect("engine frames");
     let their_color = theirs.pop().expect("colour");
@@ -469,11 +457,8 @@ fn departures_one_by_one(engine: Engine) {
         engine,
         dir.path(),
         &EngineRequest {
-            variants: vec![Variant::Color],
-            width,
-            height,
             hide_refractor: true,
-            without: Vec::new(),
+            ..EngineRequest::new(vec![Variant::Color], width, height)
         },
     )
     .expect("engine frame without the glass")
@@ -507,11 +492,8 @@ fn departures_one_by_one(engine: Engine) {
             engine,
             dir.path(),
             &EngineRequest {
-                variants: vec![Variant::Color],
-                width,
-                height,
-                hide_refractor: false,
                 without: without.clone(),
+                ..EngineRequest::new(vec![Variant::Color], width, height)
             },
         )
         .expect("engine frame")
@@ -620,11 +602,8 @@ fn an_engine_that_cannot_leave_a_behaviour_out_says_so() {
             Engine::GltfViewer,
             dir.path(),
             &EngineRequest {
-                variants: vec![Variant::Color],
-                width: 16,
-                height: 16,
-                hide_refractor: false,
                 without: vec![Departure::FresnelWeight],
+                ..EngineRequest::new(vec![Variant::Color], 16, 16)
             },
         )
         .expect_err("the glTF Sample Viewer leaves nothing out");
@@ -656,13 +635,7 @@ fn gltf_viewer_looks_up_where_volume_thickness_does_weighted_by_its_fresnel() {
         &driver,
         Engine::GltfViewer,
         dir.path(),
-        &EngineRequest {
-            variants: vec![Variant::Position],
-            width,
-            height,
-            hide_refractor: false,
-            without: Vec::new(),
-        },
+        &EngineRequest::new(vec![Variant::Position], width, height),
     )
     .expect("engine frame")
     .remove(0);
@@ -725,13 +698,7 @@ fn glass_shows_the_environment_and_positions_after_colour() {
                 &driver,
                 engine,
                 dir.path(),
-                &EngineRequest {
-                    variants: vec![Variant::Color, Variant::Position],
-                    width,
-                    height,
-                    hide_refractor: false,
-                    without: Vec::new(),
-                },
+                &EngineRequest::new(vec![Variant::Color, Variant::Position], width, height),
             )
             .expect("engine frames");
             let position = frames.pop().expect("position");
@@ -784,13 +751,8 @@ fn a_session_renders_each_scene_as_its_first_request() {
             (name, dir)
         })
         .collect();
-    let request = |width, height| EngineRequest {
-        variants: vec![Variant::Color, Variant::Position],
-        width,
-        height,
-        hide_refractor: false,
-        without: Vec::new(),
-    };
+    let request =
+        |width, height| EngineRequest::new(vec![Variant::Color, Variant::Position], width, height);
     for engine in Engine::ALL {
         let mut session = driver.session(engine).expect("session");
         let mut render = |k: usize, (width, height): (u32, u32)| {

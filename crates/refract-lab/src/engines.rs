@@ -122,16 +122,13 @@ impl EngineRenderers {
         let export = tempfile::tempdir().map_err(crate::LabError::Os)?;
         export_gltf(scene)?.write(export.path())?;
         let bounds = position_code_bounds(scene);
-        let request = |engine: Engine| EngineRequest {
-            variants: if engine.positions_through_glass() {
+        let request = |engine: Engine| {
+            let variants = if engine.positions_through_glass() {
                 vec![Variant::Color, Variant::Position]
             } else {
                 vec![Variant::Color]
-            },
-            width,
-            height,
-            hide_refractor: false,
-            without: Vec::new(),
+            };
+            EngineRequest::new(variants, width, height)
         };
         let covered = truth
             .flag(Aov::Covered)
