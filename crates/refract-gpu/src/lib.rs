@@ -34,8 +34,8 @@ pub mod shaders;
 mod timestamps;
 
 pub use context::{AdapterSummary, GpuContext, GpuError, RayQueryPolicy, list_adapters};
+pub use refract_scene::PassTime;
 pub use renderer::{GpuFrame, GpuRenderer};
-pub use timestamps::PassTime;
 
 use shaders::ShaderModule;
 

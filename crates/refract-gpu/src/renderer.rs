@@ -17,7 +17,8 @@ use crate::methods::Families;
 use crate::passes::raster::RasterPipelines;
 use crate::passes::surfaces::rasterize_surface;
 use crate::scene_buffers::GpuScene;
-use crate::timestamps::{PassTime, Timestamps};
+use crate::timestamps::Timestamps;
+use refract_scene::PassTime;
 
 impl From<GpuError> for RenderError {
     fn from(err: GpuError) -> Self {
@@ -115,6 +116,10 @@ impl GpuRenderer {
 impl Renderer for GpuRenderer {
     fn backend(&self) -> BackendId {
         BackendId::Gpu
+    }
+
+    fn last_pass_times(&self) -> Vec<PassTime> {
+        GpuRenderer::last_pass_times(self)
     }
 
     fn device(&self) -> Option<String> {

@@ -5,22 +5,13 @@
 
 use std::sync::Mutex;
 
+use refract_scene::PassTime;
+
 use crate::context::{GpuContext, GpuError};
 
 /// At most this many passes of a frame are timed; later ones run untimed (the frame's span
 /// still ends at the last timed pass).
 const MAX_PASSES: u32 = 64;
-
-/// The GPU time of the passes of one label in the last frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PassTime {
-    /// What the passes do ("back faces", "distance-map kernel", ...).
-    pub label: &'static str,
-    /// How many passes had the label.
-    pub count: u32,
-    /// Their summed GPU time in milliseconds.
-    pub ms: f64,
-}
 
 /// The query set and buffers of a frame's timestamps.
 pub(crate) struct Timestamps {

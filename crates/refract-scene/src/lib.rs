@@ -38,7 +38,7 @@ pub use registry::{
     ParamValue, PvrrParams, REGISTRY, ROUGH_MIN_SPP, TraceMode, TraceSettings, TwoInterfaceParams,
     scene_support,
 };
-pub use renderer::{FrameOutputs, FrameTiming, RenderError, Renderer, TimingSource};
+pub use renderer::{FrameOutputs, FrameTiming, PassTime, RenderError, Renderer, TimingSource};
 pub use scene::{
     Albedo, Attenuation, COLOR_CHART, CONDUCTORS, Conductor, DirectionalLight, MAX_REFRACTORS,
     Material, Object, Refractor, Scene, SceneMesh, SurfaceTexel, conductor_name,

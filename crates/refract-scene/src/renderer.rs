@@ -90,6 +90,17 @@ fn runs_on(method: MethodId) -> String {
         .join(", ")
 }
 
+/// The GPU time of the passes of one label in a frame, from timestamp queries around each pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTime {
+    /// What the passes do ("back faces", "distance-map kernel", ...).
+    pub label: &'static str,
+    /// How many passes had the label.
+    pub count: u32,
+    /// Their summed GPU time in milliseconds.
+    pub ms: f64,
+}
+
 /// A renderer: one of the CPU backend, the GPU backend, the exact reference.
 pub trait Renderer {
     /// Which backend this is.
@@ -122,6 +133,13 @@ pub trait Renderer {
         outputs: FrameOutputs,
         frame: &mut Frame,
     ) -> Result<FrameTiming, RenderError>;
+
+    /// The GPU time of the last frame's passes, summed per label in encoding order; empty for a
+    /// backend that does not time its passes (the CPU backend, the CPU tracer) and on an adapter
+    /// without timestamp queries.
+    fn last_pass_times(&self) -> Vec<PassTime> {
+        Vec::new()
+    }
 }
 
 impl RenderError {

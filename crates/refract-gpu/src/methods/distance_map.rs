@@ -460,14 +460,16 @@ impl DistanceMapTargets {
                 &everything,
                 timestamps.and_then(|t| t.render_pass("eye surfaces")),
             );
-            {
+            // The ranges are read only by the min-max search.
+            if search.min_max {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("distance-map ranges"),
                     timestamp_writes: timestamps.and_then(|t| t.compute_pass("min-max ranges")),
                 });
                 pass.set_pipeline(&pipelines.ranges);
                 pass.set_bind_group(0, &self.shade_group, &[]);
-                pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 6 * layers);
+                // DM_RANGE_RUN (32) texels of a row an invocation.
+                pass.dispatch_workgroups(size.div_ceil(256), size.div_ceil(8), 6 * layers);
             }
         }
         {

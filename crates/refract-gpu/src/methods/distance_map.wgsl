@@ -95,21 +95,35 @@ fn dm_surface(layer: u32, dir: vec3<f32>) -> DmSurface {
 }
 
 // Each layer's smallest and largest distance (min-max acceleration): positive floats order
-// like their bits, so atomicMin/atomicMax on the bits (cleared to +inf and 0 each frame).
+// like their bits, so atomicMin/atomicMax on the bits (cleared to +inf and 0 each frame). An
+// invocation reduces a run of DM_RANGE_RUN texels of a row before its one atomic pair: every
+// texel of a layer contends for the same two words. Min and max are exact: the same bits.
+const DM_RANGE_RUN: u32 = 32u;
+
 @compute @workgroup_size(8, 8, 1)
 fn dm_ranges(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= dm.size || id.y >= dm.size || id.z >= 6u * dm.layers {
+    if id.y >= dm.size || id.z >= 6u * dm.layers {
         return;
     }
-    let texel = vec2<i32>(id.xy);
+    // +inf and 0: no texel (the identity of min and max over the bits).
+    var lo = 0x7f800000u;
+    var hi = 0u;
     let slice = i32(id.z);
-    if textureLoad(layer_n, texel, slice, 0).w < 0.5 {
-        return;
+    let start = id.x * DM_RANGE_RUN;
+    let stop = min(start + DM_RANGE_RUN, dm.size);
+    for (var x = start; x < stop; x++) {
+        let texel = vec2<i32>(i32(x), i32(id.y));
+        if textureLoad(layer_n, texel, slice, 0).w >= 0.5 {
+            let d = bitcast<u32>(length(textureLoad(layer_p, texel, slice, 0).xyz - dm.center.xyz));
+            lo = min(lo, d);
+            hi = max(hi, d);
+        }
     }
-    let d = length(textureLoad(layer_p, texel, slice, 0).xyz - dm.center.xyz);
-    let layer = id.z / 6u;
-    atomicMin(&ranges[2u * layer], bitcast<u32>(d));
-    atomicMax(&ranges[2u * layer + 1u], bitcast<u32>(d));
+    if lo <= hi {
+        let layer = id.z / 6u;
+        atomicMin(&ranges[2u * layer], lo);
+        atomicMax(&ranges[2u * layer + 1u], hi);
+    }
 }
 
 @compute @workgroup_size(8, 8, 1)

@@ -78,5 +78,5 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
             r.fps / paper
         );
     }
-    TableOutput::new(md, &records)
+    TableOutput::of_frames(md, &records)
 }

@@ -85,5 +85,5 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
             r.scene, r.triangles, r.method, r.backend, r.ms_median, r.fps
         );
     }
-    TableOutput::new(md, &records)
+    TableOutput::of_frames(md, &records)
 }

@@ -80,7 +80,7 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
         }
     }
     let md = table(&records, &reference_seconds, res, frames);
-    TableOutput::new(md, &records)
+    TableOutput::of_frames(md, &records)
 }
 
 /// The Table 1 layout: per model, 2-sided and 1-sided fps per backend, the reference time, and

@@ -6,6 +6,7 @@
 //! `--table all` runs every one and writes them as one file with the machine, the commit and
 //! the date ([`all`]); `--update` splices that file into `docs/performance.md`.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -14,7 +15,7 @@ use refract_eval::atomic_write::write_text_atomically;
 use refract_eval::{LoadOptions, load_mesh};
 use refract_geometry::{Mesh, builtin};
 use refract_scene::{
-    Environment, Frame, FrameOutputs, MethodId, MethodParams, Refractor, Renderer, Scene,
+    Environment, Frame, FrameOutputs, MethodId, MethodParams, PassTime, Refractor, Renderer, Scene,
 };
 use serde::Serialize;
 
@@ -170,6 +171,54 @@ impl TableOutput {
         let rows = serde_json::to_value(rows).context("serialising bench records")?;
         Ok(Self { markdown, rows })
     }
+
+    /// [`TableOutput::new`] for rows of frames, the table followed by [`passes_section`].
+    fn of_frames(markdown: String, records: &[BenchRecord]) -> crate::Result<Self> {
+        Self::new(markdown + &passes_section(records), &records)
+    }
+}
+
+/// Where the GPU rows' time goes: the median GPU time of each labelled pass over the timed
+/// frames (timestamp queries around each pass), their sum and the frame's span (first pass's
+/// start to last pass's end: the sum plus the gaps between passes). Empty without GPU rows or
+/// without timestamp queries.
+fn passes_section(records: &[BenchRecord]) -> String {
+    let timed: Vec<&BenchRecord> = records
+        .iter()
+        .filter(|r| !r.gpu_passes.is_empty())
+        .collect();
+    if timed.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from(
+        "\nGPU passes: the median GPU time of each pass over the same frames (timestamp queries \
+         around each pass), their sum, and the frame (its span from the first pass's start to the \
+         last pass's end).\n\n| scene | method | passes (ms) | sum | frame |\n|---|---|---|---|---|\n",
+    );
+    for r in timed {
+        let passes: Vec<String> = r
+            .gpu_passes
+            .iter()
+            .map(|p| {
+                let times = if p.count > 1 {
+                    format!(" ×{}", p.count)
+                } else {
+                    String::new()
+                };
+                format!("{}{times} {:.2}", p.label, p.ms_median)
+            })
+            .collect();
+        let sum: f64 = r.gpu_passes.iter().map(|p| p.ms_median).sum();
+        let _ = writeln!(
+            md,
+            "| {} | `{}` | {} | {sum:.2} | {:.2} |",
+            r.scene,
+            r.method,
+            passes.join(", "),
+            r.ms_median
+        );
+    }
+    md
 }
 
 /// Runs `args.table`, writes its `.md` and `.json` into `--out` (`bench.md` and `bench.json`
@@ -230,6 +279,40 @@ pub struct BenchRecord {
     ms_max: f64,
     frames: u32,
     fps: f64,
+    /// The GPU's passes (GPU rows on an adapter with timestamp queries).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    gpu_passes: Vec<PassRecord>,
+}
+
+/// The median GPU time of the passes of one label over a row's timed frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassRecord {
+    label: &'static str,
+    /// Passes with the label in a frame.
+    count: u32,
+    ms_median: f64,
+}
+
+/// Per label (in the last frame's order), the median over `frames` of the label's time, with
+/// the last frame's count.
+fn pass_medians(frames: &[Vec<PassTime>]) -> Vec<PassRecord> {
+    let Some(last) = frames.last() else {
+        return Vec::new();
+    };
+    last.iter()
+        .map(|pass| {
+            let mut times: Vec<f64> = frames
+                .iter()
+                .filter_map(|f| f.iter().find(|p| p.label == pass.label).map(|p| p.ms))
+                .collect();
+            times.sort_by(f64::total_cmp);
+            PassRecord {
+                label: pass.label,
+                count: pass.count,
+                ms_median: times[times.len() / 2],
+            }
+        })
+        .collect()
 }
 
 /// Model name, file in `meshes/`, IOR (the paper's: 1.5 for the sphere and teapot, 1.2 else).
@@ -300,6 +383,7 @@ struct Timed {
     height: u32,
     frames: u32,
     times: FrameTimes,
+    passes: Vec<PassRecord>,
 }
 
 impl Timed {
@@ -317,6 +401,7 @@ impl Timed {
             ms_max: max,
             frames: self.frames,
             fps: 1e3 / median,
+            gpu_passes: self.passes,
         }
     }
 }
@@ -330,12 +415,17 @@ fn timed(
     frames: u32,
     frame: &mut Frame,
 ) -> crate::Result<Timed> {
-    let times = time_frames(3, frames, || {
-        Ok(renderer
+    const WARM_UP: usize = 3;
+    let mut passes: Vec<Vec<PassTime>> = Vec::new();
+    let times = time_frames(WARM_UP as u32, frames, || {
+        let ms = renderer
             .render(camera, method, FrameOutputs::Color, frame)?
-            .ms)
+            .ms;
+        passes.push(renderer.last_pass_times());
+        Ok(ms)
     })?;
     Ok(Timed {
+        passes: pass_medians(&passes[WARM_UP.min(passes.len())..]),
         method: method.id().name().to_owned(),
         backend: renderer.backend().id().to_owned(),
         width: camera.width(),
@@ -347,4 +437,74 @@ fn timed(
 
 fn write(path: &std::path::Path, text: &str) -> crate::Result<()> {
     Ok(write_text_atomically(path, text)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(label: &'static str, ms: f64) -> PassTime {
+        PassTime {
+            label,
+            count: 1,
+            ms,
+        }
+    }
+
+    /// Each label's median over the frames, in the last frame's order; a label missing from a
+    /// frame is the median of the frames that have it.
+    #[test]
+    fn pass_medians_are_per_label() {
+        let frames = vec![
+            vec![pass("back faces", 1.0), pass("kernel", 5.0)],
+            vec![pass("kernel", 4.0)],
+            vec![pass("back faces", 3.0), pass("kernel", 6.0)],
+            vec![pass("back faces", 2.0), pass("kernel", 9.0)],
+        ];
+        let medians = pass_medians(&frames);
+        let got: Vec<(&str, f64)> = medians.iter().map(|p| (p.label, p.ms_median)).collect();
+        assert_eq!(got, [("back faces", 2.0), ("kernel", 6.0)]);
+        assert!(pass_medians(&[]).is_empty());
+    }
+
+    /// The section lists the GPU rows' passes and is empty without them.
+    #[test]
+    fn passes_section_lists_timed_rows_only() {
+        let record = |backend: &str, passes: Vec<PassRecord>| BenchRecord {
+            scene: "sphere".into(),
+            triangles: 1600,
+            method: "wyman".into(),
+            backend: backend.into(),
+            width: 64,
+            height: 64,
+            ms_median: 4.0,
+            ms_min: 3.9,
+            ms_max: 4.2,
+            frames: 3,
+            fps: 250.0,
+            gpu_passes: passes,
+        };
+        assert_eq!(passes_section(&[record("cpu", Vec::new())]), "");
+        let gpu = record(
+            "gpu",
+            vec![
+                PassRecord {
+                    label: "back faces",
+                    count: 1,
+                    ms_median: 1.5,
+                },
+                PassRecord {
+                    label: "kernel",
+                    count: 2,
+                    ms_median: 2.0,
+                },
+            ],
+        );
+        let md = passes_section(&[record("cpu", Vec::new()), gpu]);
+        assert!(
+            md.contains("| sphere | `wyman` | back faces 1.50, kernel ×2 2.00 | 3.50 | 4.00 |"),
+            "{md}"
+        );
+        assert_eq!(md.matches("| sphere |").count(), 1, "{md}");
+    }
 }

@@ -74,7 +74,7 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
         }
     }
     let md = nearby_table(&records, &resolutions, frames, &method);
-    TableOutput::new(md, &records)
+    TableOutput::of_frames(md, &records)
 }
 
 /// Wyman 2005b Table 1's layout with our figures, the paper's and the ratios.

@@ -120,7 +120,7 @@ pub(super) fn run(args: &BenchArgs, progress: &dyn Progress) -> crate::Result<Ta
             r.fps / lo
         );
     }
-    TableOutput::new(md, &records)
+    TableOutput::of_frames(md, &records)
 }
 
 /// The map sizes of `plan` (views 1..), `w×h` each, comma-separated; `-` without maps.
