@@ -337,8 +337,7 @@ fn lookups(engine: Engine, method: &str) -> Option<Lookups> {
         glass
             .iter()
             .filter(|&&i| {
-                let (a, b) = (their_color.frame.color[i], ours.color[i]);
-                ((a - b).abs() / b.max(Vec3::splat(1e-2))).max_element() <= tolerance
+                relative_difference(their_color.frame.color[i], ours.color[i]) <= tolerance
             })
             .count() as f32
             / glass.len() as f32
